@@ -1,0 +1,492 @@
+"""A two-dimensional droplet on a table (Exercise 2.1): calculus of variations as an NLP.
+
+Physics
+-------
+A drop of cross-sectional area ``A`` sits on the table ``y = 0`` and touches it
+on ``0 <= x <= a``.  Up to the constant ``gamma_sg * L`` its energy is
+
+    E = gamma_gl * S + (gamma_sl - gamma_sg) * a,          S = length of the free surface,
+
+minimised subject to ``∫ y dx = A``.  The Euler–Lagrange equation makes the free
+surface a circular arc of curvature ``lambda / gamma_gl`` (``lambda`` the area
+multiplier, the Laplace pressure); with ``a`` free, the contact angle obeys
+Young's equation ``gamma_gl cos(theta) + gamma_sl - gamma_sg = 0``.  The
+derivation is in ``docs/derivations.md``.
+
+Layers
+------
+* describe: :class:`Droplet` (tensions, area, optional fixed span) and its
+  analytic oracle :func:`analytic` (a :class:`CircularCap`);
+* discretise: :class:`Curve` (polyline ``(x_i, y_i)`` with equal segments,
+  every ``theta`` in ``(0, pi)``) and :class:`Graph` (``y(x_i)`` on a uniform
+  grid, ``theta < 90°``);
+* solve: :func:`solve` builds one :class:`~castrajectory.nlp.NLP` and returns a
+  :class:`DropletSolution` with the errors against the oracle;
+* the reduced one-dimensional problem in ``theta`` is :func:`solve_angle`.
+
+All NLPs are posed in units where ``A = 1`` and ``gamma_gl = 1`` (length unit
+``sqrt(A)``, energy unit ``gamma_gl sqrt(A)``); results are converted back.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Dict, Optional
+
+import casadi as ca
+import numpy as np
+
+from .nlp import NLP
+from .result import Result
+from .validation import InputError, finite, integer_at_least, one_of, positive
+
+FORMULATIONS = ("curve", "graph")
+#: Smallest number of segments: the contact-angle estimator needs two chords per end.
+MIN_N = 3
+
+
+# ---------------------------------------------------------------------------- describe
+@dataclass(frozen=True)
+class Droplet:
+    """The scene: tensions, area and (optionally) a pinned span ``a``.
+
+    Free span (``span=None``) requires partial wetting,
+    ``|gamma_sg - gamma_sl| < gamma_gl``; see :meth:`validate`.
+    """
+
+    gamma_gl: float = 1.0
+    gamma_sl: float = 0.5
+    gamma_sg: float = 1.0
+    area: float = 1.0
+    span: Optional[float] = None
+
+    def __post_init__(self):
+        self.validate()
+
+    @property
+    def wetting(self) -> float:
+        """Coefficient of the span in the energy: ``gamma_sl - gamma_sg``."""
+        return self.gamma_sl - self.gamma_sg
+
+    @property
+    def spreading_coefficient(self) -> float:
+        """``S = gamma_sg - gamma_sl - gamma_gl``; ``S >= 0`` means complete wetting."""
+        return self.gamma_sg - self.gamma_sl - self.gamma_gl
+
+    @property
+    def length_scale(self) -> float:
+        return math.sqrt(self.area)
+
+    def validate(self) -> None:
+        positive("gamma_gl", self.gamma_gl)
+        finite("gamma_sl", self.gamma_sl)
+        finite("gamma_sg", self.gamma_sg)
+        positive("area", self.area)
+        if self.span is not None:
+            positive("span", self.span)
+            return
+        if self.spreading_coefficient >= 0.0:
+            raise InputError(
+                f"complete wetting: the spreading coefficient S = gamma_sg - gamma_sl - gamma_gl = "
+                f"{self.spreading_coefficient:g} >= 0, so the drop spreads without bound and no minimiser exists")
+        if self.wetting >= self.gamma_gl:
+            raise InputError(
+                f"complete non-wetting: gamma_sl - gamma_sg = {self.wetting:g} >= gamma_gl = {self.gamma_gl:g} "
+                "gives Young's angle pi, where the drop touches the table at a single point")
+
+
+def young_angle(gamma_gl: float, gamma_sl: float, gamma_sg: float) -> float:
+    """Young's contact angle ``arccos((gamma_sg - gamma_sl) / gamma_gl)``."""
+    return math.acos((gamma_sg - gamma_sl) / gamma_gl)
+
+
+def segment_area_factor(theta):
+    """``theta - sin(2 theta)/2``: area of a circular cap of half-angle theta divided by R²."""
+    return theta - 0.5 * np.sin(2.0 * theta) if not isinstance(theta, (ca.SX, ca.MX)) \
+        else theta - 0.5 * ca.sin(2.0 * theta)
+
+
+def _angle_from_aspect(area_over_span2: float) -> float:
+    """Solve ``(t - sin(2t)/2) / (4 sin² t) = A / a²`` for ``t`` in (0, pi) by bisection (monotone)."""
+    lo, hi = 1e-12, math.pi - 1e-12
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if segment_area_factor(mid) / (4.0 * math.sin(mid) ** 2) < area_over_span2:
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
+
+
+@dataclass(frozen=True)
+class CircularCap:
+    """A circular cap standing on ``y = 0`` with its left contact point at the origin."""
+
+    contact_angle: float
+    radius: float
+    gamma_gl: float
+    wetting: float
+
+    @property
+    def span(self) -> float:
+        return 2.0 * self.radius * math.sin(self.contact_angle)
+
+    @property
+    def area(self) -> float:
+        return self.radius ** 2 * segment_area_factor(self.contact_angle)
+
+    @property
+    def length(self) -> float:
+        return 2.0 * self.radius * self.contact_angle
+
+    @property
+    def pressure(self) -> float:
+        """Laplace pressure ``gamma_gl / R``."""
+        return self.gamma_gl / self.radius
+
+    @property
+    def energy(self) -> float:
+        """``gamma_gl S + (gamma_sl - gamma_sg) a`` (equals ``2 gamma_gl A / R`` at Young's angle)."""
+        return self.gamma_gl * self.length + self.wetting * self.span
+
+    @property
+    def center(self) -> tuple:
+        return (0.5 * self.span, -self.radius * math.cos(self.contact_angle))
+
+    def points(self, n: int) -> np.ndarray:
+        """``n + 1`` points equally spaced in arc length, from (0, 0) to (a, 0)."""
+        return arc_points(self.contact_angle, self.radius, n)
+
+    def distance(self, x, y) -> np.ndarray:
+        """Signed distance of points from the circle (positive outside)."""
+        cx, cy = self.center
+        return np.hypot(np.asarray(x) - cx, np.asarray(y) - cy) - self.radius
+
+    def as_dict(self) -> Dict[str, float]:
+        return {"contact_angle": self.contact_angle, "span": self.span, "radius": self.radius,
+                "pressure": self.pressure, "energy": self.energy}
+
+
+def arc_points(theta: float, radius: float, n: int) -> np.ndarray:
+    """Vertices of a circular cap of half-angle ``theta``: ``(n + 1) x 2``, left contact at the origin."""
+    alpha = 0.5 * math.pi + theta - 2.0 * theta * np.arange(n + 1) / n
+    cx, cy = radius * math.sin(theta), -radius * math.cos(theta)
+    pts = np.column_stack([cx + radius * np.cos(alpha), cy + radius * np.sin(alpha)])
+    pts[0] = (0.0, 0.0)
+    pts[-1] = (2.0 * cx, 0.0)
+    return pts
+
+
+def analytic(drop: Droplet) -> CircularCap:
+    """The exact minimiser: Young's angle for a free span, the arc through (0,0),(a,0) for a fixed one."""
+    if drop.span is None:
+        theta = young_angle(drop.gamma_gl, drop.gamma_sl, drop.gamma_sg)
+        radius = math.sqrt(drop.area / segment_area_factor(theta))
+    else:
+        theta = _angle_from_aspect(drop.area / drop.span ** 2)
+        radius = drop.span / (2.0 * math.sin(theta))
+    return CircularCap(theta, radius, drop.gamma_gl, drop.wetting)
+
+
+# ---------------------------------------------------------------------------- discretise
+@dataclass
+class Geometry:
+    """What a discretisation hands to the energy: CasADi expressions in scaled units."""
+
+    x: object
+    y: object
+    length: object
+    span: object
+    area: object
+
+
+def _cumulative_area(nlp: NLP, pieces, init_pieces) -> object:
+    """Area as a running sum ``c_k = c_{k-1} + t_k`` with ``c`` as unknowns; returns the total.
+
+    Summing all ``n`` pieces into one constraint gives the Jacobian a dense row;
+    together with any variable shared by all elements (the graph's grid step)
+    no one-sided colouring is then sparse, and CasADi's derivative construction
+    becomes quadratic in ``n``.  The running sum keeps every row local; the
+    multiplier of the last link (the ``area`` constraint) is still ``dE*/dA``.
+    """
+    n = pieces.numel()
+    c = nlp.variable("partial_area", n - 1, init=np.cumsum(init_pieces)[:-1])
+    prev = ca.vertcat(0.0, c[:-1])
+    nlp.equal("area_links", n * (c - prev - pieces[:-1]))
+    return c[-1] + pieces[-1]
+
+
+class Curve:
+    """Polyline ``(x_i, y_i)``, ``i = 0..n``, from contact point to contact point.
+
+    Unknowns: the ``n - 1`` interior vertices and the span ``a = x_n`` (unless
+    pinned).  Constraints: consecutive segments have equal length,
+    ``(|p_{i+1} - p_i|² - |p_i - p_{i-1}|²) / (2 l_ref²) = 0`` (a gauge
+    condition that removes the tangential sliding of vertices; its multipliers
+    vanish as ``n -> oo``), and the shoelace area.  The length is the sum of
+    the segment lengths.  No graph assumption is made, so overhanging drops
+    (``theta > 90°``) are fine.
+
+    Default initial guess: the half-disc (``theta = 90°``) of the given area,
+    or the arc through the pinned span with the given area; it does not use
+    Young's angle.
+    """
+
+    name = "curve"
+
+    def __init__(self, n: int):
+        self.n = n
+
+    @staticmethod
+    def element() -> ca.Function:
+        p0, p1 = ca.SX.sym("p0", 2), ca.SX.sym("p1", 2)
+        d = p1 - p0
+        sq = ca.dot(d, d)
+        return ca.Function("segment", [p0, p1], [sq, ca.sqrt(sq), 0.5 * (p1[0] * p0[1] - p0[0] * p1[1])])
+
+    def build(self, nlp: NLP, span: Optional[float]) -> Geometry:
+        n = self.n
+        if span is None:
+            guess = arc_points(0.5 * math.pi, math.sqrt(1.0 / segment_area_factor(0.5 * math.pi)), n)
+        else:
+            t = _angle_from_aspect(1.0 / span ** 2)
+            guess = arc_points(t, span / (2.0 * math.sin(t)), n)
+        seg0 = float(np.hypot(*np.diff(guess, axis=0).T).mean())
+        px = nlp.variable("x", n - 1, init=guess[1:-1, 0])
+        py = nlp.variable("y", n - 1, init=guess[1:-1, 1])
+        a = nlp.variable("span", 1, lb=1e-8, init=guess[-1, 0]) if span is None else span
+        x = ca.vertcat(0.0, px, a)
+        y = ca.vertcat(0.0, py, 0.0)
+        pts = ca.horzcat(x, y).T
+        sq, length, tri = self.element().map(n)(pts[:, :-1], pts[:, 1:])
+        nlp.equal("equal_segments", ((sq[1:] - sq[:-1]) / (2.0 * seg0 ** 2)).T)
+        gx, gy = guess[:, 0], guess[:, 1]
+        area = _cumulative_area(nlp, tri.T, 0.5 * (gx[1:] * gy[:-1] - gx[:-1] * gy[1:]))
+        return Geometry(x, y, ca.sum2(length), a, area)
+
+
+class Graph:
+    """Graph ``y(x_i)`` on the uniform grid ``x_i = i h``, ``h = a / n``, of ``[0, a]``.
+
+    Unknowns: the ``n - 1`` interior heights and the span ``a`` (unless pinned).  Length
+    ``sum sqrt(h² + (y_{i+1} - y_i)²)``, area by the trapezoid rule.  A graph
+    cannot overhang: contact angles of 90° or more are refused.
+
+    Default initial guess: the cap of contact angle 45° and the given area (or
+    the pinned span's arc); it does not use Young's angle.
+    """
+
+    name = "graph"
+    guess_angle = 0.25 * math.pi
+
+    def __init__(self, n: int):
+        self.n = n
+
+    @staticmethod
+    def element() -> ca.Function:
+        y0, y1, h = ca.SX.sym("y0"), ca.SX.sym("y1"), ca.SX.sym("h")
+        return ca.Function("cell", [y0, y1, h], [ca.sqrt(h * h + (y1 - y0) ** 2), 0.5 * h * (y0 + y1)])
+
+    def build(self, nlp: NLP, span: Optional[float]) -> Geometry:
+        n = self.n
+        if span is None:
+            t = self.guess_angle
+            radius = math.sqrt(1.0 / segment_area_factor(t))
+        else:
+            t = _angle_from_aspect(1.0 / span ** 2)
+            radius = span / (2.0 * math.sin(t))
+        a0 = 2.0 * radius * math.sin(t)
+        xs = a0 * np.arange(n + 1) / n
+        ys = np.maximum(np.sqrt(np.maximum(radius ** 2 - (xs - 0.5 * a0) ** 2, 0.0)) - radius * math.cos(t), 0.0)
+        ys[[0, -1]] = 0.0
+        yv = nlp.variable("y", n - 1, init=ys[1:-1])
+        if span is None:
+            a = nlp.variable("span", 1, lb=1e-8, init=a0)
+        else:
+            a = span
+        h = ca.repmat(a / n, n, 1)
+        y = ca.vertcat(0.0, yv, 0.0)
+        length, trap = self.element().map(n)(y[:-1].T, y[1:].T, h.T)
+        area = _cumulative_area(nlp, trap.T, 0.5 * (a0 / n) * (ys[:-1] + ys[1:]))
+        x = ca.vertcat(0.0, ca.cumsum(h))
+        return Geometry(x, y, ca.sum2(length), a, area)
+
+
+DISCRETISATIONS = {"curve": Curve, "graph": Graph}
+
+
+# ---------------------------------------------------------------------------- inspect helpers
+def contact_angle_estimate(x, y) -> float:
+    """Contact angle from the vertices, second-order accurate in 1/N.
+
+    The first chord's angle ``phi_0`` is the tangent angle at the chord's
+    middle, half a segment inside the contact point, so it lags the contact
+    angle by half the turning per segment (about ``theta / N``).  Extrapolating
+    the chord angles ``phi_0, phi_1`` linearly in arc length to the contact
+    point removes that lag; the estimate is exact for vertices on a circle with
+    equal chords.  Both ends are estimated (the right end mirrored) and
+    averaged.
+    """
+    x, y = np.asarray(x, float), np.asarray(y, float)
+
+    def one_end(px, py):
+        dx, dy = np.diff(px[:3]), np.diff(py[:3])
+        phi = np.arctan2(dy, dx)
+        l0, l1 = np.hypot(dx[0], dy[0]), np.hypot(dx[1], dy[1])
+        return phi[0] + (phi[0] - phi[1]) * l0 / (l0 + l1)
+
+    left = one_end(x, y)
+    right = one_end(-(x[::-1] - x[-1]), y[::-1])
+    return 0.5 * (left + right)
+
+
+# ---------------------------------------------------------------------------- solve
+@dataclass
+class DropletSolution:
+    """The discrete drop, its physical readings and their errors against the oracle."""
+
+    drop: Droplet
+    formulation: str
+    n: int
+    result: Result
+    x: np.ndarray
+    y: np.ndarray
+    contact_angle: float
+    span: float
+    pressure: float
+    energy: float
+    young_residual: Optional[float]
+    analytic: CircularCap
+    errors: Dict[str, float] = field(default_factory=dict)
+
+    @property
+    def success(self) -> bool:
+        return self.result.success
+
+    @property
+    def status(self) -> str:
+        return "ok" if self.result.success else self.result.status
+
+    def as_dict(self) -> dict:
+        """The JSON object of ``problems/droplet.py --json``."""
+        r = self.result
+        return {
+            "status": self.status,
+            "message": r.message,
+            "formulation": self.formulation,
+            "n": self.n,
+            "mode": "free-span" if self.drop.span is None else "fixed-span",
+            "iterations": r.iterations,
+            "build_time_s": r.build_time_s,
+            "solve_time_s": r.solve_time_s,
+            "contact_angle": self.contact_angle,
+            "span": self.span,
+            "pressure": self.pressure,
+            "energy": self.energy,
+            "young_residual": self.young_residual,
+            "analytic": self.analytic.as_dict(),
+            "errors": dict(self.errors),
+            "x": self.x.tolist(),
+            "y": self.y.tolist(),
+        }
+
+
+def make_nlp(drop: Droplet, n: int, formulation: str = "curve"):
+    """Build (but do not solve) the droplet NLP in scaled units; return ``(nlp, geometry, area_constraint)``."""
+    n = integer_at_least("n", n, MIN_N)
+    one_of("formulation", formulation, FORMULATIONS)
+    cap = analytic(drop)
+    if formulation == "graph" and cap.contact_angle >= 0.5 * math.pi:
+        raise InputError(
+            f"the graph formulation y(x) cannot represent contact angles of 90 degrees or more "
+            f"(this drop's angle is {math.degrees(cap.contact_angle):.4g} degrees); use the curve formulation")
+    L = drop.length_scale
+    nlp = NLP(ca.MX)
+    geo = DISCRETISATIONS[formulation](n).build(nlp, None if drop.span is None else drop.span / L)
+    # The scene's terms: surface tension always; the wetting term only when the span is free and it is non-zero.
+    energy = geo.length
+    w = drop.wetting / drop.gamma_gl
+    if drop.span is None and w != 0.0:
+        energy = energy + w * geo.span
+    nlp.minimize(energy)
+    area = nlp.equal("area", geo.area, 1.0)
+    return nlp, geo, area
+
+
+def solve(drop: Droplet, n: int = 400, formulation: str = "curve", *, options: Optional[dict] = None,
+          verbose: bool = False) -> DropletSolution:
+    """Minimise the discrete droplet energy; never raises on non-convergence (see ``Result``)."""
+    nlp, geo, _ = make_nlp(drop, n, formulation)
+    res = nlp.solve(options=options, verbose=verbose)
+    L, g = drop.length_scale, drop.gamma_gl
+    xs, ys, span, length = nlp.evaluate(res, geo.x, geo.y, geo.span, geo.length)
+    x, y = L * xs, L * ys
+    span, length = L * float(span[0]), L * float(length[0])
+    cap = analytic(drop)
+    theta = contact_angle_estimate(x, y)
+    pressure = g / L * float(res.multipliers["area"][0])
+    energy = g * length + drop.wetting * span
+    young = None if drop.span is not None else g * math.cos(theta) + drop.wetting
+    errors = {
+        "shape": float(np.max(np.abs(cap.distance(x, y)))) / cap.radius,
+        "contact_angle": abs(theta - cap.contact_angle),
+        "span": abs(span - cap.span) / cap.span,
+        "energy": abs(energy - cap.energy) / abs(cap.energy),
+        "pressure": abs(pressure - cap.pressure) / cap.pressure,
+    }
+    return DropletSolution(drop, formulation, n, res, x, y, theta, span, pressure, energy, young, cap, errors)
+
+
+# ---------------------------------------------------------------------------- reduced problem in theta
+@dataclass
+class AngleSolution:
+    """Minimiser of the reduced energy ``E(theta)``."""
+
+    drop: Droplet
+    result: Result
+    contact_angle: float
+    radius: float
+    span: float
+    energy: float
+    young_residual: float
+    energy_function: ca.Function  # theta -> E(theta), physical units
+
+    @property
+    def success(self) -> bool:
+        return self.result.success
+
+    @property
+    def status(self) -> str:
+        return "ok" if self.result.success else self.result.status
+
+    def as_dict(self) -> dict:
+        return {"status": self.status, "message": self.result.message, "contact_angle": self.contact_angle,
+                "young_residual": self.young_residual, "radius": self.radius, "span": self.span,
+                "energy": self.energy, "iterations": self.result.iterations,
+                "build_time_s": self.result.build_time_s, "solve_time_s": self.result.solve_time_s}
+
+
+def reduced_energy(drop: Droplet):
+    """``E(theta)`` as a CasADi function: ``R = sqrt(A / (theta - sin(2 theta)/2))``, ``a = 2 R sin theta``,
+    ``S = 2 R theta``, ``E = gamma_gl S + (gamma_sl - gamma_sg) a``."""
+    th = ca.SX.sym("theta")
+    R = ca.sqrt(drop.area / segment_area_factor(th))
+    E = drop.gamma_gl * 2.0 * R * th + drop.wetting * 2.0 * R * ca.sin(th)
+    return ca.Function("E", [th], [E], ["theta"], ["E"]), ca.Function("R", [th], [R])
+
+
+def solve_angle(drop: Droplet, *, verbose: bool = False) -> AngleSolution:
+    """Minimise ``E(theta)`` over ``theta`` in ``(0, pi)`` as a one-variable NLP (scaled: A = gamma_gl = 1)."""
+    if drop.span is not None:
+        raise InputError("the reduced problem in theta is posed for a free span; drop the span")
+    unit = Droplet(1.0, drop.wetting / drop.gamma_gl, 0.0, 1.0)
+    E_unit, _ = reduced_energy(unit)
+    nlp = NLP()
+    th = nlp.variable("theta", 1, lb=1e-6, ub=math.pi - 1e-6, init=0.5 * math.pi)
+    nlp.minimize(E_unit(th))
+    res = nlp.solve(options={"tol": 1e-14}, verbose=verbose)
+    theta = float(res["theta"][0])
+    E, Rf = reduced_energy(drop)
+    radius = float(Rf(theta))
+    return AngleSolution(drop, res, theta, radius, 2.0 * radius * math.sin(theta), float(E(theta)),
+                         drop.gamma_gl * math.cos(theta) + drop.wetting, E)
