@@ -228,8 +228,8 @@ class Curve:
     (``theta > 90°``) are fine.
 
     Default initial guess: the half-disc (``theta = 90°``) of the given area,
-    or the arc through the pinned span with the given area; it does not use
-    Young's angle.
+    or the half-ellipse of the given area over a pinned span; neither uses the
+    answer (Young's angle or the pinned arc).
     """
 
     name = "curve"
@@ -248,9 +248,14 @@ class Curve:
         n = self.n
         if span is None:
             guess = arc_points(0.5 * math.pi, math.sqrt(1.0 / segment_area_factor(0.5 * math.pi)), n)
-        else:
-            t = _angle_from_aspect(1.0 / span ** 2)
-            guess = arc_points(t, span / (2.0 * math.sin(t)), n)
+        else:  # half-ellipse of area 1 over the pinned span, resampled to equal arc length
+            phi = np.linspace(math.pi, 0.0, 64 * n + 1)
+            ell = np.column_stack([0.5 * span * (1.0 + np.cos(phi)), 4.0 / (math.pi * span) * np.sin(phi)])
+            s = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(ell, axis=0).T))])
+            t = np.linspace(0.0, s[-1], n + 1)
+            guess = np.column_stack([np.interp(t, s, ell[:, 0]), np.interp(t, s, ell[:, 1])])
+            guess[[0, -1], 1] = 0.0
+            guess[-1, 0] = span
         seg0 = float(np.hypot(*np.diff(guess, axis=0).T).mean())
         px = nlp.variable("x", n - 1, init=guess[1:-1, 0])
         py = nlp.variable("y", n - 1, init=guess[1:-1, 1])
@@ -272,8 +277,8 @@ class Graph:
     ``sum sqrt(h² + (y_{i+1} - y_i)²)``, area by the trapezoid rule.  A graph
     cannot overhang: contact angles of 90° or more are refused.
 
-    Default initial guess: the cap of contact angle 45° and the given area (or
-    the pinned span's arc); it does not use Young's angle.
+    Default initial guess: the cap of contact angle 45° and the given area, or
+    the parabola of the given area over a pinned span; neither uses the answer.
     """
 
     name = "graph"
@@ -292,12 +297,14 @@ class Graph:
         if span is None:
             t = self.guess_angle
             radius = math.sqrt(1.0 / segment_area_factor(t))
-        else:
-            t = _angle_from_aspect(1.0 / span ** 2)
-            radius = span / (2.0 * math.sin(t))
-        a0 = 2.0 * radius * math.sin(t)
-        xs = a0 * np.arange(n + 1) / n
-        ys = np.maximum(np.sqrt(np.maximum(radius ** 2 - (xs - 0.5 * a0) ** 2, 0.0)) - radius * math.cos(t), 0.0)
+            a0 = 2.0 * radius * math.sin(t)
+            xs = a0 * np.arange(n + 1) / n
+            ys = np.sqrt(np.maximum(radius ** 2 - (xs - 0.5 * a0) ** 2, 0.0)) - radius * math.cos(t)
+        else:  # parabola over the pinned span with area 1
+            a0 = span
+            xs = a0 * np.arange(n + 1) / n
+            ys = 6.0 / a0 ** 3 * xs * (a0 - xs)
+        ys = np.maximum(ys, 0.0)
         ys[[0, -1]] = 0.0
         yv = nlp.variable("y", n - 1, init=ys[1:-1])
         if span is None:

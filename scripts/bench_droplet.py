@@ -1,0 +1,482 @@
+#!/usr/bin/env python
+"""Benchmark of the droplet solver (``castrajectory.droplet``) and an SLSQP baseline.
+
+This is a benchmark, not a test: it measures and reports, and always exits
+with status 0 (2 for bad command-line flags, as argparse does).  PASS/MISS
+lines say whether the performance goals were met in *this* run on *this*
+machine; nothing is gated on them.
+
+What is measured
+----------------
+1. Scaling.  For each ``N`` in ``--sizes`` the default drop
+   (``gamma_gl = 1, gamma_sl = 0.5, gamma_sg = 1, A = 1``: Young's angle 60°)
+   is solved with ``droplet.solve(drop, N, formulation)`` ``--repeats`` times,
+   each time from scratch (a fresh NLP, so a fresh CasADi graph and Ipopt
+   solver).  Reported per ``N``: the best build time (``Result.build_time_s``:
+   graph construction plus ``nlpsol``), the best Ipopt solve time
+   (``Result.solve_time_s``), the best per-run sum build + solve, the best wall
+   time of the whole ``solve()`` call (which also post-processes the result),
+   Ipopt's iteration count, the status and the shape error (largest distance of
+   a vertex from the exact circle, divided by its radius).  Between consecutive
+   sizes the script prints the time ratio and the ratio of time per ``N``; over
+   all sizes it fits the slope of ``log(build + solve)`` against ``log N`` (the
+   growth exponent; linear cost is 1).
+
+2. SLSQP baseline.  For each ``N`` in ``--slsqp-sizes`` the *same* discrete
+   problem as :class:`droplet.Curve` is posed in scaled units
+   (``A = gamma_gl = 1``) for ``scipy.optimize.minimize(method="SLSQP")``:
+
+   * unknowns ``z = (x_1..x_{N-1}, y_1..y_{N-1}, a)``, with ``p_0 = (0, 0)``
+     and ``p_N = (a, 0)``;
+   * objective ``sum_i |p_{i+1} - p_i| + w a``, ``w = (gamma_sl - gamma_sg) / gamma_gl``;
+   * equalities ``(|p_{i+2} - p_{i+1}|² - |p_{i+1} - p_i|²) / (2 l_ref²) = 0``
+     (``l_ref`` the mean segment of the initial guess, as in ``Curve``) and the
+     shoelace area ``sum_i (x_{i+1} y_i - x_i y_{i+1}) / 2 = 1``
+     (``Curve`` writes the same sum as a chain of partial sums; the feasible
+     set and the minimiser are the same);
+   * initial guess: the half-disc arc of unit area, as in ``Curve``;
+   * exact derivatives: gradient and constraint Jacobians are written out
+     analytically (vectorised numpy) and checked once against central finite
+     differences before anything is timed;
+   * options ``maxiter = 2000, ftol = 1e-10``.
+
+   The SLSQP wall time is the best of ``--repeats`` runs (only one run if the
+   first takes longer than 20 s).  Reported: success flag, message, iteration
+   count, final constraint violation, energy error against the analytic energy
+   ``droplet.analytic(drop).energy``, and the largest vertex distance from the
+   castrajectory solution at the same ``N`` (a check that both solved the same
+   problem).  castrajectory is re-run at the same ``N`` (best of
+   ``--repeats``) and two speed ratios, both measured in this run, are printed:
+   SLSQP time / castrajectory solve time and SLSQP time / castrajectory
+   (build + solve) time.
+
+An untimed warm-up solve at small ``N`` runs first, so that loading the Ipopt
+plugin is not billed to the first size.
+
+BLAS threads: unless the caller already set them, ``OPENBLAS_NUM_THREADS``,
+``OMP_NUM_THREADS`` and ``MKL_NUM_THREADS`` are set to 1 before numpy is
+imported.  SLSQP's dense linear algebra goes through numpy/scipy's OpenBLAS;
+on a machine whose cores are busy with other work, OpenBLAS worker threads
+were measured to slow SLSQP at N = 160 down some 30-fold (about 1.3 s
+single-threaded against about 40 s threaded), which would inflate the speed-up
+ratios.  Ipopt's timings were not affected measurably.  Export the variables
+yourself to benchmark another setting; the values in effect are printed.
+Timings on a shared machine are noisy: compare numbers from one run only.
+
+Usage::
+
+    python scripts/bench_droplet.py
+    python scripts/bench_droplet.py --sizes 1000 10000 --repeats 1
+    python scripts/bench_droplet.py --slsqp-sizes 40 160 --json bench.json
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import platform
+import sys
+import time
+from typing import Dict, List, Optional
+
+#: Single-threaded BLAS unless the caller chose otherwise (see the module docstring); must precede numpy.
+BLAS_THREAD_VARS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+for _var in BLAS_THREAD_VARS:
+    os.environ.setdefault(_var, "1")
+
+import numpy as np  # noqa: E402
+
+from castrajectory import droplet as d  # noqa: E402
+
+#: The benchmarked scene (partial wetting, Young's angle 60 degrees).
+DROP = d.Droplet(gamma_gl=1.0, gamma_sl=0.5, gamma_sg=1.0, area=1.0)
+
+#: Goals reported as PASS/MISS.
+GOAL_MAX_ITER = 15
+GOAL_N_TIME = 10_000
+GOAL_TIME_S = 0.3
+GOAL_MAX_EXPONENT = 1.15
+GOAL_SPEEDUP_N = 160
+GOAL_SPEEDUP = 1000.0
+
+#: SLSQP runs slower than this are not repeated.
+SLSQP_REPEAT_LIMIT_S = 20.0
+
+
+# ---------------------------------------------------------------------------- castrajectory
+def run_castrajectory(n: int, formulation: str, repeats: int) -> Dict[str, object]:
+    """Solve ``repeats`` times from scratch; keep the best times and the last run's readings."""
+    builds, solves, sums, walls = [], [], [], []
+    sol = None
+    for _ in range(repeats):
+        t = time.perf_counter()
+        sol = d.solve(DROP, n, formulation)
+        walls.append(time.perf_counter() - t)
+        r = sol.result
+        builds.append(r.build_time_s)
+        solves.append(r.solve_time_s)
+        sums.append(r.build_time_s + r.solve_time_s)
+    return {
+        "n": n,
+        "build_s": min(builds),
+        "solve_s": min(solves),
+        "build_plus_solve_s": min(sums),
+        "wall_s": min(walls),
+        "iterations": sol.result.iterations,
+        "status": sol.status,
+        "success": bool(sol.success),
+        "errors": dict(sol.errors),
+        "energy": sol.energy,
+        "_solution": sol,
+    }
+
+
+def loglog_slope(ns: List[int], ts: List[float]) -> Optional[float]:
+    """Least-squares slope of ``log t`` against ``log n`` (None with fewer than two distinct sizes)."""
+    if len(set(ns)) < 2:
+        return None
+    return float(np.polyfit(np.log(ns), np.log(ts), 1)[0])
+
+
+# ---------------------------------------------------------------------------- SLSQP baseline
+class SlsqpDroplet:
+    """The ``Curve`` discretisation in scaled units with analytic first derivatives.
+
+    ``z = (x_1..x_{n-1}, y_1..y_{n-1}, a)``; all derivatives are first taken with
+    respect to the full vertex arrays ``X = x_0..x_n`` and ``Y = y_0..y_n`` and then
+    restricted to the unknowns (interior ``X``, interior ``Y``, and ``X_n = a``).
+    """
+
+    def __init__(self, drop: d.Droplet, n: int):
+        self.n = n
+        self.w = drop.wetting / drop.gamma_gl
+        guess = d.arc_points(0.5 * math.pi, math.sqrt(1.0 / d.segment_area_factor(0.5 * math.pi)), n)
+        self.z0 = np.concatenate([guess[1:-1, 0], guess[1:-1, 1], [guess[-1, 0]]])
+        seg0 = float(np.hypot(*np.diff(guess, axis=0).T).mean())
+        self.eq_scale = 1.0 / (2.0 * seg0 ** 2)
+
+    # -- unknowns <-> vertices
+    def vertices(self, z):
+        n = self.n
+        X = np.empty(n + 1)
+        Y = np.zeros(n + 1)
+        X[0], X[1:n], X[n] = 0.0, z[:n - 1], z[-1]
+        Y[1:n] = z[n - 1:2 * n - 2]
+        return X, Y
+
+    def restrict(self, gX, gY):
+        """Derivatives w.r.t. X and Y (last axis has n + 1 entries) -> w.r.t. z."""
+        n = self.n
+        return np.concatenate([gX[..., 1:n], gY[..., 1:n], gX[..., n:n + 1]], axis=-1)
+
+    # -- objective: sum of segment lengths + w a
+    def energy(self, z):
+        X, Y = self.vertices(z)
+        return float(np.hypot(np.diff(X), np.diff(Y)).sum() + self.w * z[-1])
+
+    def energy_grad(self, z):
+        X, Y = self.vertices(z)
+        dx, dy = np.diff(X), np.diff(Y)
+        length = np.hypot(dx, dy)
+        ux, uy = dx / length, dy / length
+        gX = np.zeros(self.n + 1)
+        gY = np.zeros(self.n + 1)
+        gX[1:] += ux
+        gX[:-1] -= ux
+        gY[1:] += uy
+        gY[:-1] -= uy
+        g = self.restrict(gX, gY)
+        g[-1] += self.w
+        return g
+
+    # -- equalities: equal consecutive squared segments, scaled as in Curve
+    def equal_segments(self, z):
+        X, Y = self.vertices(z)
+        sq = np.diff(X) ** 2 + np.diff(Y) ** 2
+        return self.eq_scale * (sq[1:] - sq[:-1])
+
+    def equal_segments_jac(self, z):
+        n = self.n
+        X, Y = self.vertices(z)
+        dx, dy = np.diff(X), np.diff(Y)
+        rows = np.arange(n - 1)
+        # row i: s_{i+1} - s_i, with d s_k / d X_k = -2 dx_k and d s_k / d X_{k+1} = +2 dx_k
+        JX = np.zeros((n - 1, n + 1))
+        JY = np.zeros((n - 1, n + 1))
+        for J, dd in ((JX, dx), (JY, dy)):
+            J[rows, rows] = 2.0 * dd[:-1]
+            J[rows, rows + 1] = -2.0 * (dd[:-1] + dd[1:])
+            J[rows, rows + 2] = 2.0 * dd[1:]
+        return self.eq_scale * self.restrict(JX, JY)
+
+    # -- equality: shoelace area (clockwise traversal, so positive) == 1
+    def area(self, z):
+        X, Y = self.vertices(z)
+        return float(0.5 * np.sum(X[1:] * Y[:-1] - X[:-1] * Y[1:]))
+
+    def area_residual(self, z):
+        return np.array([self.area(z) - 1.0])
+
+    def area_jac(self, z):
+        X, Y = self.vertices(z)
+        Xp, Yp = np.pad(X, 1), np.pad(Y, 1)
+        gX = 0.5 * (Yp[:-2] - Yp[2:])    # d/dX_k = (Y_{k-1} - Y_{k+1}) / 2
+        gY = 0.5 * (Xp[2:] - Xp[:-2])    # d/dY_k = (X_{k+1} - X_{k-1}) / 2
+        return self.restrict(gX, gY)[None, :]
+
+    def constraints(self):
+        return [
+            {"type": "eq", "fun": self.equal_segments, "jac": self.equal_segments_jac},
+            {"type": "eq", "fun": self.area_residual, "jac": self.area_jac},
+        ]
+
+    def violation(self, z) -> float:
+        return float(max(np.max(np.abs(self.equal_segments(z))), abs(self.area(z) - 1.0)))
+
+
+def _central_jacobian(fun, z, h=1e-6):
+    f0 = np.atleast_1d(fun(z))
+    J = np.empty((f0.size, z.size))
+    for k in range(z.size):
+        e = np.zeros_like(z)
+        e[k] = h
+        J[:, k] = (np.atleast_1d(fun(z + e)) - np.atleast_1d(fun(z - e))) / (2.0 * h)
+    return J
+
+
+def check_slsqp_derivatives(n: int = 7, seed: int = 0) -> float:
+    """Compare the analytic derivatives with central differences at a perturbed guess; assert agreement."""
+    prob = SlsqpDroplet(DROP, n)
+    rng = np.random.default_rng(seed)
+    z = prob.z0 + 0.05 * rng.standard_normal(prob.z0.size)
+    worst = 0.0
+    for name, fun, jac in (("energy", prob.energy, lambda v: prob.energy_grad(v)[None, :]),
+                           ("equal_segments", prob.equal_segments, prob.equal_segments_jac),
+                           ("area", prob.area_residual, prob.area_jac)):
+        exact, approx = np.atleast_2d(jac(z)), _central_jacobian(fun, z)
+        err = float(np.max(np.abs(exact - approx)) / max(1.0, float(np.max(np.abs(approx)))))
+        assert exact.shape == approx.shape, f"{name}: Jacobian shape {exact.shape} != {approx.shape}"
+        assert err < 1e-6, f"{name}: analytic derivative disagrees with finite differences ({err:.2e})"
+        worst = max(worst, err)
+    return worst
+
+
+def run_slsqp(n: int, repeats: int) -> Dict[str, object]:
+    from scipy.optimize import minimize
+
+    prob = SlsqpDroplet(DROP, n)
+    times, res = [], None
+    for _ in range(repeats):
+        t = time.perf_counter()
+        res = minimize(prob.energy, prob.z0, jac=prob.energy_grad, method="SLSQP",
+                       constraints=prob.constraints(), options={"maxiter": 2000, "ftol": 1e-10})
+        times.append(time.perf_counter() - t)
+        if times[-1] > SLSQP_REPEAT_LIMIT_S:
+            break
+    cap = d.analytic(DROP)
+    scale = DROP.gamma_gl * DROP.length_scale
+    energy = scale * float(res.fun)
+    X, Y = prob.vertices(res.x)
+    return {
+        "n": n,
+        "time_s": min(times),
+        "runs": len(times),
+        "success": bool(res.success),
+        "message": str(res.message),
+        "nit": int(res.nit),
+        "energy": energy,
+        "energy_error": abs(energy - cap.energy) / abs(cap.energy),
+        "constraint_violation": prob.violation(res.x),
+        "_xy": (X, Y),
+    }
+
+
+# ---------------------------------------------------------------------------- reporting
+def goal_line(ok: Optional[bool], text: str, detail: str) -> str:
+    tag = "SKIP" if ok is None else ("PASS" if ok else "MISS")
+    return f"  {tag}  {text}: {detail}"
+
+
+def fmt_s(t: float) -> str:
+    return f"{t:9.4f}"
+
+
+def _positive_int(s: str) -> int:
+    try:
+        v = int(s)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {s!r}") from None
+    if v < d.MIN_N:
+        raise argparse.ArgumentTypeError(f"N must be at least {d.MIN_N}, got {v}")
+    return v
+
+
+def _repeats(s: str) -> int:
+    try:
+        v = int(s)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {s!r}") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"repeats must be at least 1, got {v}")
+    return v
+
+
+def parse_args(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0],
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--sizes", type=_positive_int, nargs="+", default=[1000, 10000, 100000],
+                   help="segment counts N for the scaling study (default: 1000 10000 100000)")
+    p.add_argument("--slsqp-sizes", type=_positive_int, nargs="*", default=[40, 160],
+                   help="segment counts N for the SLSQP comparison (default: 40 160; none to skip)")
+    p.add_argument("--repeats", type=_repeats, default=3, help="runs per measurement; best time kept (default 3)")
+    p.add_argument("--formulation", choices=d.FORMULATIONS, default="curve",
+                   help="droplet discretisation (default curve; the SLSQP baseline always poses the curve)")
+    p.add_argument("--json", metavar="PATH", help="also write all numbers as JSON to PATH")
+    return p.parse_args(argv)
+
+
+def main(argv=None) -> int:
+    args = parse_args(argv)
+    sizes = sorted(set(args.sizes))
+    slsqp_sizes = sorted(set(args.slsqp_sizes))
+    cap = d.analytic(DROP)
+    import casadi
+    import scipy
+
+    env = {"python": platform.python_version(), "platform": platform.platform(),
+           "casadi": casadi.__version__, "numpy": np.__version__, "scipy": scipy.__version__,
+           "cpus": os.cpu_count()}
+    env.update({v: os.environ.get(v) for v in BLAS_THREAD_VARS})
+    print("castrajectory droplet benchmark")
+    print(f"  drop: gamma_gl={DROP.gamma_gl:g} gamma_sl={DROP.gamma_sl:g} gamma_sg={DROP.gamma_sg:g} "
+          f"area={DROP.area:g}  (Young's angle {math.degrees(cap.contact_angle):.4g} deg, "
+          f"analytic energy {cap.energy:.12g})")
+    print(f"  formulation={args.formulation}  repeats={args.repeats} (best time kept)")
+    print("  " + "  ".join(f"{k} {env[k]}" for k in ("python", "casadi", "numpy", "scipy", "cpus")))
+    print("  " + "  ".join(f"{v}={env[v]}" for v in BLAS_THREAD_VARS) + "  (1 unless set by the caller)")
+    print(f"  {env['platform']}")
+
+    d.solve(DROP, 20, args.formulation)  # warm-up: load the Ipopt plugin outside the timings
+
+    # -------------------------------------------------------------- 1. scaling
+    print()
+    print(f"1. Scaling of droplet.solve(drop, N, {args.formulation!r}), fresh build every run; times in seconds")
+    head = (f"  {'N':>8} {'build':>9} {'solve':>9} {'build+solve':>11} {'wall':>9} {'iter':>5}  "
+            f"{'status':<24} {'shape err':>9}")
+    print(head)
+    print("  " + "-" * (len(head) - 2))
+    scaling = []
+    for n in sizes:
+        r = run_castrajectory(n, args.formulation, args.repeats)
+        r.pop("_solution")
+        scaling.append(r)
+        print(f"  {n:>8} {fmt_s(r['build_s'])} {fmt_s(r['solve_s'])} {r['build_plus_solve_s']:11.4f} "
+              f"{fmt_s(r['wall_s'])} {r['iterations']:>5}  {r['status']:<24} {r['errors']['shape']:9.2e}",
+              flush=True)
+
+    ratios = []
+    if len(scaling) > 1:
+        print()
+        print("  consecutive sizes (build+solve):")
+        print(f"  {'N1 -> N2':>18} {'N ratio':>8} {'t ratio':>8} {'(t/N) ratio':>11} {'local exponent':>15}")
+        for a, b in zip(scaling, scaling[1:]):
+            nr = b["n"] / a["n"]
+            tr = b["build_plus_solve_s"] / a["build_plus_solve_s"]
+            ratios.append({"n1": a["n"], "n2": b["n"], "n_ratio": nr, "time_ratio": tr,
+                           "time_per_n_ratio": tr / nr, "local_exponent": math.log(tr) / math.log(nr)})
+            print(f"  {str(a['n']) + ' -> ' + str(b['n']):>18} {nr:8.2f} {tr:8.2f} {tr / nr:11.3f} "
+                  f"{math.log(tr) / math.log(nr):15.3f}")
+    slope = loglog_slope([r["n"] for r in scaling], [r["build_plus_solve_s"] for r in scaling])
+    print()
+    print("  growth exponent (least-squares slope of log(build+solve) vs log N; linear = 1): "
+          + ("n/a (needs two sizes)" if slope is None else f"{slope:.3f}"))
+
+    goals = []
+    print()
+    print("  goals:")
+    max_iter = max(r["iterations"] for r in scaling)
+    ok = max_iter <= GOAL_MAX_ITER and all(r["success"] for r in scaling)
+    detail = f"max {max_iter} iterations over N = {', '.join(str(r['n']) for r in scaling)}"
+    if not all(r["success"] for r in scaling):
+        detail += "; some solves failed: " + ", ".join(f"N={r['n']} {r['status']}" for r in scaling if not r["success"])
+    goals.append(("iterations <= 15 at every N", ok, detail))
+    at = [r for r in scaling if r["n"] == GOAL_N_TIME]
+    goals.append((f"build+solve at N = {GOAL_N_TIME} < {GOAL_TIME_S} s",
+                  None if not at else at[0]["build_plus_solve_s"] < GOAL_TIME_S,
+                  f"N = {GOAL_N_TIME} not in --sizes" if not at else f"{at[0]['build_plus_solve_s']:.4f} s"))
+    goals.append((f"growth exponent <= {GOAL_MAX_EXPONENT}", None if slope is None else slope <= GOAL_MAX_EXPONENT,
+                  "needs two sizes" if slope is None else f"{slope:.3f}"))
+    for text, ok, detail in goals:
+        print(goal_line(ok, text, detail))
+
+    # -------------------------------------------------------------- 2. SLSQP baseline
+    comparison = []
+    fd_err = None
+    if slsqp_sizes:
+        print()
+        print("2. SLSQP baseline (scipy.optimize.minimize, method='SLSQP', maxiter=2000, ftol=1e-10)")
+        print("   same curve discretisation, scaled units, analytic gradient and Jacobians, half-disc guess")
+        fd_err = check_slsqp_derivatives()
+        print(f"   derivative check vs central differences at N=7: max relative difference {fd_err:.1e} (OK)")
+        head = (f"  {'N':>5} {'SLSQP s':>9} {'runs':>4} {'ok':>3} {'nit':>5} {'viol':>8} {'E err':>9} "
+                f"{'|dx| vs cas':>11} | {'cas solve':>9} {'cas b+s':>9} {'cas E err':>9} | "
+                f"{'SLSQP/solve':>11} {'SLSQP/(b+s)':>11}")
+        print(head)
+        print("  " + "-" * (len(head) - 2))
+        for n in slsqp_sizes:
+            s = run_slsqp(n, args.repeats)
+            c = run_castrajectory(n, "curve", args.repeats)
+            sol = c.pop("_solution")
+            X, Y = s.pop("_xy")
+            L = DROP.length_scale
+            dist = float(np.max(np.hypot(X - sol.x / L, Y - sol.y / L)))
+            row = {"n": n, "slsqp": s, "castrajectory": c, "max_vertex_distance": dist,
+                   "ratio_vs_solve": s["time_s"] / c["solve_s"],
+                   "ratio_vs_build_plus_solve": s["time_s"] / c["build_plus_solve_s"]}
+            comparison.append(row)
+            print(f"  {n:>5} {fmt_s(s['time_s'])} {s['runs']:>4} {'yes' if s['success'] else 'NO':>3} "
+                  f"{s['nit']:>5} {s['constraint_violation']:8.1e} {s['energy_error']:9.2e} {dist:11.2e} | "
+                  f"{fmt_s(c['solve_s'])} {fmt_s(c['build_plus_solve_s'])} {c['errors']['energy']:9.2e} | "
+                  f"{row['ratio_vs_solve']:10.0f}x {row['ratio_vs_build_plus_solve']:10.0f}x", flush=True)
+            if not s["success"]:
+                print(f"        SLSQP failed: {s['message']}")
+            if not c["success"]:
+                print(f"        castrajectory failed: {c['status']}")
+        print("   E err: |E - E_analytic| / E_analytic (discretisation error, O(1/N²), the same for both if both converge);")
+        print("   |dx| vs cas: largest vertex distance between the SLSQP and castrajectory solutions;")
+        print("   ratios: SLSQP wall time / castrajectory solve time, and / castrajectory build+solve time.")
+        print()
+        print("  goals:")
+        at = [r for r in comparison if r["n"] == GOAL_SPEEDUP_N]
+        for key, label in (("ratio_vs_solve", "SLSQP time / castrajectory solve time"),
+                           ("ratio_vs_build_plus_solve", "SLSQP time / castrajectory build+solve time")):
+            text = f">= {GOAL_SPEEDUP:g}x faster than SLSQP at N = {GOAL_SPEEDUP_N} ({label})"
+            if not at:
+                ok, detail = None, f"N = {GOAL_SPEEDUP_N} not in --slsqp-sizes"
+            elif not at[0]["slsqp"]["success"]:
+                ok, detail = None, f"{at[0][key]:.0f}x, not comparable: SLSQP failed: {at[0]['slsqp']['message']}"
+            elif not at[0]["castrajectory"]["success"]:
+                ok, detail = None, f"{at[0][key]:.0f}x, not comparable: castrajectory failed"
+            else:
+                ok, detail = at[0][key] >= GOAL_SPEEDUP, f"{at[0][key]:.0f}x"
+            goals.append((text, ok, detail))
+            print(goal_line(ok, text, detail))
+
+    if args.json:
+        out = {"environment": env, "drop": {"gamma_gl": DROP.gamma_gl, "gamma_sl": DROP.gamma_sl,
+                                            "gamma_sg": DROP.gamma_sg, "area": DROP.area},
+               "analytic": cap.as_dict(), "formulation": args.formulation, "repeats": args.repeats,
+               "scaling": scaling, "consecutive": ratios, "growth_exponent": slope,
+               "slsqp_derivative_check": fd_err, "slsqp_comparison": comparison,
+               "goals": [{"goal": t, "result": "SKIP" if ok is None else ("PASS" if ok else "MISS"),
+                          "detail": det} for t, ok, det in goals]}
+        with open(args.json, "w") as fh:
+            json.dump(out, fh, indent=2)
+        print()
+        print(f"JSON written to {args.json}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

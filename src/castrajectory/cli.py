@@ -1,0 +1,173 @@
+"""Command-line plumbing shared by the problem scripts, and the ``castrajectory`` console command.
+
+A problem script defines ``parser()`` and ``run(args) -> Outcome`` and calls
+:func:`run_scene`, which applies the conventions of every scene:
+
+* ``--json`` prints one JSON object on stdout and nothing else: while the
+  scene runs, file descriptor 1 is pointed at stderr, so nothing a C++ library
+  prints can leak into the JSON;
+* exit code ``0`` solved, ``1`` the solver failed (message on stderr),
+  ``2`` bad input (one line on stderr, no traceback);
+* ``--plot`` / ``--animate`` files are written only after a successful solve,
+  so a refused or failed run never overwrites earlier output.
+
+Console: ``castrajectory list``, ``castrajectory run <scene> [flags]``,
+``castrajectory report --out DIR``.
+"""
+from __future__ import annotations
+
+import argparse
+import contextlib
+import importlib
+import json
+import math
+import os
+import sys
+from dataclasses import dataclass, field
+from typing import Callable, Dict, List, Optional
+
+import numpy as np
+
+from .validation import InputError
+
+#: Scene name -> module (the files in problems/, installed as castrajectory.problems).
+SCENES = {
+    "droplet": "castrajectory.problems.droplet",
+    "droplet_angle": "castrajectory.problems.droplet_angle",
+}
+
+
+class ArgumentParser(argparse.ArgumentParser):
+    """argparse with a one-line error message and exit code 2."""
+
+    def error(self, message):  # pragma: no cover - exercised through subprocess tests
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+def scene_parser(prog: str, description: str) -> ArgumentParser:
+    p = ArgumentParser(prog=prog, description=description,
+                       formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout and nothing else")
+    p.add_argument("--verbose", action="store_true", help="stream Ipopt's log (to stderr with --json)")
+    return p
+
+
+def add_plot(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--plot", metavar="PATH", help="write a picture (format from the extension, e.g. .png, .pdf)")
+
+
+@dataclass
+class Outcome:
+    """What a scene's ``run`` returns."""
+
+    success: bool
+    data: dict
+    summary: List[str]
+    message: str = ""
+    writers: Dict[str, Callable[[str], None]] = field(default_factory=dict)  # flag name -> writer(path)
+
+
+def jsonable(obj):
+    """Convert numpy values and non-finite floats (-> None) so that ``json.dumps(allow_nan=False)`` works."""
+    if isinstance(obj, dict):
+        return {str(k): jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return jsonable(obj.tolist())
+    if isinstance(obj, (np.floating, float)):
+        v = float(obj)
+        return v if math.isfinite(v) else None
+    if isinstance(obj, (np.integer,)):
+        return int(obj)
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    return obj
+
+
+@contextlib.contextmanager
+def stdout_to_stderr(enabled: bool = True):
+    """Point file descriptor 1 at stderr for the duration (catches output of C/C++ libraries too)."""
+    if not enabled:
+        yield
+        return
+    sys.stdout.flush()
+    saved = os.dup(1)
+    try:
+        os.dup2(2, 1)
+        yield
+    finally:
+        sys.stdout.flush()
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
+def run_scene(parser: argparse.ArgumentParser, run: Callable[[argparse.Namespace], Outcome],
+              argv: Optional[List[str]] = None) -> int:
+    """Parse, run, write outputs and return the exit code (see module docstring)."""
+    args = parser.parse_args(argv)
+    prog = parser.prog
+    try:
+        with stdout_to_stderr(args.json):
+            outcome = run(args)
+            if outcome.success:
+                for flag, writer in outcome.writers.items():
+                    path = getattr(args, flag, None)
+                    if path:
+                        os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+                        writer(path)
+    except InputError as exc:
+        print(f"{prog}: error: {exc}", file=sys.stderr)
+        return 2
+    if args.json:
+        sys.stdout.write(json.dumps(jsonable(outcome.data), allow_nan=False) + "\n")
+    else:
+        print("\n".join(outcome.summary))
+    if not outcome.success:
+        print(f"{prog}: solver failed: {outcome.message}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def fmt(v, spec: str = ".10g") -> str:
+    return "-" if v is None else format(v, spec)
+
+
+def table(rows: List[List[str]]) -> List[str]:
+    """Left-aligned plain-text table."""
+    widths = [max(len(str(r[i])) for r in rows) for i in range(len(rows[0]))]
+    return ["  ".join(str(c).ljust(w) for c, w in zip(r, widths)).rstrip() for r in rows]
+
+
+# ---------------------------------------------------------------------------- console command
+def main(argv: Optional[List[str]] = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    p = ArgumentParser(prog="castrajectory", description="Variational mechanics as NLPs (CasADi + Ipopt).")
+    sub = p.add_subparsers(dest="command", required=True)
+    sub.add_parser("list", help="list the scenes")
+    r = sub.add_parser("run", help="run a scene: castrajectory run <scene> [scene flags]", add_help=False)
+    r.add_argument("scene")
+    rep = sub.add_parser("report", help="solve every scene at its defaults and write a report")
+    rep.add_argument("--out", required=True, metavar="DIR", help="output directory")
+    rep.add_argument("--quick", action="store_true", help="smaller convergence sweep (N up to 2048)")
+    if argv[:1] == ["run"]:
+        if len(argv) < 2 or argv[1].startswith("-"):
+            print("castrajectory: error: run needs a scene name; see `castrajectory list`", file=sys.stderr)
+            return 2
+        name = argv[1]
+        if name not in SCENES:
+            print(f"castrajectory: error: unknown scene {name!r}; known: {', '.join(SCENES)}", file=sys.stderr)
+            return 2
+        return importlib.import_module(SCENES[name]).main(argv[2:])
+    args = p.parse_args(argv)
+    if args.command == "list":
+        for name, mod in SCENES.items():
+            doc = (importlib.import_module(mod).__doc__ or "").strip().splitlines()
+            print(f"{name:16s} {doc[0] if doc else ''}")
+        return 0
+    from .report import write_report
+    return write_report(args.out, quick=args.quick)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
