@@ -33,7 +33,7 @@ def run(args):
     # describe
     drop = droplet.Droplet(args.gamma_gl, args.gamma_sl, args.gamma_sg, args.area, args.span)
     # discretise + solve
-    sol = droplet.solve(drop, args.n, args.formulation, verbose=args.verbose)
+    sol = droplet.solve(drop, args.n, args.formulation, options=cli.ipopt_options(args), verbose=args.verbose)
     # inspect
     cap, e, r = sol.analytic, sol.errors, sol.result
     deg = math.degrees

@@ -26,7 +26,7 @@ def parser():
 
 def run(args):
     drop = droplet.Droplet(args.gamma_gl, args.gamma_sl, args.gamma_sg, args.area)
-    sol = droplet.solve_angle(drop, verbose=args.verbose)
+    sol = droplet.solve_angle(drop, options=cli.ipopt_options(args), verbose=args.verbose)
     young = droplet.young_angle(drop.gamma_gl, drop.gamma_sl, drop.gamma_sg)
     r = sol.result
     summary = [

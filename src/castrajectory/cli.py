@@ -49,7 +49,13 @@ def scene_parser(prog: str, description: str) -> ArgumentParser:
                        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout and nothing else")
     p.add_argument("--verbose", action="store_true", help="stream Ipopt's log (to stderr with --json)")
+    p.add_argument("--max-iter", type=int, default=None, help="Ipopt iteration limit (default: library's)")
     return p
+
+
+def ipopt_options(args) -> dict:
+    """Ipopt options selected by the shared flags."""
+    return {} if args.max_iter is None else {"max_iter": args.max_iter}
 
 
 def add_plot(p: argparse.ArgumentParser) -> None:

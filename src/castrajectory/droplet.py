@@ -482,7 +482,7 @@ def reduced_energy(drop: Droplet):
     return ca.Function("E", [th], [E], ["theta"], ["E"]), ca.Function("R", [th], [R])
 
 
-def solve_angle(drop: Droplet, *, verbose: bool = False) -> AngleSolution:
+def solve_angle(drop: Droplet, *, options: Optional[dict] = None, verbose: bool = False) -> AngleSolution:
     """Minimise ``E(theta)`` over ``theta`` in ``(0, pi)`` as a one-variable NLP (scaled: A = gamma_gl = 1)."""
     if drop.span is not None:
         raise InputError("the reduced problem in theta is posed for a free span; drop the span")
@@ -491,7 +491,7 @@ def solve_angle(drop: Droplet, *, verbose: bool = False) -> AngleSolution:
     nlp = NLP()
     th = nlp.variable("theta", 1, lb=1e-6, ub=math.pi - 1e-6, init=0.5 * math.pi)
     nlp.minimize(E_unit(th))
-    res = nlp.solve(options={"tol": 1e-14}, verbose=verbose)
+    res = nlp.solve(options={"tol": 1e-14, **(options or {})}, verbose=verbose)
     theta = float(res["theta"][0])
     E, Rf = reduced_energy(drop)
     radius = float(Rf(theta))
