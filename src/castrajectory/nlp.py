@@ -89,6 +89,7 @@ class NLP:
     def __init__(self, symbolic=ca.SX):
         self._sym = symbolic
         self._t0 = time.perf_counter()
+        self._t_described = self._t0  # end of the last description call
         self._vars: List[_Block] = []
         self._params: List[_Block] = []
         self._g: List[object] = []
@@ -110,6 +111,7 @@ class NLP:
         sym = self._sym.sym(name, size)
         self._vars.append(_Block(name, sym, _column(lb, size, f"{name}.lb"), _column(ub, size, f"{name}.ub"),
                                  _column(init, size, f"{name}.init")))
+        self._t_described = time.perf_counter()
         return sym
 
     def parameter(self, name: str, size: int = 1, value=0.0):
@@ -131,6 +133,7 @@ class NLP:
         if self._f is not None:
             raise ValueError("the objective is already set")
         self._f = expr
+        self._t_described = time.perf_counter()
 
     def equal(self, name: str, expr, rhs=0.0) -> Constraint:
         """Add ``expr == rhs``; its multiplier is ``d f*/d rhs``."""
@@ -197,6 +200,7 @@ class NLP:
         self._gub.append(ub)
         self._cons[name] = con
         self._ng += n
+        self._t_described = time.perf_counter()
         return con
 
     # ------------------------------------------------------------------ solving
@@ -226,9 +230,12 @@ class NLP:
                 "error_on_fail": False}
         if expand:
             opts["expand"] = True
+        t = time.perf_counter()
         self._solver = ca.nlpsol("castrajectory", "ipopt", {"x": x, "f": self._f, "g": g, "p": p}, opts)
         self._solver_key = key
-        self._build_time = time.perf_counter() - self._t0
+        # Build time = symbolic description (NLP creation to its last variable/constraint/objective)
+        # + creation of the Ipopt solver; time spent between description and solve is not counted.
+        self._build_time = (self._t_described - self._t0) + (time.perf_counter() - t)
         return self._solver
 
     def _split(self, vec, blocks) -> Dict[str, np.ndarray]:

@@ -1,0 +1,405 @@
+"""Tests of the NLP core: values, multipliers (sign convention and sensitivities),
+failure reporting, output, timing, complementarity and naming rules."""
+from __future__ import annotations
+
+import math
+import time
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from castrajectory.nlp import NLP
+from castrajectory.result import SolveError
+
+SYMBOLICS = pytest.mark.parametrize("sym", [ca.SX, ca.MX], ids=["SX", "MX"])
+
+
+# ----------------------------------------------------------------------------- a convex QP with known KKT point
+#
+#   min (x-3)² + 2(y-1)² + z² + (u-5)² + (v+1)² + (s-1)² + (w-4)²
+#   s.t.  x + 2y = b          (equality)          b = 2
+#         2z >= c             (active lower)      c = 2
+#         u <= d              (active upper)      d = 1
+#         0 <= w <= 10        (inactive)
+#         v >= lv             (variable bound)    lv = 2
+#         s <= us             (variable bound)    us = -1
+#
+# By hand (Lagrange):  x - 3 = y - 1 = mu/2 with 5 + 1.5 mu = b  =>  mu = (b - 5)/1.5,
+#   f*(b) = 0.75 mu²,  df*/db = mu = -2;  z = c/2, df*/dc = c/2 = 1;
+#   u = d, df*/dd = 2(d-5) = -8;  v = lv, df*/dlv = 2(lv+1) = 6;  s = us, df*/dus = 2(us-1) = -4.
+QP_RHS = {"b": 2.0, "c": 2.0, "d": 1.0, "lv": 2.0, "us": -1.0}
+
+
+def qp_exact(b, c, d, lv, us):
+    mu = (b - 5.0) / 1.5
+    x, y = 3.0 + mu / 2, 1.0 + mu / 2
+    z, u, v, s, w = c / 2, d, lv, us, 4.0
+    f = (x - 3) ** 2 + 2 * (y - 1) ** 2 + z ** 2 + (u - 5) ** 2 + (v + 1) ** 2 + (s - 1) ** 2 + (w - 4) ** 2
+    values = dict(x=x, y=y, z=z, u=u, v=v, s=s, w=w)
+    mult = {"eq": mu, "low": c / 2, "up": 2 * (d - 5), "box": 0.0}
+    bmult = dict(x=0.0, y=0.0, z=0.0, u=0.0, v=2 * (lv + 1), s=2 * (us - 1), w=0.0)
+    return values, f, mult, bmult
+
+
+def build_qp(sym=ca.SX, b=2.0, c=2.0, d=1.0, lv=2.0, us=-1.0):
+    nlp = NLP(sym)
+    x = nlp.variable("x")
+    y = nlp.variable("y")
+    z = nlp.variable("z")
+    u = nlp.variable("u")
+    v = nlp.variable("v", lb=lv, init=lv + 1.0)
+    s = nlp.variable("s", ub=us, init=us - 1.0)
+    w = nlp.variable("w", init=1.0)
+    f = (x - 3) ** 2 + 2 * (y - 1) ** 2 + z ** 2 + (u - 5) ** 2 + (v + 1) ** 2 + (s - 1) ** 2 + (w - 4) ** 2
+    nlp.minimize(f)
+    nlp.equal("eq", x + 2 * y, b)
+    nlp.inequality("low", 2 * z, lb=c)
+    nlp.inequality("up", u, ub=d)
+    nlp.inequality("box", w, lb=0.0, ub=10.0)
+    syms = dict(x=x, y=y, z=z, u=u, v=v, s=s, w=w)
+    return nlp, syms, f
+
+
+def kkt_stationarity(nlp_syms, f, constraints, res):
+    """|grad f - J^T m - m_x| at the solution, with J from CasADi (independent of the NLP's own bookkeeping)."""
+    names = list(nlp_syms)
+    X = ca.vertcat(*[nlp_syms[k] for k in names])
+    G = ca.vertcat(*[g for _, g in constraints])
+    fun = ca.Function("kkt", [X], [ca.gradient(f, X), ca.jacobian(G, X)])
+    xv = np.concatenate([res[k] for k in names])
+    grad, jac = (np.asarray(v, float) for v in fun(xv))
+    m = np.concatenate([res.multipliers[name] for name, _ in constraints])
+    mx = np.concatenate([res.bound_multipliers[k] for k in names])
+    return np.max(np.abs(grad.reshape(-1) - jac.T @ m - mx))
+
+
+@SYMBOLICS
+def test_qp_values_objective_and_multipliers(sym):
+    nlp, syms, f = build_qp(sym)
+    res = nlp.solve()
+    assert res.success and res.status == "Solve_Succeeded"
+    values, fstar, mult, bmult = qp_exact(**QP_RHS)
+    for k, v in values.items():
+        assert res[k] == pytest.approx([v], abs=1e-7), k
+    assert res.objective == pytest.approx(fstar, rel=1e-7)
+    for k, m in mult.items():
+        assert res.multipliers[k] == pytest.approx([m], abs=1e-6), k
+    for k, m in bmult.items():
+        assert res.bound_multipliers[k] == pytest.approx([m], abs=1e-6), k
+    # sign convention spelled out
+    assert res.multipliers["low"][0] > 0.5          # lower bound active -> positive
+    assert res.multipliers["up"][0] < -0.5          # upper bound active -> negative
+    assert res.bound_multipliers["v"][0] > 0.5      # variable lower bound active -> positive
+    assert res.bound_multipliers["s"][0] < -0.5     # variable upper bound active -> negative
+    # KKT stationarity with the reported multipliers: grad f = J^T m + m_x
+    cons = [("eq", syms["x"] + 2 * syms["y"]), ("low", 2 * syms["z"]), ("up", syms["u"]), ("box", syms["w"])]
+    assert kkt_stationarity(syms, f, cons, res) < 1e-7
+
+
+@pytest.mark.parametrize("rhs, multiplier", [
+    ("b", ("multipliers", "eq")),
+    ("c", ("multipliers", "low")),
+    ("d", ("multipliers", "up")),
+    ("lv", ("bound_multipliers", "v")),
+    ("us", ("bound_multipliers", "s")),
+])
+def test_qp_multiplier_is_derivative_of_optimal_objective(rhs, multiplier):
+    """multiplier = d f*/d rhs, checked by a central difference of re-solved problems."""
+    base = build_qp()[0].solve()
+    reported = getattr(base, multiplier[0])[multiplier[1]][0]
+    h = 1e-4
+    fp = build_qp(**{**QP_RHS, rhs: QP_RHS[rhs] + h})[0].solve()
+    fm = build_qp(**{**QP_RHS, rhs: QP_RHS[rhs] - h})[0].solve()
+    assert fp.success and fm.success
+    fd = (fp.objective - fm.objective) / (2 * h)
+    assert reported == pytest.approx(fd, rel=1e-5, abs=1e-6)
+
+
+# ----------------------------------------------------------------------------- nonlinear convex problems
+def disk_problem(sym, rhs, kind):
+    """min x + y  s.t. x² + y² (= or <=) rhs: x = y = -sqrt(rhs/2), f* = -sqrt(2 rhs), df*/drhs = -1/sqrt(2 rhs)."""
+    nlp = NLP(sym)
+    x = nlp.variable("x", 2, init=[0.3, -0.2])
+    nlp.minimize(x[0] + x[1])
+    if kind == "equality":
+        nlp.equal("disk", ca.sumsqr(x), rhs)
+    else:
+        nlp.inequality("disk", ca.sumsqr(x), ub=rhs)
+    return nlp
+
+
+def hyperbola_problem(sym, rhs, kind):
+    """min x² + y²  s.t. x y >= rhs, x, y >= 0: x = y = sqrt(rhs), f* = 2 rhs, df*/drhs = 2."""
+    nlp = NLP(sym)
+    x = nlp.variable("x", 2, lb=0.0, init=[2.0, 1.5])
+    nlp.minimize(ca.sumsqr(x))
+    nlp.inequality("hyp", x[0] * x[1], lb=rhs)
+    return nlp
+
+
+@SYMBOLICS
+@pytest.mark.parametrize("problem, name, kind, rhs, xstar, fstar, dfstar", [
+    (disk_problem, "disk", "equality", 2.0, [-1.0, -1.0], -2.0, -0.5),
+    (disk_problem, "disk", "upper", 8.0, [-2.0, -2.0], -4.0, -0.25),
+    (hyperbola_problem, "hyp", "lower", 4.0, [2.0, 2.0], 8.0, 2.0),
+])
+def test_nonlinear_multiplier_analytic_and_fd(sym, problem, name, kind, rhs, xstar, fstar, dfstar):
+    res = problem(sym, rhs, kind).solve()
+    assert res.success
+    assert res["x"] == pytest.approx(xstar, abs=1e-7)
+    assert res.objective == pytest.approx(fstar, rel=1e-8)
+    assert res.multipliers[name][0] == pytest.approx(dfstar, rel=1e-6)
+    h = 1e-4 * rhs
+    fp, fm = problem(sym, rhs + h, kind).solve(), problem(sym, rhs - h, kind).solve()
+    assert res.multipliers[name][0] == pytest.approx((fp.objective - fm.objective) / (2 * h), rel=1e-6)
+    # bounds x >= 0 of the hyperbola problem are inactive: zero bound multipliers
+    assert np.max(np.abs(res.bound_multipliers["x"])) < 1e-7
+
+
+# ----------------------------------------------------------------------------- failure is reported
+def rosenbrock(sym=ca.SX):
+    nlp = NLP(sym)
+    x = nlp.variable("x", 2, init=[-1.2, 1.0])
+    nlp.minimize((1 - x[0]) ** 2 + 100 * (x[1] - x[0] ** 2) ** 2)
+    return nlp
+
+
+def test_max_iter_reported_not_raised():
+    res = rosenbrock().solve(options={"max_iter": 1})
+    assert res.success is False
+    assert res.status == "Maximum_Iterations_Exceeded"
+    assert "Maximum_Iterations_Exceeded" in res.message and "max_iter" in res.message
+    assert res.iterations == 1
+    with pytest.raises(SolveError) as info:
+        res.raise_for_status()
+    assert info.value.result is res
+    assert "Maximum_Iterations_Exceeded" in str(info.value)
+
+
+def test_success_raise_for_status_returns_result():
+    res = rosenbrock().solve()
+    assert res.success and res.raise_for_status() is res
+    assert res["x"] == pytest.approx([1.0, 1.0], abs=1e-8)
+
+
+@pytest.mark.parametrize("case", ["negative_square", "bounds_vs_constraint"])
+def test_infeasible_problem_reported(case):
+    nlp = NLP()
+    if case == "negative_square":
+        x = nlp.variable("x", 2, init=1.0)
+        nlp.minimize(ca.sumsqr(x))
+        nlp.equal("impossible", ca.sumsqr(x), -1.0)
+    else:
+        x = nlp.variable("x", 1, lb=0.0, ub=1.0)
+        nlp.minimize(x ** 2)
+        nlp.inequality("impossible", x, lb=2.0)
+    res = nlp.solve()
+    assert res.success is False
+    assert res.status != "Solve_Succeeded"
+    assert res.status in res.message
+    with pytest.raises(SolveError):
+        res.raise_for_status()
+
+
+# ----------------------------------------------------------------------------- output
+def test_quiet_by_default(capfd):
+    capfd.readouterr()
+    res = rosenbrock().solve()
+    out, err = capfd.readouterr()
+    assert res.success
+    assert out == ""
+    assert "Ipopt" not in err
+
+
+def test_quiet_on_failure(capfd):
+    capfd.readouterr()
+    res = rosenbrock().solve(options={"max_iter": 2})
+    out, _ = capfd.readouterr()
+    assert not res.success
+    assert out == ""
+
+
+def test_verbose_prints_ipopt_log(capfd):
+    capfd.readouterr()
+    res = rosenbrock().solve(verbose=True)
+    out, _ = capfd.readouterr()
+    assert res.success
+    assert "Ipopt" in out
+    assert "EXIT: Optimal Solution Found" in out
+    assert "iter" in out and "objective" in out
+
+
+# ----------------------------------------------------------------------------- timing and solver reuse
+def test_build_and_solve_times_positive_and_separate():
+    t0 = time.perf_counter()
+    nlp = rosenbrock()
+    r1 = nlp.solve()
+    wall = time.perf_counter() - t0
+    assert r1.build_time_s > 0 and r1.solve_time_s > 0
+    # the two intervals do not overlap: together they fit in the measured wall time
+    assert r1.build_time_s + r1.solve_time_s <= wall
+    r2 = nlp.solve()
+    assert r2.success
+    assert r2.build_time_s == r1.build_time_s  # no rebuild
+    assert r2.solve_time_s > 0
+
+
+def test_parameter_change_reuses_solver():
+    nlp = NLP()
+    x = nlp.variable("x", 2, init=[-1.2, 1.0])
+    p = nlp.parameter("p", 1, value=1.0)
+    nlp.minimize((p - x[0]) ** 2 + 100 * (x[1] - x[0] ** 2) ** 2)
+    r1 = nlp.solve()
+    nlp.set_parameter("p", 2.0)
+    r2 = nlp.solve()
+    assert r1.success and r2.success
+    assert r1["x"] == pytest.approx([1.0, 1.0], abs=1e-8)
+    assert r2["x"] == pytest.approx([2.0, 4.0], abs=1e-8)
+    assert r2.build_time_s == r1.build_time_s
+    # a warm start at the solution needs (almost) no iterations
+    r3 = nlp.solve(warm=r2)
+    assert r3.success and r3.iterations <= 1 < r2.iterations
+    # an explicit initial guess by name is used
+    r4 = nlp.solve(init={"x": [2.0, 4.0]})
+    assert r4.success and r4.iterations <= 1
+
+
+def test_rebuild_time_excludes_earlier_work():
+    nlp = rosenbrock()
+    nlp.solve()
+    time.sleep(0.3)
+    t0 = time.perf_counter()
+    r = nlp.solve(options={"tol": 1e-9})  # different options: solver is rebuilt
+    wall = time.perf_counter() - t0
+    assert r.build_time_s <= wall
+
+
+def test_nlp_frozen_after_build():
+    nlp = rosenbrock()
+    nlp.solve()
+    with pytest.raises(RuntimeError):
+        nlp.variable("late")
+    with pytest.raises(RuntimeError):
+        nlp.equal("late", ca.SX.sym("q"), 0.0)
+
+
+# ----------------------------------------------------------------------------- complementarity
+@SYMBOLICS
+@pytest.mark.parametrize("init", [(0.5, 0.5), (1.0, 0.2), (0.2, 1.0), (0.0, 0.0), (2.0, 1.0)])
+def test_complementarity_scalar(sym, init):
+    nlp = NLP(sym)
+    x = nlp.variable("x", init=init[0])
+    y = nlp.variable("y", init=init[1])
+    nlp.minimize((x - 1) ** 2 + (y - 1) ** 2)
+    nlp.complementarity("c", x, y)
+    res = nlp.solve()
+    assert res.success, res.message
+    sol = (float(res["x"][0]), float(res["y"][0]))
+    assert min(math.dist(sol, (1.0, 0.0)), math.dist(sol, (0.0, 1.0))) < 1e-7
+    assert res.objective == pytest.approx(1.0, abs=1e-7)
+    assert res.complementarity_residual <= 1e-8
+    assert abs(sol[0] * sol[1]) <= 1e-8
+    # homotopy bookkeeping
+    sigmas = [s.sigma for s in res.homotopy]
+    assert len(sigmas) >= 2
+    assert all(a > b for a, b in zip(sigmas, sigmas[1:]))
+    assert sigmas[-1] == 0.0
+    for step in res.homotopy:
+        assert step.status == "Solve_Succeeded"
+        assert step.iterations >= 0 and step.solve_time_s > 0
+        # the relaxed product a*b <= sigma holds at each step (up to Ipopt's tolerance)
+        assert step.complementarity_residual <= step.sigma + 1e-8
+    assert res.iterations == sum(s.iterations for s in res.homotopy)
+    assert res.solve_time_s == pytest.approx(sum(s.solve_time_s for s in res.homotopy))
+    # documented signs: the sides a >= 0, b >= 0 are lower-bounded inequalities
+    assert res.multipliers["c.a"][0] >= -1e-8
+    assert res.multipliers["c.b"][0] >= -1e-8
+    assert res.multipliers["c"][0] <= 1e-8  # a*b - sigma <= 0 is an upper bound
+
+
+def test_complementarity_partial_homotopy_says_so():
+    nlp = NLP()
+    x = nlp.variable("x", init=1.0)
+    y = nlp.variable("y", init=0.2)
+    nlp.minimize((x - 1) ** 2 + (y - 1) ** 2)
+    nlp.complementarity("c", x, y)
+    res = nlp.solve(homotopy=(1e-1, 1e-2))
+    assert res.success
+    assert [s.sigma for s in res.homotopy] == [1e-1, 1e-2]
+    assert "sigma = 0.01" in res.message
+    # the relaxed solution has a*b = sigma (the relaxation is active)
+    assert res.complementarity_residual == pytest.approx(1e-2, rel=1e-6)
+
+
+def test_complementarity_vector_pairs():
+    nlp = NLP()
+    x = nlp.variable("x", 3, init=0.5)
+    y = nlp.variable("y", 3, init=0.5)
+    tx, ty = np.array([1.0, 2.0, -1.0]), np.array([2.0, 1.0, 1.0])
+    nlp.minimize(ca.sumsqr(x - tx) + ca.sumsqr(y - ty))
+    nlp.complementarity("c", x, y)
+    res = nlp.solve()
+    assert res.success
+    # componentwise: keep the side that costs more to zero; third pair: x wants < 0, so x = 0, y = 1
+    assert res["x"] == pytest.approx([0.0, 2.0, 0.0], abs=1e-5)
+    assert res["y"] == pytest.approx([2.0, 0.0, 1.0], abs=1e-5)
+    assert res.complementarity_residual <= 1e-8
+    assert np.all(res.multipliers["c.a"] >= -1e-8) and np.all(res.multipliers["c.b"] >= -1e-8)
+
+
+def test_complementarity_size_mismatch():
+    nlp = NLP()
+    x = nlp.variable("x", 2)
+    y = nlp.variable("y", 3)
+    with pytest.raises(ValueError):
+        nlp.complementarity("c", x, y)
+
+
+# ----------------------------------------------------------------------------- names and symbolics
+@SYMBOLICS
+def test_duplicate_names_rejected(sym):
+    nlp = NLP(sym)
+    x = nlp.variable("x", 2)
+    with pytest.raises(ValueError, match="duplicate"):
+        nlp.variable("x", 1)
+    with pytest.raises(ValueError, match="duplicate"):
+        nlp.parameter("x", 1)
+    nlp.parameter("p")
+    with pytest.raises(ValueError, match="duplicate"):
+        nlp.variable("p")
+    nlp.equal("c", x[0], 1.0)
+    with pytest.raises(ValueError, match="duplicate"):
+        nlp.inequality("c", x[1], lb=0.0)
+    nlp.complementarity("cc", x[0], x[1])
+    with pytest.raises(ValueError, match="duplicate"):
+        nlp.equal("cc.a", x[0], 0.0)
+
+
+def test_objective_set_once_and_required():
+    nlp = NLP()
+    x = nlp.variable("x")
+    with pytest.raises(ValueError, match="objective"):
+        nlp.solve()
+    nlp.minimize(x ** 2)
+    with pytest.raises(ValueError, match="objective"):
+        nlp.minimize(x ** 4)
+
+
+def test_inconsistent_bounds_rejected():
+    nlp = NLP()
+    x = nlp.variable("x", 2)
+    with pytest.raises(ValueError):
+        nlp.inequality("bad", x, lb=1.0, ub=0.0)
+    with pytest.raises(ValueError):
+        nlp.variable("y", 3, init=[1.0, 2.0])
+
+
+@SYMBOLICS
+def test_symbolic_kinds_agree(sym):
+    res = build_qp(sym)[0].solve()
+    ref = build_qp(ca.SX)[0].solve()
+    for k in ref.values:
+        assert res[k] == pytest.approx(ref[k], abs=1e-9)
+    for k in ref.multipliers:
+        assert res.multipliers[k] == pytest.approx(ref.multipliers[k], abs=1e-7)
