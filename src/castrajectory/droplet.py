@@ -229,8 +229,9 @@ class Curve:
     Unknowns: the ``n - 1`` interior vertices and the span ``a = x_n`` (unless
     pinned).  Constraints: consecutive segments have equal length,
     ``(|p_{i+1} - p_i|² - |p_i - p_{i-1}|²) / (2 l_ref²) = 0`` (a gauge
-    condition that removes the tangential sliding of vertices; its multipliers
-    vanish as ``n -> oo``), and the shoelace area.  The length is the sum of
+    condition that removes the tangential sliding of vertices; stationarity
+    alone already makes the chords equal, so its multipliers are zero at the
+    optimum and it only conditions the Newton systems), and the shoelace area.  The length is the sum of
     the segment lengths.  No graph assumption is made, so overhanging drops
     (``theta > 90°``) are fine.
 
