@@ -135,3 +135,18 @@ def test_convergence_script_small(tmp_path):
     assert p.returncode == 0, p.stderr
     assert "observed orders" in p.stdout
     assert (tmp_path / "droplet_convergence.png").exists()
+
+
+def test_every_scene_is_installed_as_castrajectory_problems():
+    """problems/__init__.py makes the scripts the installed package castrajectory.problems,
+    which is what `castrajectory run <scene>` imports."""
+    import importlib
+
+    import castrajectory.problems
+    from castrajectory.cli import SCENES
+
+    files = {p.stem for p in (ROOT / "problems").glob("*.py") if p.stem != "__init__"}
+    assert files == set(SCENES)
+    for name, module in SCENES.items():
+        mod = importlib.import_module(module)
+        assert callable(mod.main) and mod.__doc__
