@@ -52,8 +52,7 @@ def run(args):
     young = ("Young residual γ_gl cos θ + γ_sl − γ_sg = " + cli.fmt(sol.young_residual, ".3e")
              if sol.young_residual is not None else "Young's law does not apply: the span is pinned")
     summary = [f"droplet: {sol.formulation} formulation, N = {sol.n}, {mode}", *summary, young,
-               f"status: {sol.status} ({r.message}); {r.iterations} Ipopt iterations; "
-               f"build {r.build_time_s:.3f} s, solve {r.solve_time_s:.3f} s"]
+               cli.status_line(sol.status, r)]
     return cli.Outcome(sol.success, sol.as_dict(), summary, r.message,
                        writers={"plot": lambda path: plotting.droplet_shape(sol, path)})
 

@@ -40,8 +40,7 @@ def run(args):
             ["energy", cli.fmt(sol.energy), ""],
         ]),
         f"Young residual γ_gl cos θ + γ_sl − γ_sg = {sol.young_residual:.3e}",
-        f"status: {sol.status} ({r.message}); {r.iterations} Ipopt iterations; "
-        f"build {r.build_time_s:.3f} s, solve {r.solve_time_s:.4f} s",
+        cli.status_line(sol.status, r),
     ]
     return cli.Outcome(sol.success, sol.as_dict(), summary, r.message,
                        writers={"plot": lambda path: plotting.reduced_energy(sol, path)})

@@ -135,6 +135,12 @@ def run_scene(parser: argparse.ArgumentParser, run: Callable[[argparse.Namespace
     return 0
 
 
+def status_line(status: str, result) -> str:
+    """The closing line of every summary: status, Ipopt message, iterations and wall times."""
+    return (f"status: {status} ({result.message}); {result.iterations} Ipopt iterations; "
+            f"build {result.build_time_s:.3f} s, solve {result.solve_time_s:.4f} s")
+
+
 def fmt(v, spec: str = ".10g") -> str:
     return "-" if v is None else format(v, spec)
 

@@ -102,7 +102,6 @@ class NLP:
         self._solver = None
         self._solver_key = None
         self._build_time = None
-        self._last: Optional[Result] = None
 
     # ------------------------------------------------------------------ description
     def variable(self, name: str, size: int = 1, lb: Number = -np.inf, ub: Number = np.inf, init=0.0):
@@ -348,5 +347,4 @@ class NLP:
             homotopy=steps,
             x=x, lam_x=lam_x, lam_g=lam_g,
         )
-        self._last = res
         return res
