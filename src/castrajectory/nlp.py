@@ -17,6 +17,13 @@ The Ipopt solver is created once, on the first call to :meth:`NLP.solve`, and
 reused by later calls (new initial guesses, parameter values or relaxation
 steps), so construction cost is paid once and reported as ``build_time_s``.
 
+Structured NLPs can add whole families of identical constraints or objective
+terms at once with :meth:`NLP.equal_elements`, :meth:`NLP.inequality_elements`
+and :meth:`NLP.minimize_elements`: one small CasADi function, evaluated for
+every element on index arrays into the decision vector.  Such an NLP is
+differentiated element by element (:mod:`castrajectory.assembly`), so building
+the solver costs a few array operations per nonzero instead of whole-graph AD.
+
 Complementarity pairs ``0 <= a  ⟂  b >= 0`` are relaxed in the Scholtes way,
 ``a >= 0, b >= 0, a_i b_i <= sigma``, and solved by a homotopy ``sigma -> 0``
 that warm-starts each step from the last (see :meth:`NLP.solve`).
@@ -30,6 +37,7 @@ from typing import Dict, Iterable, List, Optional, Sequence, Union
 import casadi as ca
 import numpy as np
 
+from .assembly import Contribution, assemble, dense_vector
 from .result import SUCCESS_STATUSES, HomotopyStep, Result
 
 Number = Union[float, int]
@@ -46,6 +54,11 @@ DEFAULT_IPOPT_OPTIONS: Dict[str, object] = {
     "mumps_scaling": 0,
     "mumps_permuting_scaling": 0,
 }
+
+
+#: How element families are evaluated: CasADi ``map`` parallelization and thread count.
+MAP_PARALLELIZATION = "serial"
+MAP_THREADS = 1
 
 
 @dataclass(frozen=True)
@@ -67,6 +80,70 @@ class _Block:
     init: np.ndarray
 
 
+class X:
+    """Element argument read from the decision vector at ``index``.
+
+    ``index`` has shape ``(E, n)`` (row ``e`` feeds element ``e``) or ``(n,)``
+    (the same entries for every element).  Positions come from :meth:`NLP.index`.
+    """
+
+    def __init__(self, index):
+        self.index = np.asarray(index, dtype=np.int64)
+
+
+class P(X):
+    """Element argument read from the parameter vector at ``index`` (see :meth:`NLP.parameter_index`)."""
+
+
+@dataclass
+class _Group:
+    """A family of ``count`` identical constraints or objective terms."""
+
+    name: str
+    fn: ca.Function
+    args: list  # X, P or constant arrays of shape (E, n) / (n,)
+    count: int
+    size: int  # outputs per element
+
+
+def _element_args(fn: ca.Function, args: Sequence, where: str):
+    if fn.n_out() != 1:
+        raise ValueError(f"{where}: the element function must have exactly one output")
+    if len(args) != fn.n_in():
+        raise ValueError(f"{where}: {fn.n_in()} arguments expected, got {len(args)}")
+    count, out = None, []
+    for i, a in enumerate(args):
+        n = fn.size1_in(i) * fn.size2_in(i)
+        if isinstance(a, X):
+            arr = a.index
+        else:
+            arr = np.asarray(a, dtype=float)
+            if not np.all(np.isfinite(arr)):
+                raise ValueError(f"{where}: argument {i} is not finite")
+        if arr.ndim == 0:
+            arr = arr.reshape(1)
+        if arr.ndim == 1:
+            if arr.size != n:
+                raise ValueError(f"{where}: argument {i} needs {n} entries per element, got {arr.size}")
+        elif arr.ndim == 2:
+            if arr.shape[1] != n:
+                raise ValueError(f"{where}: argument {i} needs {n} columns, got {arr.shape[1]}")
+            if count is not None and arr.shape[0] != count:
+                raise ValueError(f"{where}: argument {i} has {arr.shape[0]} elements, expected {count}")
+            count = arr.shape[0]
+        else:
+            raise ValueError(f"{where}: argument {i} must be 1-D or 2-D")
+        out.append(type(a)(arr) if isinstance(a, X) else arr)
+    if count is None:
+        count = 1
+    return out, count
+
+
+def _nz(M):
+    """The structural nonzeros of an SX matrix as a dense column (constant zeros kept)."""
+    return ca.densify(ca.vertcat(*M.nonzeros())) if M.nnz() else ca.SX(0, 1)
+
+
 def _column(value, n: int, what: str) -> np.ndarray:
     arr = np.asarray(value, dtype=float).reshape(-1)
     if arr.size == 1:
@@ -84,10 +161,20 @@ class NLP:
     symbolic:
         ``casadi.SX`` (default: fastest for scalar-heavy expressions) or
         ``casadi.MX`` (for graphs built with ``map``).
+    hessian:
+        ``"exact"`` (default) or ``"zero"``.  ``"zero"`` hands Ipopt a zero
+        Hessian of the Lagrangian.  It is exact for a *square feasibility
+        problem* (objective ≡ 0, as many independent equalities as unknowns):
+        there ``∇gᵀλ = 0`` forces ``λ = 0``, the Lagrangian's Hessian vanishes at
+        the solution and the primal Newton step ``-J⁻¹g`` does not depend on it.
+        It saves the most expensive derivative evaluation (element families only).
     """
 
-    def __init__(self, symbolic=ca.SX):
+    def __init__(self, symbolic=ca.SX, hessian: str = "exact"):
+        if hessian not in ("exact", "zero"):
+            raise ValueError("hessian must be 'exact' or 'zero'")
         self._sym = symbolic
+        self._hessian = hessian
         self._t0 = time.perf_counter()
         self._t_described = self._t0  # end of the last description call
         self._vars: List[_Block] = []
@@ -99,6 +186,7 @@ class NLP:
         self._ng = 0
         self._comps: List[tuple] = []  # (name, a, b) expressions
         self._f = None
+        self._f_groups: List[_Group] = []
         self._solver = None
         self._solver_key = None
         self._build_time = None
@@ -166,6 +254,59 @@ class NLP:
         self._comps.append((name, a, b))
         return con
 
+    # ------------------------------------------------------------------ element families
+    @staticmethod
+    def _position(blocks, name: str) -> np.ndarray:
+        i = 0
+        for b in blocks:
+            if b.name == name:
+                return np.arange(i, i + b.init.size)
+            i += b.init.size
+        raise KeyError(name)
+
+    def index(self, name: str) -> np.ndarray:
+        """Positions of variable block ``name`` in the stacked decision vector."""
+        return self._position(self._vars, name)
+
+    def parameter_index(self, name: str) -> np.ndarray:
+        """Positions of parameter block ``name`` in the stacked parameter vector."""
+        return self._position(self._params, name)
+
+    def _group(self, name, fn, args) -> _Group:
+        if self._sym is not ca.SX:
+            raise ValueError("element families need an SX-based NLP (the default)")
+        args, count = _element_args(fn, args, name)
+        return _Group(name, fn, args, count, fn.size1_out(0) * fn.size2_out(0))
+
+    def equal_elements(self, name: str, fn: ca.Function, args: Sequence, rhs=0.0) -> Constraint:
+        """Add ``fn(args_e) == rhs`` for every element ``e``; rows are element-major.
+
+        Each entry of ``args`` is :class:`X` (decision variables), :class:`P`
+        (parameters) or a constant array, with one row per element or one row
+        shared by all elements.
+        """
+        grp = self._group(name, fn, args)
+        n = grp.count * grp.size
+        r = _column(rhs, n, f"{name}.rhs")
+        return self._add(name, "equality", grp, r, r)
+
+    def inequality_elements(self, name: str, fn: ca.Function, args: Sequence, lb=-np.inf, ub=np.inf) -> Constraint:
+        """Add ``lb <= fn(args_e) <= ub`` for every element (see :meth:`equal_elements`)."""
+        grp = self._group(name, fn, args)
+        n = grp.count * grp.size
+        lo, hi = _column(lb, n, f"{name}.lb"), _column(ub, n, f"{name}.ub")
+        if np.any(lo > hi):
+            raise ValueError(f"{name}: lower bound above upper bound")
+        return self._add(name, "inequality", grp, lo, hi)
+
+    def minimize_elements(self, name: str, fn: ca.Function, args: Sequence) -> None:
+        """Add ``sum_e fn(args_e)`` (scalar ``fn``) to the objective."""
+        grp = self._group(name, fn, args)
+        if grp.size != 1:
+            raise ValueError(f"{name}: an objective element must be scalar")
+        self._f_groups.append(grp)
+        self._t_described = time.perf_counter()
+
     @property
     def has_complementarity(self) -> bool:
         return bool(self._comps)
@@ -192,9 +333,13 @@ class NLP:
             raise RuntimeError("the NLP cannot change after its solver was built")
         if name in self._cons:
             raise ValueError(f"duplicate constraint name {name!r}")
-        n = expr.numel()
+        if isinstance(expr, _Group):
+            n = expr.count * expr.size
+            self._g.append(expr)
+        else:
+            n = expr.numel()
+            self._g.append(ca.vec(expr))
         con = Constraint(name, kind, n, slice(self._ng, self._ng + n))
-        self._g.append(ca.vec(expr))
         self._glb.append(lb)
         self._gub.append(ub)
         self._cons[name] = con
@@ -220,8 +365,10 @@ class NLP:
         key = (tuple(sorted((options or {}).items())), verbose, expand)
         if self._solver is not None and key == self._solver_key:
             return self._solver
-        if self._f is None:
+        if self._f is None and not self._f_groups:
             raise ValueError("no objective: call minimize() first")
+        if self._f_groups or any(isinstance(g, _Group) for g in self._g):
+            return self._build_assembled(options, verbose, key)
         x = ca.vertcat(*[b.sym for b in self._vars])
         p = ca.vertcat(*[b.sym for b in self._params]) if self._params else self._sym(0, 1)
         g = ca.vertcat(*self._g) if self._g else self._sym(0, 1)
@@ -236,6 +383,144 @@ class NLP:
         # + creation of the Ipopt solver; time spent between description and solve is not counted.
         self._build_time = (self._t_described - self._t0) + (time.perf_counter() - t)
         return self._solver
+
+    def _build_assembled(self, options, verbose, key):
+        """Build the solver from element derivatives (see :mod:`castrajectory.assembly`)."""
+        t = time.perf_counter()
+        nx = sum(b.init.size for b in self._vars)
+        npar = sum(b.init.size for b in self._params)
+        Xm, Pm = ca.MX.sym("x", nx), ca.MX.sym("p", npar)
+        lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", self._ng)
+        xs = ca.vertcat(*[b.sym for b in self._vars])
+        ps = ca.vertcat(*[b.sym for b in self._params]) if self._params else ca.SX(0, 1)
+
+        g_parts, jac, hess, grad = [], [], [], []
+        f_total = ca.MX(0)
+        # Expression part: ordinary SX automatic differentiation on the (small) expression rows.
+        expr_rows = [(c.slice, g) for c, g in zip(self._cons.values(), self._g) if not isinstance(g, _Group)]
+        f_expr = self._f if self._f is not None else ca.SX(0)
+        f_const = not ca.depends_on(f_expr, xs)
+        if f_const and not expr_rows:
+            # Nothing symbolic to differentiate: a constant objective and only element families.
+            f_total = f_total + ca.Function("f0", [ps], [f_expr])(Pm)
+            g_expr_by_slice = {}
+        elif expr_rows or self._f is not None:
+            ge = ca.vertcat(*[g for _, g in expr_rows]) if expr_rows else ca.SX(0, 1)
+            rows_of_ge = np.concatenate([np.arange(s.start, s.stop) for s, _ in expr_rows]) if expr_rows \
+                else np.zeros(0, dtype=np.int64)
+            le = ca.SX.sym("le", ge.numel())
+            sf = ca.SX.sym("sf")
+            Je = ca.jacobian(ge, xs)
+            He = ca.triu(ca.hessian(sf * f_expr + ca.dot(le, ge), xs)[0])
+            ge_grad = ca.gradient(f_expr, xs)
+            fe = ca.Function("expr", [xs, ps],
+                             [f_expr, ge, _nz(Je), _nz(ge_grad)])
+            fh = ca.Function("expr_hess", [xs, ps, sf, le], [_nz(He)])
+            lam_e = lam_g[rows_of_ge.tolist()] if rows_of_ge.size else ca.MX(0, 1)
+            fv, gv, jv, gfv = fe(Xm, Pm)
+            hv = fh(Xm, Pm, lam_f, lam_e)
+            f_total = f_total + fv
+            jr, jc = Je.sparsity().get_triplet()
+            jac.append(Contribution(jv, rows_of_ge[np.asarray(jr, dtype=np.int64)], np.asarray(jc, dtype=np.int64)))
+            hr, hc = He.sparsity().get_triplet()
+            hr, hc = np.asarray(hr, dtype=np.int64), np.asarray(hc, dtype=np.int64)
+            # He is already upper triangular; mirror it so assemble(triu=True) keeps each entry once.
+            hess.append(Contribution(hv, hr, hc))
+            gr, _ = ge_grad.sparsity().get_triplet()
+            grad.append(Contribution(gfv, np.asarray(gr, dtype=np.int64), np.zeros(len(gr), dtype=np.int64)))
+            g_expr_by_slice = {s.start: gv[i0:i0 + (s.stop - s.start)]
+                               for (s, _), i0 in zip(expr_rows, np.cumsum([0] + [s.stop - s.start for s, _ in expr_rows]))}
+        else:
+            g_expr_by_slice = {}
+
+        if self._hessian == "zero":
+            if self._f is not None and ca.depends_on(self._f, xs) or self._f_groups:
+                raise ValueError("hessian='zero' needs a constant objective (a square feasibility problem)")
+        for con, g in zip(self._cons.values(), self._g):
+            if isinstance(g, _Group):
+                gv, jc_, hc_ = self._element_derivatives(g, Xm, Pm, lam_g[con.slice.start:con.slice.stop], con.slice.start)
+                g_parts.append(gv)
+                jac.append(jc_)
+                hess.append(hc_)
+            else:
+                g_parts.append(g_expr_by_slice[con.slice.start])
+        for grp in self._f_groups:
+            fv, gc_, hc_ = self._element_derivatives(grp, Xm, Pm, lam_f, None)
+            f_total = f_total + fv
+            grad.append(gc_)
+            hess.append(hc_)
+
+        f_total = ca.densify(f_total)
+        G = ca.densify(ca.vertcat(*g_parts)) if g_parts else ca.MX(0, 1)
+        Jg = assemble(jac, (self._ng, nx))
+        Hl = assemble(hess, (nx, nx), triu=True) if self._hessian == "exact" else ca.MX(nx, nx)
+        gf = dense_vector(grad, nx)
+        funcs = {
+            "grad_f": ca.Function("grad_f", [Xm, Pm], [f_total, gf], ["x", "p"], ["f", "grad_f_x"]),
+            "jac_g": ca.Function("jac_g", [Xm, Pm], [G, Jg], ["x", "p"], ["g", "jac_g_x"]),
+            "hess_lag": ca.Function("hess_lag", [Xm, Pm, lam_f, lam_g], [Hl],
+                                    ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"]),
+        }
+        opts = {"ipopt": self._ipopt_options(options, verbose), "print_time": bool(verbose),
+                "error_on_fail": False, **funcs}
+        self._solver = ca.nlpsol("castrajectory", "ipopt", {"x": Xm, "p": Pm, "f": f_total, "g": G}, opts)
+        self._solver_key = key
+        self._build_time = (self._t_described - self._t0) + (time.perf_counter() - t)
+        return self._solver
+
+    @staticmethod
+    def _element_derivatives(grp: _Group, Xm, Pm, weight, row0):
+        """Values, first-derivative and Hessian contributions of one element family.
+
+        ``row0`` is the first constraint row (None for an objective family, whose
+        first derivative is a gradient).  ``weight`` is the multiplier slice
+        (constraints) or the objective factor.
+        """
+        fn, E, r = grp.fn, grp.count, grp.size
+        syms, call_args, var_idx = [], [], []
+        for i, a in enumerate(grp.args):
+            n = fn.size1_in(i) * fn.size2_in(i)
+            s = ca.SX.sym(f"a{i}", n)
+            syms.append(s)
+            if isinstance(a, X):
+                src = Pm if isinstance(a, P) else Xm
+                idx = a.index
+                col = src[idx.reshape(-1).tolist()]
+                call_args.append(ca.reshape(col, n, idx.shape[0] if idx.ndim == 2 else 1))
+                if not isinstance(a, P):
+                    var_idx.append((s, idx))
+            else:
+                call_args.append(ca.DM(a.T if a.ndim == 2 else a.reshape(-1, 1)))
+        out = ca.vec(fn(*[ca.reshape(s, fn.size1_in(i), fn.size2_in(i)) for i, s in enumerate(syms)]))
+        z = ca.vertcat(*[s for s, _ in var_idx]) if var_idx else ca.SX(0, 1)
+        # Global position of each local unknown, per element: (E, nz).
+        zidx = np.hstack([np.broadcast_to(idx.reshape(-1, idx.shape[-1]), (E, idx.shape[-1])) for _, idx in var_idx]) \
+            if var_idx else np.zeros((E, 0), dtype=np.int64)
+        w = ca.SX.sym("w", r)
+        J = ca.jacobian(out, z)
+        H = ca.hessian(ca.dot(w, out), z)[0]
+        f_el = ca.Function("el", syms, [out])
+        fJ = ca.Function("el_jac", syms, [_nz(J)])
+        fH = ca.Function("el_hess", syms + [w], [_nz(H)])
+        mapped = lambda f: f.map(E, MAP_PARALLELIZATION, MAP_THREADS) if E > 1 else f  # noqa: E731
+        if row0 is None:
+            wv = weight
+        else:
+            wv = ca.reshape(weight, r, E)
+        values = ca.vec(mapped(f_el)(*call_args))
+        jv = ca.vec(mapped(fJ)(*call_args))
+        hv = ca.vec(mapped(fH)(*call_args, wv))
+        jr, jc = (np.asarray(v, dtype=np.int64) for v in J.sparsity().get_triplet())
+        hr, hc = (np.asarray(v, dtype=np.int64) for v in H.sparsity().get_triplet())
+        hcon = Contribution(hv, zidx[:, hr].reshape(-1), zidx[:, hc].reshape(-1))
+        if row0 is None:
+            # Objective family: value is the sum, first derivative is a gradient.
+            fsum = ca.sum1(values)
+            gcon = Contribution(jv, zidx[:, jc].reshape(-1), np.zeros(E * jc.size, dtype=np.int64))
+            return fsum, gcon, hcon
+        rows = (row0 + np.arange(E, dtype=np.int64)[:, None] * r + jr[None, :]).reshape(-1)
+        jcon = Contribution(jv, rows, zidx[:, jc].reshape(-1))
+        return values, jcon, hcon
 
     def _split(self, vec, blocks) -> Dict[str, np.ndarray]:
         out, i = {}, 0
@@ -268,7 +553,8 @@ class NLP:
 
     def solve(self, init: Optional[Dict[str, object]] = None, *, warm: Optional[Result] = None,
               options: Optional[dict] = None, verbose: bool = False, expand: bool = False,
-              homotopy: Sequence[float] = (1e-1, 1e-2, 1e-3, 1e-5, 1e-7, 0.0)) -> Result:
+              homotopy: Sequence[float] = (1e-1, 1e-2, 1e-3, 1e-5, 1e-7, 0.0),
+              bounds: Optional[Dict[str, tuple]] = None) -> Result:
         """Solve and return a :class:`~castrajectory.result.Result` (never raises on non-convergence).
 
         Parameters
@@ -279,6 +565,9 @@ class NLP:
         verbose: stream Ipopt's banner and iteration log.
         homotopy: relaxation values ``sigma`` used when the NLP has complementarity pairs;
             each step warm-starts from the previous one.
+        bounds: ``{name: (lb, ub)}`` overriding, for this solve only, the bounds of a
+            variable block or a constraint (``(-inf, inf)`` switches a constraint off;
+            ``lb == ub`` fixes variables, which Ipopt then removes).
         """
         solver = self.build(options, verbose, expand)
         build_time = self._build_time
@@ -297,6 +586,16 @@ class NLP:
         ubx = np.concatenate([b.ub for b in self._vars])
         lbg = np.concatenate(self._glb) if self._glb else np.zeros(0)
         ubg = np.concatenate(self._gub) if self._gub else np.zeros(0)
+        if bounds:
+            lbx, ubx, lbg, ubg = lbx.copy(), ubx.copy(), lbg.copy(), ubg.copy()
+            for name, (lo, hi) in bounds.items():
+                if name in self._cons:
+                    sl = self._cons[name].slice
+                    n = sl.stop - sl.start
+                    lbg[sl], ubg[sl] = _column(lo, n, f"{name}.lb"), _column(hi, n, f"{name}.ub")
+                else:
+                    idx = self.index(name)
+                    lbx[idx], ubx[idx] = _column(lo, idx.size, f"{name}.lb"), _column(hi, idx.size, f"{name}.ub")
         args = dict(x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
         if warm is not None and warm.lam_g is not None:
             args.update(lam_x0=warm.lam_x, lam_g0=warm.lam_g)

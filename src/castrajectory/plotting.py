@@ -6,10 +6,13 @@ backend or display is needed and nothing global is touched.
 from __future__ import annotations
 
 import math
-from typing import List
+from io import BytesIO
+from typing import Dict, List, Optional, Sequence
 
 import numpy as np
+from matplotlib import animation
 from matplotlib.figure import Figure
+from PIL import Image
 
 _ERROR_STYLE = {"shape": "o-", "contact_angle": "s-", "span": "^-", "energy": "v-", "pressure": "d-"}
 
@@ -85,3 +88,355 @@ def droplet_convergence(rows: List[dict], path: str) -> None:
         axes[0, j].set_title(f"{f}: error against N")
         axes[1, j].set_title(f"{f}: error against run time")
     fig.savefig(path, dpi=120)
+
+
+# ----------------------------------------------------------------------------- trajectories
+# The functions below return a Figure and leave saving to the caller
+# (``fig.savefig(path)``); nothing global is touched.
+
+def _as_time(t, label: str) -> np.ndarray:
+    t = np.asarray(t, dtype=float).reshape(-1)
+    if t.size == 0:
+        raise ValueError(f"{label}: the time array is empty")
+    return t
+
+
+def _series_time(t, key: str, n: int) -> np.ndarray:
+    """The time array for series ``key``: ``t`` itself, or ``t[key]`` when ``t`` is a dict."""
+    tk = _as_time(t[key] if isinstance(t, dict) else t, key)
+    if tk.size != n:
+        raise ValueError(f"{key}: {n} values but {tk.size} times")
+    return tk
+
+
+def _positive(y: np.ndarray) -> np.ndarray:
+    """``y`` with non-positive or non-finite entries masked (NaN), for log axes."""
+    y = np.array(y, dtype=float)
+    y[~np.isfinite(y) | (y <= 0)] = np.nan
+    return y
+
+
+def energy_plot(t, energies: Dict[str, np.ndarray], title: Optional[str] = None,
+                relative: bool = True) -> Figure:
+    """Energy drift of one or several labelled runs.
+
+    ``energies`` maps a label to ``E(t)``; ``t`` is one time array shared by all
+    runs or a dict with the same labels.  With ``relative=True`` the plot shows
+    ``|E − E₀| / |E₀|`` on a log axis (``|E − E₀|`` when ``E₀ = 0``; exact
+    zeros, such as the first sample, are left out); otherwise ``E − E₀`` on a
+    linear axis.
+    """
+    fig = Figure(figsize=(6.4, 4.0), layout="constrained")
+    ax = fig.add_subplot()
+    absolute = False
+    for label, E in energies.items():
+        E = np.asarray(E, dtype=float).reshape(-1)
+        tk = _series_time(t, label, E.size)
+        dE = E - E[0]
+        if relative:
+            scale = abs(E[0])
+            if scale > 0:
+                y = np.abs(dE) / scale
+            else:
+                y, absolute = np.abs(dE), True
+            ax.plot(tk, _positive(y), lw=1.2, label=label)
+        else:
+            ax.plot(tk, dE, lw=1.2, label=label)
+    if relative:
+        ax.set_yscale("log")
+        ax.set_ylabel("|E − E₀|" + ("" if absolute else " / |E₀|"))
+    else:
+        ax.axhline(0.0, color="0.5", lw=0.8)
+        ax.set_ylabel("E − E₀")
+    ax.set_xlabel("t")
+    ax.grid(True, which="major", alpha=0.3)
+    ax.set_title(title or "Energy error", fontsize=10)
+    if energies:
+        ax.legend(fontsize=8)
+    return fig
+
+
+def trajectory_plot(t, q, names: Sequence[str], title: Optional[str] = None) -> Figure:
+    """Generalised coordinates ``q`` (shape (K, n)) against time, one line per coordinate."""
+    t = _as_time(t, "trajectory_plot")
+    q = np.asarray(q, dtype=float)
+    if q.ndim == 1:
+        q = q[:, None]
+    if q.shape[0] != t.size:
+        raise ValueError(f"trajectory_plot: {q.shape[0]} rows of q but {t.size} times")
+    names = list(names)
+    if len(names) != q.shape[1]:
+        raise ValueError(f"trajectory_plot: {q.shape[1]} coordinates but {len(names)} names")
+    fig = Figure(figsize=(6.4, 4.0), layout="constrained")
+    ax = fig.add_subplot()
+    for j, name in enumerate(names):
+        ax.plot(t, q[:, j], lw=1.2, label=name)
+    ax.set_xlabel("t")
+    ax.set_ylabel("q")
+    ax.grid(True, which="major", alpha=0.3)
+    ax.set_title(title or "Generalised coordinates", fontsize=10)
+    ax.legend(fontsize=8)
+    return fig
+
+
+def long_horizon_plot(t, energy_errors: Dict[str, np.ndarray], period: Optional[float] = None,
+                      title: Optional[str] = None) -> Figure:
+    """``|E − E₀|`` against time (or against periods when ``period`` is given), log y.
+
+    ``energy_errors`` maps a label (e.g. ``"RK4"``, ``"midpoint"``) to the
+    energy error ``E(t) − E₀`` (the sign is dropped); ``t`` is shared or a dict
+    keyed like ``energy_errors``.  Typical use: RK4's secular drift against the
+    bounded oscillation of a variational scheme.
+    """
+    if period is not None and not (np.isfinite(period) and period > 0):
+        raise ValueError(f"long_horizon_plot: period must be positive, got {period!r}")
+    fig = Figure(figsize=(7.0, 4.0), layout="constrained")
+    ax = fig.add_subplot()
+    for label, err in energy_errors.items():
+        err = np.asarray(err, dtype=float).reshape(-1)
+        tk = _series_time(t, label, err.size)
+        x = tk / period if period else tk
+        ax.plot(x, _positive(np.abs(err)), lw=1.0, label=label)
+    ax.set_yscale("log")
+    ax.set_xlabel("t / period" if period else "t")
+    ax.set_ylabel("|E − E₀|")
+    ax.grid(True, which="major", alpha=0.3)
+    ax.set_title(title or "Long-horizon energy error", fontsize=10)
+    if energy_errors:
+        ax.legend(fontsize=8)
+    return fig
+
+
+# ----------------------------------------------------------------------------- work-precision
+_WP_X = {"time": "wall time, build + solve (s)", "solve_time_s": "solve time (s)",
+         "build_time_s": "build time (s)", "n": "N (steps)"}
+_WP_Y_ALIAS = {"error": "error_final", "energy": "energy_error_max"}
+_WP_Y_LABEL = {"error_final": "final-state error", "energy_error_max": "max |E − E₀|"}
+_WP_MARKERS = "os^vD<>pPX*h"
+
+
+def _wp_value(row: dict, key: str) -> float:
+    if key == "time":
+        return float(row["build_time_s"]) + float(row["solve_time_s"])
+    return float(row[key])
+
+
+def _work_precision_axes(ax, rows: List[dict], x: str, y: str, group: Sequence[str]) -> int:
+    """Draw one work-precision diagram on ``ax``; returns the number of groups drawn."""
+    if x not in _WP_X:
+        raise ValueError(f"work_precision: x must be one of {sorted(_WP_X)}, got {x!r}")
+    ykey = _WP_Y_ALIAS.get(y, y)
+    group = (group,) if isinstance(group, str) else tuple(group)
+    groups: Dict[tuple, list] = {}
+    for r in rows:
+        if r.get("status", "ok") != "ok":
+            continue
+        try:
+            xv, yv = _wp_value(r, x), _wp_value(r, ykey)
+        except (KeyError, TypeError, ValueError):
+            continue
+        if not (np.isfinite(xv) and np.isfinite(yv) and xv > 0 and yv > 0):
+            continue
+        groups.setdefault(tuple(r.get(g) for g in group), []).append((r.get("n", 0), xv, yv))
+    for k, (key, pts) in enumerate(sorted(groups.items(), key=lambda kv: tuple(map(str, kv[0])))):
+        pts.sort(key=lambda p: p[0])
+        xs = [p[1] for p in pts]
+        ys = [p[2] for p in pts]
+        label = " / ".join(str(v) for v in key)
+        ax.plot(xs, ys, "-", marker=_WP_MARKERS[k % len(_WP_MARKERS)], ms=4, lw=1, label=label)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel(_WP_X[x])
+    ax.set_ylabel(_WP_Y_LABEL.get(ykey, ykey))
+    ax.grid(True, which="both", alpha=0.25)
+    if groups:
+        ax.legend(fontsize=7)
+    return len(groups)
+
+
+def work_precision(rows: List[dict], x: str = "time", y: str = "error",
+                   group: Sequence[str] = ("method", "scheme"), title: Optional[str] = None) -> Figure:
+    """Work–precision diagram (SciML style): error against cost, log-log.
+
+    ``rows`` are dicts with at least ``method``, ``scheme``, ``n``,
+    ``error_final``, ``energy_error_max``, ``build_time_s``, ``solve_time_s``.
+    ``x`` is ``"time"`` (build + solve), ``"solve_time_s"``, ``"build_time_s"``
+    or ``"n"``; ``y`` is a row key (``"error"`` means ``error_final``,
+    ``"energy"`` means ``energy_error_max``).  One line with markers per
+    ``group`` value, its points sorted by ``n``.  Rows whose ``status`` is
+    present and not ``"ok"``, or whose x or y is missing, non-finite or
+    non-positive, are skipped.
+    """
+    fig = Figure(figsize=(6.4, 4.6), layout="constrained")
+    ax = fig.add_subplot()
+    _work_precision_axes(ax, rows, x, y, group)
+    ax.set_title(title or "Work–precision", fontsize=10)
+    return fig
+
+
+def work_precision_panels(rows: List[dict], x: str = "time",
+                          group: Sequence[str] = ("method", "scheme"),
+                          title: Optional[str] = None) -> Figure:
+    """Two work–precision panels side by side: final error and max energy error against ``x``."""
+    fig = Figure(figsize=(11.0, 4.6), layout="constrained")
+    ax_err, ax_en = fig.subplots(1, 2)
+    _work_precision_axes(ax_err, rows, x, "error_final", group)
+    _work_precision_axes(ax_en, rows, x, "energy_error_max", group)
+    ax_err.set_title("final-state error", fontsize=10)
+    ax_en.set_title("max energy error", fontsize=10)
+    if title:
+        fig.suptitle(title, fontsize=11)
+    return fig
+
+
+# ----------------------------------------------------------------------------- animation
+class _SharedPaletteGifWriter(animation.PillowWriter):
+    """:class:`~matplotlib.animation.PillowWriter` that quantises every frame to one shared palette.
+
+    Pillow otherwise builds an adaptive palette per RGB frame while saving,
+    which costs more than drawing the frames; mapping all frames onto one
+    palette (taken from a mosaic of a few frames) is about ten times faster
+    and gives a smaller file.  Frames must be opaque.
+    """
+
+    def setup(self, fig, outfile, dpi=None):
+        super().setup(fig, outfile, dpi=dpi)
+        self._rgb = []
+
+    def grab_frame(self, **savefig_kwargs):
+        buf = BytesIO()
+        self.fig.savefig(buf, **{**savefig_kwargs, "format": "rgba", "dpi": self.dpi})
+        self._rgb.append(Image.frombuffer("RGBA", self.frame_size, buf.getbuffer(), "raw", "RGBA", 0, 1)
+                         .convert("RGB"))
+
+    def finish(self):
+        frames = self._rgb
+        picks = [frames[i] for i in np.unique(np.linspace(0, len(frames) - 1, 8).round().astype(int))]
+        w, h = picks[0].size
+        mosaic = Image.new("RGB", (w, h * len(picks)))
+        for k, im in enumerate(picks):
+            mosaic.paste(im, (0, k * h))
+        palette = mosaic.quantize(colors=255)
+        quantised = [im.quantize(palette=palette, dither=Image.Dither.NONE) for im in frames]
+        quantised[0].save(self.outfile, save_all=True, append_images=quantised[1:],
+                          duration=int(1000 / self.fps), loop=0)
+
+
+def animate_points(positions, t, path: str, trail: bool = True, fps: int = 30, max_frames: int = 300,
+                   links: bool = True, pivot=(0.0, 0.0), title: Optional[str] = None,
+                   trail_time: float = 1.0, dpi: int = 80) -> str:
+    """Animate moving points (e.g. a pendulum's bobs) and write a GIF or an MP4.
+
+    ``positions`` has shape (K, n_points, 2) and ``t`` length K.  With
+    ``links=True`` segments join ``pivot`` and the points in order; each frame
+    shows markers at the points and, with ``trail=True``, a fading trail of
+    the last point over the preceding ``trail_time`` (s).  Frames are
+    subsampled evenly in time to at most ``max_frames``.  ``path`` ending in
+    ``.gif`` is written with Pillow; ``.mp4`` needs ffmpeg (``ValueError``
+    otherwise).  The axes are fixed, equal-aspect and cover every position.
+    Returns ``path``.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.collections import LineCollection
+
+    ext = str(path).lower().rsplit(".", 1)[-1] if "." in str(path) else ""
+    if ext == "gif":
+        writer = _SharedPaletteGifWriter(fps=fps)
+    elif ext == "mp4":
+        if not animation.FFMpegWriter.isAvailable():
+            raise ValueError(f"cannot write {path}: MP4 needs ffmpeg, which was not found; "
+                             "install ffmpeg or ask for a .gif")
+        writer = animation.FFMpegWriter(fps=fps)
+    else:
+        raise ValueError(f"cannot write {path}: the animation path must end in .gif or .mp4")
+    P = np.asarray(positions, dtype=float)
+    if P.ndim == 2 and P.shape[-1] == 2:
+        P = P[:, None, :]
+    if P.ndim != 3 or P.shape[-1] != 2 or P.shape[0] == 0:
+        raise ValueError(f"positions must have shape (K, n_points, 2), got {np.shape(positions)}")
+    t = _as_time(t, "animate_points")
+    if t.size != P.shape[0]:
+        raise ValueError(f"animate_points: {P.shape[0]} position rows but {t.size} times")
+    if not np.all(np.isfinite(t)) or np.any(np.diff(t) < 0):
+        raise ValueError("animate_points: t must be finite and non-decreasing")
+    if not np.all(np.isfinite(P)):
+        raise ValueError("animate_points: positions contain non-finite values")
+    if int(max_frames) < 1 or fps <= 0:
+        raise ValueError("animate_points: max_frames and fps must be positive")
+    K = t.size
+    # frames evenly in time: the last sample at or before each target time
+    targets = np.linspace(t[0], t[-1], min(K, int(max_frames)))
+    frames = np.unique(np.clip(np.searchsorted(t, targets, side="right") - 1, 0, K - 1))
+    pivot = np.asarray(pivot, dtype=float).reshape(2)
+
+    allpts = P.reshape(-1, 2)
+    if links:
+        allpts = np.vstack([allpts, pivot])
+    lo, hi = allpts.min(axis=0), allpts.max(axis=0)
+    centre, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
+    half = np.maximum(half, 0.5 * max(half.max(), 1e-9)) * 1.08 + 1e-9
+
+    # figure shaped to the data (aspect clamped), in even pixel counts as ffmpeg wants
+    dpi = int(dpi)
+    left, right, bottom, top_in = 0.5, 0.12, 0.35, (0.35 if title else 0.12)
+    aspect = float(np.clip(half[1] / half[0], 0.4, 1.6))
+    width_px = 2 * round(4.0 * dpi / 2)
+    axes_w = width_px / dpi - left - right
+    height_px = 2 * round((axes_w * aspect + bottom + top_in) * dpi / 2)
+    fig = Figure(figsize=(width_px / dpi, height_px / dpi), dpi=dpi)
+    canvas = FigureCanvasAgg(fig)
+    W, H = width_px / dpi, height_px / dpi
+    fig.subplots_adjust(left=left / W, right=1 - right / W, bottom=bottom / H, top=1 - top_in / H)
+    ax = fig.add_subplot()
+    ax.set_xlim(centre[0] - half[0], centre[0] + half[0])
+    ax.set_ylim(centre[1] - half[1], centre[1] + half[1])
+    ax.set_aspect("equal", adjustable="box")
+    ax.tick_params(labelsize=7)
+    ax.grid(True, alpha=0.2)
+    if title:
+        ax.set_title(title, fontsize=9)
+    if links:
+        ax.plot([pivot[0]], [pivot[1]], "s", color="k", ms=4)
+    # The static part (frame, ticks, grid, title, pivot) is rendered once and
+    # laid under the axes as a figure image; each frame then redraws only the
+    # moving artists, which keeps a 300-frame GIF at a few seconds.
+    canvas.draw()
+    background = np.asarray(canvas.buffer_rgba()).copy()
+    for artist in list(ax.lines):
+        artist.remove()
+    ax.set_title("")
+    ax.set_axis_off()
+    fig.figimage(background, origin="upper", resize=False).set_zorder(-1)
+    (link_line,) = ax.plot([], [], "-", color="0.25", lw=1.6, visible=links)
+    (markers,) = ax.plot([], [], "o", color="C0", ms=7, mec="k", mew=0.6, zorder=3)
+    trail_lc = LineCollection([], linewidths=1.5)
+    ax.add_collection(trail_lc, autolim=False)
+    stamp = ax.text(0.02, 0.97, "", transform=ax.transAxes, va="top", fontsize=8)
+    rgb = np.array([0.84, 0.15, 0.16])  # C3
+
+    with writer.saving(fig, str(path), dpi=dpi):
+        for i in frames:
+            pts = P[i]
+            if links:
+                chain = np.vstack([pivot, pts])
+                link_line.set_data(chain[:, 0], chain[:, 1])
+            markers.set_data(pts[:, 0], pts[:, 1])
+            if trail:
+                j0 = int(np.searchsorted(t, t[i] - trail_time, side="left"))
+                idx = np.arange(j0, i + 1)
+                if idx.size > 150:
+                    idx = np.unique(np.linspace(j0, i, 150).round().astype(int))
+                tr = P[idx, -1, :]
+                if len(tr) >= 2:
+                    segs = np.stack([tr[:-1], tr[1:]], axis=1)
+                    age = (t[i] - t[idx[1:]]) / trail_time if trail_time > 0 else np.zeros(len(segs))
+                    colors = np.empty((len(segs), 4))
+                    colors[:, :3] = rgb
+                    colors[:, 3] = np.clip(1.0 - age, 0.0, 1.0) * 0.9
+                    trail_lc.set_segments(segs)
+                    trail_lc.set_color(colors)
+                else:
+                    trail_lc.set_segments([])
+            stamp.set_text(f"t = {t[i]:.2f}")
+            writer.grab_frame()
+    return str(path)

@@ -1,0 +1,262 @@
+"""Lagrangian systems: coordinates, kinetic energy, potential terms, holonomic constraints.
+
+A :class:`LagrangianSystem` describes the physics only; how it is discretised
+(:mod:`castrajectory.discrete`) and solved (:mod:`castrajectory.trajectory`,
+:mod:`castrajectory.stepping`) lives elsewhere.
+
+Kinetic energy comes in one of two forms:
+
+* :class:`MassMatrix` — ``K = ½ q̇ᵀ M(q) q̇``;
+* :class:`Atoms` — the seed's definition: atom positions ``x_a = f_a(q)``
+  (CasADi expressions) with masses ``m_a``, ``K = Σ ½ m_a |J_a(q) q̇|²``.
+  Point masses of a linkage or quadrature points of a body are atoms.
+
+Potential energy is a list of terms, each a small object with an
+``energy(system)`` method: :class:`Gravity`, :class:`Spring`,
+:class:`Potential` (a user expression).  A system holds only the terms its
+scene names; in particular a scene with ``g = 0`` simply omits
+:class:`Gravity`.
+
+Holonomic constraints ``c(q) = 0`` are a list of expressions; their
+multipliers are unknowns of the trajectory NLP.
+
+Example (planar pendulum, one atom)::
+
+    q = casadi.SX.sym("q", 1)
+    bob = casadi.vertcat(casadi.sin(q[0]), -casadi.cos(q[0]))
+    pendulum = LagrangianSystem(q, Atoms([bob], [1.0]), [Gravity(9.81)])
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import List, Optional, Sequence
+
+import casadi as ca
+import numpy as np
+
+
+# ----------------------------------------------------------------------------- kinetic energy
+@dataclass
+class MassMatrix:
+    """``K = ½ q̇ᵀ M(q) q̇`` for a symmetric positive definite ``M`` (SX expression of q or constant)."""
+
+    matrix: object
+
+    def energy(self, q, qd):
+        M = ca.SX(self.matrix) if not isinstance(self.matrix, ca.SX) else self.matrix
+        return 0.5 * ca.dot(qd, ca.mtimes(M, qd))
+
+
+@dataclass
+class Atoms:
+    """Atoms at positions ``x_a = f_a(q)`` with masses ``m_a``: ``K = Σ ½ m_a |J_a q̇|²``."""
+
+    positions: Sequence[object]
+    masses: Sequence[float]
+
+    def __post_init__(self):
+        if len(self.positions) != len(self.masses):
+            raise ValueError("one mass per atom position is needed")
+        if any(not np.isfinite(m) or m <= 0 for m in self.masses):
+            raise ValueError("atom masses must be positive and finite")
+
+    def energy(self, q, qd):
+        K = ca.SX(0)
+        for x, m in zip(self.positions, self.masses):
+            v = ca.mtimes(ca.jacobian(x, q), qd)
+            K += 0.5 * m * ca.dot(v, v)
+        return K
+
+
+# ----------------------------------------------------------------------------- potential terms
+@dataclass
+class Gravity:
+    """Uniform gravity ``g`` acting along ``-e_y`` on every atom: ``U = Σ m_a g y_a``.
+
+    For a :class:`MassMatrix` system give ``heights`` (expressions) and ``masses``
+    explicitly.
+    """
+
+    g: float
+    heights: Optional[Sequence[object]] = None
+    masses: Optional[Sequence[float]] = None
+
+    def energy(self, system: "LagrangianSystem"):
+        if self.heights is not None:
+            hs, ms = self.heights, self.masses
+        elif isinstance(system.kinetic, Atoms):
+            hs = [x[1] for x in system.kinetic.positions]
+            ms = system.kinetic.masses
+        else:
+            raise ValueError("Gravity on a mass-matrix system needs explicit heights and masses")
+        return sum(m * self.g * h for m, h in zip(ms, hs))
+
+
+@dataclass
+class Spring:
+    """Linear spring of stiffness ``k`` and rest length ``rest`` between points ``a`` and ``b``."""
+
+    stiffness: float
+    rest: float
+    a: object
+    b: object
+
+    def energy(self, system):
+        d = self.a - self.b
+        return 0.5 * self.stiffness * (ca.sqrt(ca.dot(d, d)) - self.rest) ** 2
+
+
+@dataclass
+class Potential:
+    """A user-supplied potential energy expression of ``q``."""
+
+    expr: object
+    name: str = "potential"
+
+    def energy(self, system):
+        return self.expr
+
+
+# ----------------------------------------------------------------------------- the system
+@dataclass
+class LagrangianSystem:
+    """``L(q, q̇) = K(q, q̇) − U(q)`` with optional holonomic constraints ``c(q) = 0``.
+
+    Parameters
+    ----------
+    q: SX column of generalised coordinates.
+    kinetic: :class:`MassMatrix` or :class:`Atoms`.
+    potentials: potential-energy terms (only those the scene needs).
+    constraints: holonomic constraint expressions ``c_i(q) = 0``.
+    names: coordinate names, for output.
+    points: optional SX points (e.g. atom positions) returned by :meth:`points` for plots.
+    """
+
+    q: object
+    kinetic: object
+    potentials: Sequence[object] = ()
+    constraints: Sequence[object] = ()
+    names: Optional[Sequence[str]] = None
+    points_expr: Optional[Sequence[object]] = None
+    _fn: dict = field(default_factory=dict, init=False, repr=False)
+
+    def __post_init__(self):
+        if not isinstance(self.q, ca.SX) or not self.q.is_column() or not self.q.is_valid_input():
+            raise ValueError("q must be a column of SX symbols")
+        self.qd = ca.SX.sym("qd", self.nq)
+        self.names = list(self.names) if self.names else [f"q{i}" for i in range(self.nq)]
+        if self.points_expr is None and isinstance(self.kinetic, Atoms):
+            self.points_expr = list(self.kinetic.positions)
+
+    # -- sizes
+    @property
+    def nq(self) -> int:
+        return self.q.numel()
+
+    @property
+    def nc(self) -> int:
+        return int(sum(ca.vec(c).numel() for c in self.constraints))
+
+    # -- symbolic pieces (expressions in self.q, self.qd)
+    def kinetic_expr(self):
+        return self.kinetic.energy(self.q, self.qd)
+
+    def potential_expr(self):
+        U = ca.SX(0)
+        for term in self.potentials:
+            U += term.energy(self)
+        return U
+
+    def lagrangian_expr(self):
+        return self.kinetic_expr() - self.potential_expr()
+
+    def constraint_expr(self):
+        return ca.vertcat(*[ca.vec(c) for c in self.constraints]) if self.constraints else ca.SX(0, 1)
+
+    # -- numerical functions (built once)
+    def _get(self, key, build):
+        if key not in self._fn:
+            self._fn[key] = build()
+        return self._fn[key]
+
+    @property
+    def L(self) -> ca.Function:
+        """``L(q, q̇)``."""
+        return self._get("L", lambda: ca.Function("L", [self.q, self.qd], [self.lagrangian_expr()]))
+
+    @property
+    def energy(self) -> ca.Function:
+        """Total energy ``K + U`` as a function of ``(q, q̇)``."""
+        return self._get("E", lambda: ca.Function(
+            "E", [self.q, self.qd], [self.kinetic_expr() + self.potential_expr()]))
+
+    @property
+    def potential(self) -> ca.Function:
+        return self._get("U", lambda: ca.Function("U", [self.q], [self.potential_expr()]))
+
+    @property
+    def mass_matrix(self) -> ca.Function:
+        """``M(q) = ∂²K/∂q̇²``."""
+        return self._get("M", lambda: ca.Function(
+            "M", [self.q], [ca.densify(ca.hessian(self.kinetic_expr(), self.qd)[0])]))
+
+    @property
+    def momentum(self) -> ca.Function:
+        """Continuous Legendre transform ``p = ∂L/∂q̇``."""
+        return self._get("p", lambda: ca.Function(
+            "p", [self.q, self.qd], [ca.gradient(self.lagrangian_expr(), self.qd)]))
+
+    @property
+    def constraint(self) -> ca.Function:
+        """``c(q)`` and its Jacobian ``C(q) = ∂c/∂q``."""
+        c = self.constraint_expr()
+        return self._get("c", lambda: ca.Function("c", [self.q], [c, ca.densify(ca.jacobian(c, self.q))]))
+
+    @property
+    def acceleration(self) -> ca.Function:
+        """Euler–Lagrange right-hand side ``q̈(q, q̇)``.
+
+        Unconstrained: ``M q̈ = ∂L/∂q − (∂²L/∂q̇∂q) q̇``.  With holonomic
+        constraints the index-1 system ``[M Cᵀ; C 0] [q̈; λ] = [f; −(∂(C q̇)/∂q) q̇]``
+        is solved (used only by the time-stepping baselines).
+        """
+        def build():
+            L = self.lagrangian_expr()
+            dLdqd = ca.gradient(L, self.qd)
+            M = ca.hessian(L, self.qd)[0]
+            f = ca.gradient(L, self.q) - ca.mtimes(ca.jacobian(dLdqd, self.q), self.qd)
+            if self.nc:
+                c = self.constraint_expr()
+                C = ca.jacobian(c, self.q)
+                gamma = -ca.mtimes(ca.jacobian(ca.mtimes(C, self.qd), self.q), self.qd)
+                K = ca.blockcat([[M, C.T], [C, ca.SX(self.nc, self.nc)]])
+                sol = ca.solve(K, ca.vertcat(f, gamma))
+                qdd = sol[:self.nq]
+            else:
+                qdd = ca.solve(M, f)
+            return ca.Function("qdd", [self.q, self.qd], [qdd])
+        return self._get("qdd", build)
+
+    @property
+    def points(self) -> Optional[ca.Function]:
+        """Positions of the plotted points (atoms by default) as a function of q, stacked as rows."""
+        if not self.points_expr:
+            return None
+        return self._get("pts", lambda: ca.Function(
+            "pts", [self.q], [ca.horzcat(*[ca.vec(p) for p in self.points_expr]).T]))
+
+    def positions(self, q: np.ndarray) -> np.ndarray:
+        """Point positions for each row of ``q``: array of shape (len(q), n_points, dim)."""
+        fn = self.points
+        if fn is None:
+            raise ValueError("this system has no points to show")
+        q = np.atleast_2d(q)
+        F = fn.map(q.shape[0])
+        out = np.asarray(F(q.T))  # (n_points, len(q) * dim), one dim-block per row of q
+        npts = len(self.points_expr)
+        return out.reshape(npts, q.shape[0], -1).transpose(1, 0, 2)
+
+    def energies(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """Total energy for each row of ``(q, q̇)``."""
+        q, qd = np.atleast_2d(q), np.atleast_2d(qd)
+        return np.asarray(self.energy.map(q.shape[0])(q.T, qd.T)).reshape(-1)

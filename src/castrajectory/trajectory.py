@@ -1,0 +1,413 @@
+"""Whole-trajectory solves: all discrete Euler–Lagrange equations in one NLP.
+
+Two modes on a uniform grid ``t_k = k h``, ``h = T/N``:
+
+* **initial value** (:func:`solve_initial_value`): ``q_0`` and ``q̇_0`` given.
+  Unknowns ``q_1..q_N`` (plus stages and multipliers); equations: the initial
+  discrete Legendre condition ``p_0 + D₁L_d(q_0, q_1) = 0``, the DEL equation
+  at every interior node, stage equations and constraint rows.  The system is
+  square (as many equations as unknowns) and handed to Ipopt with a zero
+  objective: Ipopt then performs a globalised Newton method on it.
+* **two-point boundary** (:func:`solve_boundary`): ``q_0`` and ``q_N`` given.
+  Ipopt *minimises* the discrete action ``S_d/h`` over the interior nodes —
+  least action proper; its stationarity conditions are the DEL equations and
+  the constraint multipliers are Ipopt's.
+
+Every family of equations is added as one element family
+(:meth:`castrajectory.nlp.NLP.equal_elements`), so building is vectorised
+(one ``map`` per family, element-wise derivatives) rather than a Python loop
+of symbolic calls.
+
+Robust strategy (initial value), chosen by the library:
+
+1. **coarse to fine** — solve on ``N/2^j`` steps first (coarsest ≥ 32 steps),
+   then interpolate (cubic) each solution as the guess of the next level;
+2. **horizon continuation** — if a level does not converge from its guess
+   (chaotic motion: a coarse solution can differ O(1) from the fine one at
+   late times), grow the active horizon window by window: equations beyond
+   the window are switched off and their unknowns held fixed, the window
+   doubles after each success and halves after a failure; finally the whole
+   trajectory is solved once more with every equation active.
+
+The status reported is always that of the last whole-trajectory solve at the
+requested N; levels and windows are listed in :attr:`Trajectory.levels`.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Dict, List, Optional
+
+import casadi as ca
+import numpy as np
+
+from .discrete import DiscreteMechanics
+from .mechanics import LagrangianSystem
+from .nlp import NLP, X
+from .result import Result
+from .validation import InputError, integer_at_least, positive
+
+#: Ipopt settings for the square DEL systems (see DESIGN.md: MUMPS scaling off).
+TRAJECTORY_IPOPT = {"tol": 1e-10, "max_iter": 100, "constr_mult_init_max": 0}
+
+
+@dataclass
+class Level:
+    """One whole-trajectory solve on the way to the answer."""
+
+    n: int
+    horizon: int  # nodes with active equations (n = full trajectory)
+    status: str
+    iterations: int
+    build_time_s: float
+    solve_time_s: float
+
+
+@dataclass
+class Trajectory:
+    t: np.ndarray
+    q: np.ndarray
+    stages: np.ndarray
+    p: np.ndarray
+    v: np.ndarray
+    energy: np.ndarray
+    multipliers: Optional[np.ndarray]
+    status: str
+    success: bool
+    message: str
+    iterations: int
+    build_time_s: float
+    solve_time_s: float
+    scheme: str
+    mode: str
+    method: str = "whole"
+    levels: List[Level] = field(default_factory=list)
+
+    @property
+    def time_s(self) -> float:
+        return self.build_time_s + self.solve_time_s
+
+
+def _check_state(name, value, n):
+    arr = np.asarray(value, dtype=float).reshape(-1)
+    if arr.size != n:
+        raise InputError(f"{name} needs {n} values (got {arr.size})")
+    if not np.all(np.isfinite(arr)):
+        raise InputError(f"{name} must be finite (got {arr.tolist()})")
+    return arr
+
+
+class TrajectoryNLP:
+    """The whole-trajectory NLP for one grid (see module docstring)."""
+
+    def __init__(self, dm: DiscreteMechanics, N: int, T: float, mode: str, q0, end):
+        self.dm, self.N, self.T, self.mode = dm, N, T, mode
+        self.h = h = T / N
+        n, s, m = dm.n, dm.s, dm.m
+        st = dm.scheme.stages
+        # Initial value: a square feasibility problem, so the zero Hessian is exact (see NLP).
+        self.nlp = nlp = NLP(hessian="zero" if mode == "initial_value" else "exact")
+        q_init = np.tile(q0, N + 1)
+        nlp.variable("q", (N + 1) * n, init=q_init)
+        if s:
+            nlp.variable("Z", N * s)
+        nlam = (N if mode == "initial_value" else N - 1) * m
+        if m:
+            nlp.variable("lam", nlam)
+            if s:
+                nlp.variable("nu", N * st * m)
+        Q = nlp.index("q").reshape(N + 1, n)
+        Zi = nlp.index("Z").reshape(N, s) if s else np.zeros((N, 0), dtype=np.int64)
+        Li = nlp.index("lam").reshape(-1, m) if m else None
+        Ni = nlp.index("nu").reshape(N, st * m) if (m and s) else None
+        none = np.zeros(0)
+        hh = np.array([h])
+        zarg = (lambda rows: X(Zi[rows])) if s else (lambda rows: none)
+        self.Q, self.Zi, self.Li, self.Ni = Q, Zi, Li, Ni
+
+        if mode == "initial_value":
+            p0 = end
+            lam0 = X(Li[0]) if m else none
+            nlp.equal_elements("initial", dm.initial_residual, [X(Q[0]), zarg(0), X(Q[1]), p0, lam0, hh])
+            if N > 1:
+                k = np.arange(1, N)
+                lam = X(Li[k]) if m else none
+                nlp.equal_elements("del", dm.del_residual,
+                                   [X(Q[k - 1]), zarg(k - 1), X(Q[k]), zarg(k), X(Q[k + 1]), lam, hh])
+            nlp.minimize(ca.SX(0))
+        else:
+            a, b, Zs = ca.SX.sym("a", n), ca.SX.sym("b", n), ca.SX.sym("Z", s)
+            act = ca.Function("action", [a, Zs, b], [dm.Ld(a, Zs, b, h) / h])
+            k = np.arange(N)
+            nlp.minimize_elements("action", act, [X(Q[k]), zarg(k), X(Q[k + 1])])
+        if s and mode == "initial_value":
+            k = np.arange(N)
+            nu = X(Ni[k]) if (m and s) else np.zeros(0)
+            nlp.equal_elements("stage", dm.stage_residual, [X(Q[k]), X(Zi[k]), X(Q[k + 1]), nu, hh])
+        if m:
+            nodes = np.arange(1, N + 1) if mode == "initial_value" else np.arange(1, N)
+            nlp.equal_elements("constraint", dm.constraint_rows, [X(Q[nodes])])
+            if s:
+                for j in range(st):
+                    nlp.equal_elements(f"stage_constraint{j}", dm.constraint_rows,
+                                       [X(Zi[:, j * n:(j + 1) * n])])
+        self.q0 = np.asarray(q0, float)
+        self.end = np.asarray(end, float)
+        self._built = False
+
+    # --------------------------------------------------------------- solve
+    def _fixed_bounds(self, guess: Dict[str, np.ndarray], window: Optional[tuple]):
+        """Bounds fixing q0 (and q_N); with ``window = (K0, K1)`` also everything outside it.
+
+        In a window only the unknowns of nodes ``K0+1..K1`` (and steps/multipliers
+        ``K0..K1-1``) are free and only the equations that determine them are
+        active; all other unknowns are held at ``guess`` and their equations are
+        switched off (bounds ``±inf``).
+        """
+        N, n, m, s = self.N, self.dm.n, self.dm.m, self.dm.s
+        st = self.dm.scheme.stages
+        qlo = np.full((N + 1, n), -np.inf)
+        qhi = np.full((N + 1, n), np.inf)
+        qlo[0] = qhi[0] = self.q0
+        if self.mode == "boundary":
+            qlo[N] = qhi[N] = self.end
+        b: Dict[str, tuple] = {}
+        if window is not None:
+            K0, K1 = window
+            gq = guess["q"].reshape(N + 1, n)
+            fixed = np.ones(N + 1, bool)
+            fixed[K0 + 1:K1 + 1] = False
+            qlo[fixed] = qhi[fixed] = gq[fixed]
+            step_off = np.ones(N, bool)
+            step_off[K0:K1] = False  # steps / multipliers K0..K1-1 are free
+
+            def hold(name, width):
+                g = guess[name].reshape(N, width)
+                lo = np.full((N, width), -np.inf)
+                hi = np.full((N, width), np.inf)
+                lo[step_off] = hi[step_off] = g[step_off]
+                b[name] = (lo.reshape(-1), hi.reshape(-1))
+
+            def rows(name, off_mask, width):
+                lo = np.zeros((off_mask.size, width))
+                hi = np.zeros((off_mask.size, width))
+                lo[off_mask], hi[off_mask] = -np.inf, np.inf
+                b[name] = (lo.reshape(-1), hi.reshape(-1))
+
+            if K0 > 0:
+                rows("initial", np.ones(1, bool), n)
+            if N > 1:
+                k = np.arange(1, N)
+                rows("del", (k < K0) | (k > K1 - 1), n)
+            if s:
+                hold("Z", s)
+                rows("stage", step_off, s)
+            if m:
+                hold("lam", m)
+                k = np.arange(1, N + 1)
+                rows("constraint", (k < K0 + 1) | (k > K1), m)
+                if s:
+                    hold("nu", st * m)
+                    for j in range(st):
+                        rows(f"stage_constraint{j}", step_off, m)
+        b["q"] = (qlo.reshape(-1), qhi.reshape(-1))
+        return b
+
+    def solve(self, guess: Dict[str, np.ndarray], window: Optional[tuple] = None,
+              options: Optional[dict] = None, verbose: bool = False) -> Result:
+        opts = dict(TRAJECTORY_IPOPT)
+        opts.update(options or {})
+        init = {k: v for k, v in guess.items() if k in self.nlp.variable_names}
+        return self.nlp.solve(init=init, options=opts, verbose=verbose,
+                              bounds=self._fixed_bounds(guess, window))
+
+
+# ----------------------------------------------------------------------------- guesses
+def _resample(t_old: np.ndarray, Y: np.ndarray, t_new: np.ndarray) -> np.ndarray:
+    """Cubic (4-point Lagrange) interpolation of rows of ``Y`` on a uniform grid ``t_old``."""
+    n_old = t_old.size
+    if n_old < 4:
+        return np.stack([np.interp(t_new, t_old, Y[:, j]) for j in range(Y.shape[1])], axis=1)
+    h = t_old[1] - t_old[0]
+    i = np.clip(np.floor((t_new - t_old[0]) / h).astype(int) - 1, 0, n_old - 4)
+    s = (t_new - t_old[i]) / h  # in [0, 3]
+    w = np.stack([-(s - 1) * (s - 2) * (s - 3) / 6, s * (s - 2) * (s - 3) / 2,
+                  -s * (s - 1) * (s - 3) / 2, s * (s - 1) * (s - 2) / 6], axis=1)
+    return sum(w[:, j:j + 1] * Y[i + j] for j in range(4))
+
+
+def _refine(prev: TrajectoryNLP, values: Dict[str, np.ndarray], nxt: TrajectoryNLP) -> Dict[str, np.ndarray]:
+    """Interpolate a solution on ``prev``'s grid to a guess on ``nxt``'s grid."""
+    dm = prev.dm
+    n, s, m = dm.n, dm.s, dm.m
+    t_old = np.linspace(0, prev.T, prev.N + 1)
+    t_new = np.linspace(0, nxt.T, nxt.N + 1)
+    q_old = values["q"].reshape(prev.N + 1, n)
+    q_new = _resample(t_old, q_old, t_new)
+    q_new[0] = nxt.q0
+    out = {"q": q_new.reshape(-1)}
+    st = dm.scheme.stages
+    if s:
+        # stage j of step k sits at t_k + (j+1)/(st+1) h for the quadratic Galerkin scheme
+        ts = np.concatenate([t_new[:-1, None] + (j + 1) / (st + 1) * nxt.h for j in range(st)], axis=1)
+        Zn = np.hstack([_resample(t_old, q_old, ts[:, j]) for j in range(st)])
+        out["Z"] = Zn.reshape(-1)
+    if m:
+        lam_old = values["lam"].reshape(-1, m)
+        if prev.mode == "initial_value":
+            tl_old, tl_new = t_old[:-1], t_new[:-1]
+        else:
+            tl_old, tl_new = t_old[1:-1], t_new[1:-1]
+        out["lam"] = _resample(tl_old, lam_old, tl_new).reshape(-1) if tl_old.size else np.zeros(tl_new.size * m)
+        if s:
+            nu_old = values["nu"].reshape(prev.N, st * m)
+            tc_old = t_old[:-1] + prev.h / 2
+            tc_new = t_new[:-1] + nxt.h / 2
+            out["nu"] = _resample(tc_old, nu_old, tc_new).reshape(-1)
+    return out
+
+
+def _initial_guess(tn: TrajectoryNLP, qd0: np.ndarray) -> Dict[str, np.ndarray]:
+    """Straight-line guess ``q(t) = q0 + t q̇0`` (boundary mode: the chord from q0 to qT)."""
+    dm, N = tn.dm, tn.N
+    t = np.linspace(0, tn.T, N + 1)[:, None]
+    if tn.mode == "initial_value":
+        q = tn.q0[None, :] + t * qd0[None, :]
+    else:
+        q = tn.q0[None, :] + (t / tn.T) * (tn.end - tn.q0)[None, :]
+    out = {"q": q.reshape(-1)}
+    if dm.s:
+        out["Z"] = dm.stage_guess(q[:-1], q[1:]).reshape(-1)
+    if dm.m:
+        nl = N if tn.mode == "initial_value" else N - 1
+        out["lam"] = np.zeros(nl * dm.m)
+        if dm.s:
+            out["nu"] = np.zeros(N * dm.scheme.stages * dm.m)
+    return out
+
+
+# ----------------------------------------------------------------------------- drivers
+def _levels(N: int, coarsest: int) -> List[int]:
+    ns = [N]
+    while ns[-1] // 2 >= coarsest:
+        ns.append(int(math.ceil(ns[-1] / 2)))
+    return ns[::-1]
+
+
+#: Iteration budget of a whole-trajectory attempt from an interpolated guess before the
+#: horizon continuation takes over (a good guess converges in 0-6 Newton iterations).
+FIRST_ATTEMPT_MAX_ITER = 10
+#: Iteration budget of one window of the horizon continuation.
+WINDOW_MAX_ITER = 10
+
+
+def _solve_level(tn: TrajectoryNLP, guess, options, verbose, log: List[Level], allow_windows: bool):
+    first = dict(options or {})
+    window_opts = dict(first)
+    if allow_windows:
+        cap = int(first.get("max_iter", TRAJECTORY_IPOPT["max_iter"]))
+        first["max_iter"] = min(cap, FIRST_ATTEMPT_MAX_ITER)
+        window_opts["max_iter"] = min(cap, WINDOW_MAX_ITER)
+    res = tn.solve(guess, options=first, verbose=verbose)
+    log.append(Level(tn.N, tn.N, res.status, res.iterations, res.build_time_s, res.solve_time_s))
+    if res.success or not allow_windows:
+        return res
+    # Horizon continuation: march an active window over the trajectory; the solved
+    # prefix is held fixed, the window grows by half after a success and halves after a failure.
+    cur = {k: v.copy() for k, v in guess.items()}
+    dm = tn.dm
+    n, N = dm.n, tn.N
+    K, L = 0, max(2, N // 32)
+    while K < N:
+        Kt = min(N, K + L)
+        r = tn.solve(cur, window=(K, Kt), options=window_opts, verbose=verbose)
+        log.append(Level(N, Kt, r.status, r.iterations, 0.0, r.solve_time_s))
+        if r.success:
+            new = {k: np.asarray(v).copy() for k, v in r.values.items()}
+            # continue the unsolved tail from the solved node Kt (shift by the jump there)
+            qn = new["q"].reshape(N + 1, n)
+            shift = qn[Kt] - cur["q"].reshape(N + 1, n)[Kt]
+            qn[Kt + 1:] += shift
+            if dm.s:
+                Zn = new["Z"].reshape(N, dm.s)
+                Zn[Kt:] += np.tile(shift, dm.scheme.stages)
+            cur = new
+            K, L = Kt, L + (L + 1) // 2
+        else:
+            L //= 2
+            if L == 0:
+                return r
+    res = tn.solve(cur, options=options, verbose=verbose)
+    log.append(Level(N, N, res.status, res.iterations, 0.0, res.solve_time_s))
+    return res
+
+
+def _finish(tn: TrajectoryNLP, res: Result, log: List[Level], mode: str) -> Trajectory:
+    dm, N = tn.dm, tn.N
+    q = res.values["q"].reshape(N + 1, dm.n)
+    Z = res.values["Z"].reshape(N, dm.s) if dm.s else np.zeros((N, 0))
+    p = dm.momenta(q, Z, tn.h)
+    v = dm.velocities(q, p)
+    energy = tn.dm.system.energies(q, v)
+    lam = None
+    if dm.m:
+        lam = res.values["lam"].reshape(-1, dm.m) if mode == "initial_value" else \
+            res.multipliers["constraint"].reshape(-1, dm.m)
+    return Trajectory(
+        t=np.linspace(0.0, tn.T, N + 1), q=q, stages=Z, p=p, v=v, energy=energy, multipliers=lam,
+        status=res.status, success=res.success, message=res.message,
+        iterations=int(sum(lv.iterations for lv in log)),
+        build_time_s=float(sum(lv.build_time_s for lv in log)),
+        solve_time_s=float(sum(lv.solve_time_s for lv in log)),
+        scheme=dm.scheme.name, mode=mode, levels=log)
+
+
+def _validate(system, T, N):
+    positive("T", T)
+    N = integer_at_least("n", N, 2)
+    return float(T), N
+
+
+def solve_initial_value(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str = "midpoint",
+                        options: Optional[dict] = None, verbose: bool = False,
+                        coarsest: int = 32) -> Trajectory:
+    """Solve the initial-value problem as one whole-trajectory NLP (robust strategy in the module doc)."""
+    T, N = _validate(system, T, N)
+    q0 = _check_state("q0", q0, system.nq)
+    qd0 = _check_state("qd0", qd0, system.nq)
+    if system.nc:
+        c, C = system.constraint(q0)
+        if np.max(np.abs(np.asarray(c))) > 1e-9 or np.max(np.abs(np.asarray(C) @ qd0)) > 1e-9:
+            raise InputError("the initial state violates the holonomic constraints (position or velocity level)")
+    dm = DiscreteMechanics(system, scheme)
+    p0 = np.asarray(system.momentum(q0, qd0)).reshape(-1)
+    log: List[Level] = []
+    prev, values = None, None
+    for Nl in _levels(N, coarsest):
+        tn = TrajectoryNLP(dm, Nl, T, "initial_value", q0, p0)
+        guess = _initial_guess(tn, qd0) if prev is None else _refine(prev, values, tn)
+        res = _solve_level(tn, guess, options, verbose, log, allow_windows=True)
+        if res.success:
+            prev, values = tn, res.values
+        # A coarse level that fails is too coarse to resolve the motion: drop it and go finer.
+    return _finish(tn, res, log, "initial_value")
+
+
+def solve_boundary(system: LagrangianSystem, q0, qT, T: float, N: int, scheme: str = "midpoint",
+                   options: Optional[dict] = None, verbose: bool = False, coarsest: int = 32) -> Trajectory:
+    """Least action proper: minimise the discrete action with ``q(0) = q0`` and ``q(T) = qT``."""
+    T, N = _validate(system, T, N)
+    q0 = _check_state("q0", q0, system.nq)
+    qT = _check_state("qT", qT, system.nq)
+    dm = DiscreteMechanics(system, scheme)
+    log: List[Level] = []
+    prev, values = None, None
+    for Nl in _levels(N, coarsest):
+        tn = TrajectoryNLP(dm, Nl, T, "boundary", q0, qT)
+        guess = _initial_guess(tn, None) if prev is None else _refine(prev, values, tn)
+        res = _solve_level(tn, guess, options, verbose, log, allow_windows=False)
+        if not res.success:
+            break
+        prev, values = tn, res.values
+    return _finish(tn, res, log, "boundary")
