@@ -34,6 +34,10 @@ from .validation import InputError
 SCENES = {
     "droplet": "castrajectory.problems.droplet",
     "droplet_angle": "castrajectory.problems.droplet_angle",
+    "double_pendulum": "castrajectory.problems.double_pendulum",
+    "n_link_pendulum": "castrajectory.problems.n_link_pendulum",
+    "stiff_spring_pendulum": "castrajectory.problems.stiff_spring_pendulum",
+    "thrown_ball": "castrajectory.problems.thrown_ball",
 }
 
 
@@ -60,6 +64,64 @@ def ipopt_options(args) -> dict:
 
 def add_plot(p: argparse.ArgumentParser) -> None:
     p.add_argument("--plot", metavar="PATH", help="write a picture (format from the extension, e.g. .png, .pdf)")
+
+
+def add_trajectory_flags(p: argparse.ArgumentParser, T: float, n: int, scheme: str = "midpoint",
+                         methods: bool = True) -> None:
+    """Flags shared by the mechanics scenes: horizon, grid, scheme, method, plot and animation."""
+    from .discrete import SCHEMES
+    from .simulate import METHODS
+    p.add_argument("--T", type=float, default=T, help="duration T in s (> 0)")
+    p.add_argument("--n", type=int, default=n, help="number of time steps N (>= 2)")
+    p.add_argument("--scheme", choices=list(SCHEMES), default=scheme, help="discrete Lagrangian")
+    if methods:
+        p.add_argument("--method", choices=list(METHODS), default="whole",
+                       help="whole: one whole-trajectory NLP (the library's method); others are baselines")
+    add_plot(p)
+    p.add_argument("--animate", metavar="PATH", help="write an animation (.gif, or .mp4 when ffmpeg is present)")
+
+
+def check_animation_path(path: Optional[str]) -> None:
+    """Refuse an animation path we cannot write, before any work is done (exit 2)."""
+    if not path:
+        return
+    ext = os.path.splitext(path)[1].lower()
+    if ext not in (".gif", ".mp4"):
+        raise InputError(f"--animate needs a .gif or .mp4 path (got {path!r})")
+    if ext == ".mp4":
+        from matplotlib.animation import FFMpegWriter
+        if not FFMpegWriter.isAvailable():
+            raise InputError("--animate .mp4 needs ffmpeg, which was not found; use a .gif path")
+
+
+def trajectory_outcome(title: str, system, run, extra: Optional[dict] = None,
+                       extra_lines: Optional[List[str]] = None, links: bool = True) -> "Outcome":
+    """Summary, JSON data and plot/animation writers of a mechanics scene."""
+    from . import plotting
+    e = np.asarray(run.energy, float)
+    drift = float(np.max(np.abs(e - e[0]))) if e.size and np.all(np.isfinite(e)) else float("nan")
+    rel = drift / max(abs(e[0]), 1e-300) if e.size else float("nan")
+    names = list(system.names)
+    final = ", ".join(f"{nm} = {v:.6g}" for nm, v in zip(names, run.q[-1]))
+    how = f"method {run.method}" + (f", scheme {run.scheme}" if run.scheme else "")
+    lines = [f"{title}: {how}, N = {len(run.t) - 1}, T = {run.t[-1]:g} s",
+             f"final state: {final}",
+             f"energy: E(0) = {e[0]:.10g}, max |E - E(0)| = {drift:.3e} ({rel:.3e} relative)",
+             *(extra_lines or []),
+             status_line(run.status, run)]
+    data = run.as_dict()
+    data.update(extra or {})
+
+    def plot(path):
+        fig = plotting.energy_plot(run.t, {how: e}, title=f"{title}: energy error")
+        fig.savefig(path)
+
+    def animate(path):
+        if system.points is None:
+            raise InputError("this scene has no points to animate")
+        plotting.animate_points(system.positions(run.q), run.t, path, links=links, title=title)
+
+    return Outcome(run.success, data, lines, run.message, writers={"plot": plot, "animate": animate})
 
 
 @dataclass

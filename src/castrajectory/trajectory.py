@@ -83,10 +83,20 @@ class Trajectory:
     mode: str
     method: str = "whole"
     levels: List[Level] = field(default_factory=list)
+    action: float = float("nan")  # discrete action S_d = Σ L_d
 
     @property
     def time_s(self) -> float:
         return self.build_time_s + self.solve_time_s
+
+    def as_dict(self) -> dict:
+        return {
+            "status": self.status, "iterations": self.iterations,
+            "build_time_s": self.build_time_s, "solve_time_s": self.solve_time_s,
+            "scheme": self.scheme, "method": self.method, "mode": self.mode,
+            "t": self.t, "q": self.q, "energy": self.energy,
+            "levels": [vars(lv) for lv in self.levels],
+        }
 
 
 def _check_state(name, value, n):
@@ -360,7 +370,8 @@ def _finish(tn: TrajectoryNLP, res: Result, log: List[Level], mode: str) -> Traj
         iterations=int(sum(lv.iterations for lv in log)),
         build_time_s=float(sum(lv.build_time_s for lv in log)),
         solve_time_s=float(sum(lv.solve_time_s for lv in log)),
-        scheme=dm.scheme.name, mode=mode, levels=log)
+        scheme=dm.scheme.name, mode=mode, levels=log,
+        action=float(np.sum(np.asarray(dm.Ld.map(N)(q[:-1].T, Z.T, q[1:].T, tn.h)))))
 
 
 def _validate(system, T, N):

@@ -1,0 +1,39 @@
+"""N-link pendulum by least action over the whole trajectory.
+
+A planar chain of equal point masses on equal massless rods, released at rest
+with every link at the same angle from the downward vertical.
+
+    python problems/n_link_pendulum.py --links 5 --animate chain.gif
+"""
+import sys
+
+from castrajectory import cli, pendulum, simulate
+from castrajectory.validation import integer_at_least
+
+
+def parser():
+    p = cli.scene_parser("n_link_pendulum.py", __doc__.splitlines()[0])
+    p.add_argument("--links", type=int, default=4, help="number of links (>= 1)")
+    p.add_argument("--mass", type=float, default=1.0, help="mass of each bob (> 0)")
+    p.add_argument("--length", type=float, default=1.0, help="length of each link (> 0)")
+    p.add_argument("--theta", type=float, default=1.5, help="initial angle of every link (rad)")
+    p.add_argument("--g", type=float, default=9.81, help="gravity (0 drops the gravity term)")
+    cli.add_trajectory_flags(p, T=5.0, n=2000)
+    return p
+
+
+def run(args):
+    cli.check_animation_path(args.animate)
+    k = integer_at_least("links", args.links, 1)
+    system = pendulum.n_link_pendulum([args.mass] * k, [args.length] * k, args.g)
+    res = simulate.simulate(system, [args.theta] * k, [0.0] * k, args.T, args.n, args.scheme, args.method,
+                            options=cli.ipopt_options(args), verbose=args.verbose)
+    return cli.trajectory_outcome(f"{k}-link pendulum", system, res, extra={"links": k})
+
+
+def main(argv=None):
+    return cli.run_scene(parser(), run, argv)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
