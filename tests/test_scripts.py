@@ -150,3 +150,106 @@ def test_every_scene_is_installed_as_castrajectory_problems():
     for name, module in SCENES.items():
         mod = importlib.import_module(module)
         assert callable(mod.main) and mod.__doc__
+
+
+# ----------------------------------------------------------------------------- mechanics scenes
+MECH_KEYS = ("status", "iterations", "build_time_s", "solve_time_s", "t", "q", "energy", "scheme", "method")
+
+
+@pytest.mark.parametrize("method,scheme", [("whole", "midpoint"), ("whole", "galerkin4"), ("whole", "trapezoid"),
+                                           ("march", "midpoint"), ("rk4", "midpoint"),
+                                           ("implicit-euler", "midpoint")])
+def test_double_pendulum_json(method, scheme):
+    p = run([script("double_pendulum"), "--T", "1", "--n", "200", "--method", method, "--scheme", scheme, "--json"])
+    assert p.returncode == 0, p.stderr
+    d = json.loads(p.stdout)
+    for k in MECH_KEYS:
+        assert k in d
+    assert d["status"] == "ok" and d["method"] == method
+    assert len(d["t"]) == len(d["q"]) == len(d["energy"]) == 201
+    assert d["t"][-1] == 1.0 and d["q"][0] == [2.0, 1.0] and len(d["q"][0]) == 2
+    e = d["energy"]
+    if method == "implicit-euler":
+        # first order and dissipative: energy only decreases
+        assert e[-1] < e[0] and all(b <= a + 1e-9 for a, b in zip(e, e[1:]))
+    else:
+        # conserved to discretisation accuracy at this step (h = 5 ms)
+        assert max(abs(v - e[0]) for v in e) < 1e-2 * abs(e[0])
+
+
+def test_double_pendulum_plot_and_animation(tmp_path):
+    gif, png = tmp_path / "dp.gif", tmp_path / "dp.png"
+    p = run([script("double_pendulum"), "--T", "1", "--n", "100", "--animate", str(gif), "--plot", str(png)])
+    assert p.returncode == 0, p.stderr
+    assert "status: ok" in p.stdout
+    assert gif.read_bytes()[:4] == b"GIF8" and png.stat().st_size > 10_000
+
+
+MECH_BAD = [
+    ("double_pendulum", ["--T", "0"], "T must be positive"),
+    ("double_pendulum", ["--T", "-2"], "T must be positive"),
+    ("double_pendulum", ["--n", "1"], "n must be an integer >= 2"),
+    ("double_pendulum", ["--m1", "0"], "mass 1 must be positive"),
+    ("double_pendulum", ["--m2", "-1"], "mass 2 must be positive"),
+    ("double_pendulum", ["--l1", "0"], "length 1 must be positive"),
+    ("double_pendulum", ["--l2", "nan"], "length 2 must be finite"),
+    ("double_pendulum", ["--theta1", "nan"], "must be finite"),
+    ("double_pendulum", ["--omega2", "inf"], "must be finite"),
+    ("double_pendulum", ["--g", "nan"], "g must be finite"),
+    ("double_pendulum", ["--animate", "x.avi"], ".gif or .mp4"),
+    ("double_pendulum", ["--scheme", "euler"], "invalid choice"),
+    ("n_link_pendulum", ["--links", "0"], "links must be an integer >= 1"),
+    ("stiff_spring_pendulum", ["--ratio", "0"], "ratio must be positive"),
+    ("stiff_spring_pendulum", ["--mass", "-1"], "mass must be positive"),
+    ("thrown_ball", ["--T", "0"], "T must be positive"),
+    ("thrown_ball", ["--mass", "0"], "mass must be positive"),
+]
+
+
+@pytest.mark.parametrize("name,args,needle", MECH_BAD)
+def test_mechanics_scripts_refuse_bad_input(tmp_path, name, args, needle):
+    out = tmp_path / "keep.png"
+    out.write_bytes(b"earlier output")
+    p = run([script(name), *args, "--json", "--plot", str(out)])
+    assert p.returncode == 2, p.stderr
+    assert p.stdout == ""
+    lines = p.stderr.strip().splitlines()
+    assert len(lines) == 1 and needle in lines[0] and "Traceback" not in p.stderr
+    assert out.read_bytes() == b"earlier output"
+
+
+def test_double_pendulum_failure_exits_1(tmp_path):
+    out = tmp_path / "keep.png"
+    out.write_bytes(b"earlier output")
+    p = run([script("double_pendulum"), "--T", "5", "--n", "400", "--max-iter", "1", "--json", "--plot", str(out)])
+    assert p.returncode == 1
+    assert json.loads(p.stdout)["status"] != "ok"
+    assert out.read_bytes() == b"earlier output"
+
+
+def test_stiff_spring_whole_is_stable_where_rk4_fails():
+    """Stiffness ratio 1e6, h ω ≈ 16: midpoint (whole trajectory) stays bounded, explicit RK4 blows up."""
+    p = run([script("stiff_spring_pendulum"), "--ratio", "1e6", "--T", "1", "--n", "200", "--json"])
+    assert p.returncode == 0, p.stderr
+    d = json.loads(p.stdout)
+    e = d["energy"]
+    assert max(abs(v - e[0]) for v in e) < 1e-3 * abs(e[0])
+    assert all(abs(r - 1.0) < 1e-2 for r, _ in d["q"])  # the spring stays near its rest length
+    p = run([script("stiff_spring_pendulum"), "--ratio", "1e6", "--T", "1", "--n", "200", "--method", "rk4"])
+    assert p.returncode == 1 and "non-finite" in p.stderr
+
+
+@pytest.mark.parametrize("scheme", ["midpoint", "trapezoid", "galerkin4"])
+def test_thrown_ball_matches_parabola(scheme):
+    p = run([script("thrown_ball"), "--scheme", scheme, "--n", "50", "--json"])
+    assert p.returncode == 0, p.stderr
+    d = json.loads(p.stdout)
+    assert d["parabola_error"] < 1e-9 and d["launch_velocity_error"] < 1e-8
+    assert d["q"][0] == [0.0, 0.0] and d["q"][-1] == [10.0, 2.0]
+
+
+def test_n_link_pendulum_runs():
+    p = run([script("n_link_pendulum"), "--links", "3", "--T", "1", "--n", "200", "--json"])
+    assert p.returncode == 0, p.stderr
+    d = json.loads(p.stdout)
+    assert d["links"] == 3 and len(d["q"][0]) == 3 and d["status"] == "ok"
