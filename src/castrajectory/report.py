@@ -30,6 +30,44 @@ def _droplet_entry(out: str, name: str, title: str, drop: droplet.Droplet, n: in
     return sol.success, row, f"![{title}]({name}.png)" if sol.success else f"*{title}: no picture (solve failed)*"
 
 
+#: (file stem, scene module, arguments, title, animate?) of the mechanics scenes in the report.
+MECHANICS_SCENES = [
+    ("double_pendulum", "double_pendulum", [], "double pendulum, θ = (2, 1) at rest, T = 10 s (chaotic)", True),
+    ("double_pendulum_galerkin4", "double_pendulum", ["--T", "5", "--n", "2000", "--scheme", "galerkin4"],
+     "double pendulum, galerkin4, T = 5 s", False),
+    ("n_link_pendulum", "n_link_pendulum", [], "4-link pendulum", True),
+    ("stiff_spring_1e4", "stiff_spring_pendulum", ["--ratio", "1e4"], "stiff spring pendulum, k l/(m g) = 1e4", True),
+    ("stiff_spring_1e6", "stiff_spring_pendulum", ["--ratio", "1e6"],
+     "stiff spring pendulum, k l/(m g) = 1e6 (h ω ≈ 16)", False),
+    ("thrown_ball", "thrown_ball", [], "thrown ball (two-point boundary, least action)", False),
+]
+
+
+def _mechanics_scenes(out: str):
+    import importlib
+
+    from .cli import SCENES
+    lines = ["## Mechanics: least action over the whole trajectory (Exercise 2.3)", "",
+             "Each scene is solved by its problem script at the arguments shown; the energy plot "
+             "shows |E − E(0)| over the run.", ""]
+    ok = True
+    for stem, scene, argv, title, animate in MECHANICS_SCENES:
+        mod = importlib.import_module(SCENES[scene])
+        outcome = mod.run(mod.parser().parse_args(argv))
+        ok &= outcome.success
+        with open(os.path.join(out, f"{stem}.json"), "w") as fh:
+            json.dump(jsonable(outcome.data), fh, allow_nan=False)
+        lines += [f"### {title}", "", f"`python problems/{scene}.py {' '.join(argv)}`".replace(" `", "`"), "",
+                  "```", *outcome.summary, "```", ""]
+        if outcome.success:
+            outcome.writers["plot"](os.path.join(out, f"{stem}_energy.png"))
+            lines += [f"![{title}: energy]({stem}_energy.png)", ""]
+            if animate:
+                outcome.writers["animate"](os.path.join(out, f"{stem}.gif"))
+                lines += [f"![{title}: animation]({stem}.gif)", ""]
+    return ok, lines
+
+
 def write_report(out: str, quick: bool = False) -> int:
     os.makedirs(out, exist_ok=True)
     t0 = time.perf_counter()
@@ -84,6 +122,11 @@ def write_report(out: str, quick: bool = False) -> int:
         lines.append(f"| {f} | " + " | ".join(f"{orders[k]:.2f}" for k in study.DROPLET_ERRORS)
                      + f" | {max(r['iterations'] for r in sel)} | {all(r['status'] == 'ok' for r in sel)} |")
     lines += ["", "![convergence](droplet_convergence.png)", ""]
+
+    # ---- mechanics scenes (run through the problem scripts themselves)
+    good, mech_lines = _mechanics_scenes(out)
+    ok &= good
+    lines += mech_lines
 
     lines += [f"Report written in {time.perf_counter() - t0:.1f} s; every solve converged: {ok}."]
     with open(os.path.join(out, "summary.md"), "w") as fh:

@@ -85,3 +85,257 @@ def sweep_sizes(n_max: int = 100_000, n_min: int = 8) -> List[int]:
         ns.append(ns[-1] * 2)
     ns.append(n_max)
     return ns
+
+
+# ----------------------------------------------------------------------------- trajectories
+# Work–precision of the trajectory methods (:func:`castrajectory.simulate.simulate`) against
+# the CVODES reference, and long-horizon energy behaviour.
+
+#: Methods whose runs do not depend on a discrete-Lagrangian scheme.
+SCHEMELESS_METHODS = ("rk4", "implicit-euler")
+
+
+def trajectory_label(method: str, scheme: Optional[str]) -> str:
+    """``"whole-galerkin4"``, ``"march-midpoint"``, ``"rk4"`` …: one name per curve."""
+    return method if (scheme is None or method in SCHEMELESS_METHODS) else f"{method}-{scheme}"
+
+
+def _system_of(system_or_factory):
+    """``(system, factory)``: a ``LagrangianSystem`` is used as is; anything else is called."""
+    from .mechanics import LagrangianSystem
+
+    if isinstance(system_or_factory, LagrangianSystem):
+        return system_or_factory, None
+    if callable(system_or_factory):
+        return system_or_factory(), system_or_factory
+    raise TypeError("system must be a LagrangianSystem or a function returning one")
+
+
+def _ns_for(ns, method: str, scheme: Optional[str]) -> List[int]:
+    """The sizes of ``(method, scheme)``: ``ns`` is a list for all, or a dict keyed by
+    ``(method, scheme)``, ``trajectory_label(method, scheme)`` or ``method``."""
+    if not isinstance(ns, dict):
+        return [int(n) for n in ns]
+    for key in ((method, scheme), trajectory_label(method, scheme), method):
+        if key in ns:
+            return [int(n) for n in ns[key]]
+    raise KeyError(f"no sizes given for method {method!r} with scheme {scheme!r}")
+
+
+def _nan_row_errors(row: dict) -> dict:
+    row.update(error_final=math.nan, energy_error_max=math.nan)
+    return row
+
+
+def trajectory_run(system, q0, qd0, T: float, n: int, method: str, scheme: Optional[str],
+                   q_ref_final: np.ndarray, E0: float, options: Optional[dict] = None) -> dict:
+    """One row of a trajectory work–precision sweep (see :func:`work_precision_sweep`).
+
+    ``system`` is a ``LagrangianSystem`` or a factory (a fresh system per run, so
+    that every run pays for building its own CasADi functions).  A run that
+    fails, or raises anything but an ``InputError``, gives a row with
+    ``status != "ok"`` and NaN errors.
+    """
+    import time
+
+    from .simulate import simulate
+    from .validation import InputError
+
+    sys_, _ = _system_of(system)
+    row = {"label": trajectory_label(method, scheme), "method": method,
+           "scheme": None if method in SCHEMELESS_METHODS else scheme, "n": int(n), "h": T / n}
+    wall = time.perf_counter()
+    try:
+        run = simulate(sys_, q0, qd0, T, int(n), scheme or "midpoint", method, options=options)
+    except InputError:
+        raise
+    except Exception as err:  # noqa: BLE001 - a crashed run is a failed row, not a crashed sweep
+        row.update(status=f"exception: {type(err).__name__}: {err}", success=False, iterations=0,
+                   levels=0, build_time_s=math.nan, solve_time_s=math.nan, time_s=math.nan,
+                   wall_time_s=time.perf_counter() - wall)
+        return _nan_row_errors(row)
+    wall = time.perf_counter() - wall
+    levels = len(getattr(run.detail, "levels", None) or [])
+    row.update(status=run.status, success=bool(run.success and run.status == "ok"),
+               iterations=int(run.iterations), levels=levels,
+               build_time_s=float(run.build_time_s), solve_time_s=float(run.solve_time_s),
+               time_s=float(run.build_time_s + run.solve_time_s), wall_time_s=wall)
+    q_end = np.asarray(run.q, float)[-1]
+    if not row["success"] or not np.all(np.isfinite(q_end)):
+        row["success"] = False
+        if row["status"] == "ok":
+            row["status"] = "non-finite"
+        return _nan_row_errors(row)
+    row["error_final"] = float(np.max(np.abs(q_end - q_ref_final)))
+    row["energy_error_max"] = float(np.max(np.abs(np.asarray(run.energy, float) - E0)))
+    return row
+
+
+def _trajectory_task(system, q0, qd0, T, q_ref, E0, options, task):
+    method, scheme, n = task
+    return trajectory_run(system, q0, qd0, T, n, method, scheme, q_ref, E0, options)
+
+
+def work_precision_sweep(system, q0, qd0, T: float, methods_schemes: Sequence[tuple], ns,
+                         executor=None, reference_rtol: float = 1e-13,
+                         reference_atol: Optional[float] = None, options: Optional[dict] = None,
+                         warmup: bool = True, progress: Optional[Callable[[dict], None]] = None) -> List[dict]:
+    """Solve one initial-value problem with every ``(method, scheme)`` and every ``N``.
+
+    ``system``: a ``LagrangianSystem``, or a function returning one (then each
+    run gets a fresh system and pays for all of its own function building; the
+    factory must be picklable to use a process pool).  ``methods_schemes``:
+    pairs such as ``("whole", "galerkin4")`` or ``("rk4", None)`` (the scheme
+    of ``rk4`` / ``implicit-euler`` is ignored).  ``ns``: a list of step
+    counts for every pair, or a dict keyed by ``(method, scheme)``, by the
+    label ``"whole-galerkin4"`` or by the method.
+
+    One row per run (in task order) with ``label, method, scheme, n, h,
+    status, success, iterations, levels, build_time_s, solve_time_s, time_s``
+    (build + solve), ``wall_time_s`` (the whole ``simulate`` call),
+    ``error_final`` = max-abs error of ``q(T)`` against CVODES (computed once,
+    :func:`castrajectory.stepping.reference` at ``reference_rtol``;
+    ``reference_atol`` defaults to the same) and ``energy_error_max`` =
+    ``max_k |E_k − E(q0, q̇0)|``.  Failed runs keep their row with
+    ``status != "ok"``, ``success = False`` and NaN errors.
+
+    ``warmup``: first run every pair once at ``N = 64``, untimed and in this
+    process, so loading the Ipopt plugin and first-call set-up are billed to
+    no row.
+    """
+    import functools
+
+    from .stepping import reference
+
+    sys0, factory = _system_of(system)
+    q0 = np.asarray(q0, float).reshape(-1)
+    qd0 = np.asarray(qd0, float).reshape(-1)
+    atol = reference_rtol if reference_atol is None else reference_atol
+    q_ref = reference(sys0, q0, qd0, [T], rtol=reference_rtol, atol=atol)[0][-1]
+    E0 = float(sys0.energy(q0, qd0))
+    shared = factory if factory is not None else sys0
+    pairs = [(m, s) for m, s in methods_schemes]
+    if warmup:
+        for m, s in pairs:
+            trajectory_run(shared, q0, qd0, T, 64, m, s, q_ref, E0, options)
+    tasks = [(m, s, n) for m, s in pairs for n in _ns_for(ns, m, s)]
+    executor = executor or SerialExecutor()
+    fn = functools.partial(_trajectory_task, shared, q0, qd0, T, q_ref, E0, options)
+    rows = []
+    for row in executor.map(fn, tasks):
+        rows.append(row)
+        if progress:
+            progress(row)
+    return rows
+
+
+def _select(rows: List[dict], label: str, key: str) -> List[dict]:
+    """Successful rows of ``label`` with a finite positive ``key``, sorted by ``n``."""
+    out = [r for r in rows if r.get("label") == label and r.get("status") == "ok"
+           and np.isfinite(r.get(key, math.nan)) and r[key] > 0]
+    return sorted(out, key=lambda r: r["n"])
+
+
+def time_to_error(rows: List[dict], label: str, target: float, key: str = "error_final",
+                  cost: str = "time_s") -> dict:
+    """Cost for ``label``'s runs to reach ``key <= target``, interpolated in log-log.
+
+    Walks the successful runs in order of ``n`` and takes the first one whose
+    error is ``<= target``; the cost is interpolated linearly in
+    ``(log cost, log error)`` between it and the run before.  Returns
+    ``{"cost", "n", "note"}``: ``note`` is ``"interpolated"``, ``"at smallest
+    N"`` (the first run already reached it: ``cost`` is an upper bound) or
+    ``"not reached"`` (``cost`` and ``n`` are NaN).
+    """
+    sel = _select(rows, label, key)
+    sel = [r for r in sel if np.isfinite(r.get(cost, math.nan)) and r[cost] > 0]
+    for j, r in enumerate(sel):
+        if r[key] <= target:
+            if j == 0:
+                return {"cost": float(r[cost]), "n": float(r["n"]), "note": "at smallest N"}
+            a = sel[j - 1]
+            le0, le1 = math.log(a[key]), math.log(r[key])
+            w = (math.log(target) - le0) / (le1 - le0) if le1 != le0 else 1.0
+            c = math.exp(math.log(a[cost]) + w * (math.log(r[cost]) - math.log(a[cost])))
+            n = math.exp(math.log(a["n"]) + w * (math.log(r["n"]) - math.log(a["n"])))
+            return {"cost": c, "n": n, "note": "interpolated"}
+    return {"cost": math.nan, "n": math.nan, "note": "not reached"}
+
+
+def trajectory_order(rows: List[dict], label: str, key: str = "error_final",
+                     floor: float = 1e-11, ceiling: float = 1e-2, last: int = 3) -> dict:
+    """Observed order ``p`` in ``error ~ N^-p`` for ``label``, fitted on the asymptotic range.
+
+    The range is the ``last`` finest successful runs with ``floor < error <
+    ceiling``: above ``ceiling`` a chaotic trajectory is not yet resolved and
+    the coarsest runs are pre-asymptotic, below ``floor`` the reference and
+    round-off dominate.  Returns ``{"order", "points", "n_min", "n_max"}``
+    (order NaN with fewer than two points).
+    """
+    sel = [r for r in _select(rows, label, key) if floor < r[key] < ceiling][-last:]
+    if len(sel) < 2:
+        return {"order": math.nan, "points": len(sel), "n_min": math.nan, "n_max": math.nan}
+    p = -loglog_slope([r["n"] for r in sel], [r[key] for r in sel])
+    return {"order": p, "points": len(sel), "n_min": sel[0]["n"], "n_max": sel[-1]["n"]}
+
+
+def energy_drift_summary(t, energy, E0: float, tail_fraction: float = 0.1) -> dict:
+    """Long-horizon energy behaviour of one run: ``dE = |E − E0|`` against ``t``.
+
+    ``max_first_half``, ``max_second_half``, ``max``: maxima of ``dE`` over the
+    first and second half of the time span and overall; ``drift_slope``: slope
+    of a least-squares line through ``(t, dE)`` (energy per unit time);
+    ``first_tail_max`` / ``last_tail_max``: maxima of ``dE`` over the first and
+    last ``tail_fraction`` of the span and ``tail_ratio`` their quotient
+    (≈ 1 for a bounded oscillating error, ≫ 1 for a secular drift).
+    """
+    t = np.asarray(t, float).reshape(-1)
+    dE = np.abs(np.asarray(energy, float).reshape(-1) - E0)
+    if t.size != dE.size or t.size < 4:
+        raise ValueError("energy_drift_summary: need matching t and energy with at least 4 samples")
+    t0, t1 = t[0], t[-1]
+    mid = t0 + 0.5 * (t1 - t0)
+    first, second = dE[t <= mid], dE[t > mid]
+    a, b = t0 + tail_fraction * (t1 - t0), t1 - tail_fraction * (t1 - t0)
+    head, tail = dE[t <= a], dE[t >= b]
+    finite = bool(np.all(np.isfinite(dE)))
+    slope = float(np.polyfit(t, dE, 1)[0]) if finite else math.nan
+    hmax, tmax = float(np.max(head)), float(np.max(tail))
+    return {"max_first_half": float(np.max(first)), "max_second_half": float(np.max(second)),
+            "max": float(np.max(dE)), "drift_slope": slope, "first_tail_max": hmax,
+            "last_tail_max": tmax, "tail_ratio": tmax / hmax if hmax > 0 else math.inf}
+
+
+def long_horizon_run(system, q0, qd0, T: float, n: int, method: str, scheme: Optional[str] = None,
+                     options: Optional[dict] = None, tail_fraction: float = 0.1):
+    """One long run and its energy summary: ``(row, run)``.
+
+    ``row`` holds ``label, method, scheme, n, h, T, status, success,
+    iterations, build_time_s, solve_time_s, time_s, wall_time_s, E0`` and the
+    fields of :func:`energy_drift_summary` (NaN if the run failed); ``run`` is
+    the :class:`~castrajectory.simulate.Run`.
+    ``E0`` is the exact initial energy ``E(q0, q̇0)``.
+    """
+    import time
+
+    from .simulate import simulate
+
+    sys_, _ = _system_of(system)
+    E0 = float(sys_.energy(np.asarray(q0, float), np.asarray(qd0, float)))
+    row = {"label": trajectory_label(method, scheme), "method": method,
+           "scheme": None if method in SCHEMELESS_METHODS else scheme, "n": int(n), "h": T / n, "T": T}
+    wall = time.perf_counter()
+    run = simulate(sys_, q0, qd0, T, int(n), scheme or "midpoint", method, options=options)
+    wall = time.perf_counter() - wall
+    row.update(status=run.status, success=bool(run.success and run.status == "ok"),
+               iterations=int(run.iterations), levels=len(getattr(run.detail, "levels", None) or []),
+               build_time_s=float(run.build_time_s), solve_time_s=float(run.solve_time_s),
+               time_s=float(run.build_time_s + run.solve_time_s), wall_time_s=wall, E0=E0)
+    keys = ("max_first_half", "max_second_half", "max", "drift_slope", "first_tail_max",
+            "last_tail_max", "tail_ratio")
+    if row["success"] and np.all(np.isfinite(run.energy)):
+        row.update(energy_drift_summary(run.t, run.energy, E0, tail_fraction))
+    else:
+        row["success"] = False
+        row.update({k: math.nan for k in keys})
+    return row, run
