@@ -20,7 +20,8 @@ of symbolic calls.
 
 Robust strategy (initial value), chosen by the library:
 
-1. **coarse to fine** — solve on ``N/2^j`` steps first (coarsest ≥ 32 steps),
+1. **coarse to fine** — solve on ``N/2^j`` steps first (coarsest ≥ 32 steps and
+   fine enough that ``h ω ≤ 0.5`` for the fastest linearised frequency at the start),
    then interpolate (cubic) each solution as the guess of the next level;
 2. **horizon continuation** — if a level does not converge from its guess
    (chaotic motion: a coarse solution can differ O(1) from the fine one at
@@ -44,7 +45,7 @@ import numpy as np
 
 from .discrete import DiscreteMechanics
 from .mechanics import LagrangianSystem
-from .nlp import NLP, X
+from .nlp import NLP, P, X
 from .result import Result
 from .validation import InputError, integer_at_least, positive
 
@@ -137,9 +138,11 @@ class TrajectoryNLP:
         self.Q, self.Zi, self.Li, self.Ni = Q, Zi, Li, Ni
 
         if mode == "initial_value":
-            p0 = end
+            # p0 is a parameter so that one NLP serves many initial momenta (horizon windows)
+            nlp.parameter("p0", n, value=end)
             lam0 = X(Li[0]) if m else none
-            nlp.equal_elements("initial", dm.initial_residual, [X(Q[0]), zarg(0), X(Q[1]), p0, lam0, hh])
+            nlp.equal_elements("initial", dm.initial_residual,
+                               [X(Q[0]), zarg(0), X(Q[1]), P(nlp.parameter_index("p0")), lam0, hh])
             if N > 1:
                 k = np.arange(1, N)
                 lam = X(Li[k]) if m else none
@@ -162,9 +165,15 @@ class TrajectoryNLP:
                 for j in range(st):
                     nlp.equal_elements(f"stage_constraint{j}", dm.constraint_rows,
                                        [X(Zi[:, j * n:(j + 1) * n])])
+        self.set_start(q0, end)
+        self._built = False
+
+    def set_start(self, q0, end) -> None:
+        """New ``q0`` and ``p0`` (initial value) or ``q_N`` (boundary) without rebuilding."""
         self.q0 = np.asarray(q0, float)
         self.end = np.asarray(end, float)
-        self._built = False
+        if self.mode == "initial_value":
+            self.nlp.set_parameter("p0", self.end)
 
     # --------------------------------------------------------------- solve
     def _fixed_bounds(self, guess: Dict[str, np.ndarray], window: Optional[tuple]):
@@ -298,6 +307,19 @@ def _initial_guess(tn: TrajectoryNLP, qd0: np.ndarray) -> Dict[str, np.ndarray]:
 
 
 # ----------------------------------------------------------------------------- drivers
+#: Coarse levels must resolve the fastest linearised motion: h ω ≤ this.
+COARSE_H_OMEGA = 0.5
+
+
+def _fastest_frequency(system: LagrangianSystem, q0: np.ndarray, qd0: np.ndarray) -> float:
+    """Largest linearised angular frequency at the initial state: √|eig(M⁻¹ ∇²U)|, or |q̇0|-based if larger."""
+    q = system.q
+    H = ca.Function("hessU", [q], [ca.hessian(system.potential_expr(), q)[0]])(q0)
+    M = np.asarray(system.mass_matrix(q0))
+    w2 = np.abs(np.linalg.eigvals(np.linalg.solve(M, np.asarray(H)))).max() if system.nq else 0.0
+    return float(max(np.sqrt(w2), np.abs(qd0).max()))
+
+
 def _levels(N: int, coarsest: int) -> List[int]:
     ns = [N]
     while ns[-1] // 2 >= coarsest:
@@ -323,31 +345,61 @@ def _solve_level(tn: TrajectoryNLP, guess, options, verbose, log: List[Level], a
     log.append(Level(tn.N, tn.N, res.status, res.iterations, res.build_time_s, res.solve_time_s))
     if res.success or not allow_windows:
         return res
-    # Horizon continuation: march an active window over the trajectory; the solved
-    # prefix is held fixed, the window grows by half after a success and halves after a failure.
-    cur = {k: v.copy() for k, v in guess.items()}
-    dm = tn.dm
-    n, N = dm.n, tn.N
-    K, L = 0, max(2, N // 32)
+    # Horizon continuation: march a window over the trajectory.  Each window is itself a
+    # whole-trajectory initial-value solve of L steps, started from the last solved node and
+    # its discrete momentum; L doubles after a success and halves after a failure.
+    # The assembled trajectory then starts the final whole solve at the full N.
+    dm, N, h = tn.dm, tn.N, tn.h
+    n, s, m, st = dm.n, dm.s, dm.m, dm.scheme.stages
+    cur = {k: np.asarray(v, float).reshape(-1).copy() for k, v in guess.items()}
+    Qc = cur["q"].reshape(N + 1, n)
+    Zc = cur["Z"].reshape(N, s) if s else None
+    Lc = cur["lam"].reshape(N, m) if m else None
+    Nc = cur["nu"].reshape(N, st * m) if (m and s) else None
+    cache: Dict[int, TrajectoryNLP] = {}
+    K, L = 0, 1 << max(1, int(math.log2(max(2, N // 32))))  # powers of two: few distinct window NLPs
+    pK = tn.end.copy()
     while K < N:
-        Kt = min(N, K + L)
-        r = tn.solve(cur, window=(K, Kt), options=window_opts, verbose=verbose)
-        log.append(Level(N, Kt, r.status, r.iterations, 0.0, r.solve_time_s))
+        L = min(L, N - K)
+        if L not in cache:
+            cache[L] = TrajectoryNLP(dm, L, L * h, "initial_value", Qc[K], pK)
+            new_build = True
+        else:
+            new_build = False
+        w = cache[L]
+        w.set_start(Qc[K], pK)
+        shift = Qc[K] - np.asarray(guess["q"]).reshape(N + 1, n)[K]
+        wg = {"q": (np.asarray(guess["q"]).reshape(N + 1, n)[K:K + L + 1] + shift).reshape(-1)}
+        wg["q"][:n] = Qc[K]
+        if s:
+            wg["Z"] = (np.asarray(guess["Z"]).reshape(N, s)[K:K + L] + np.tile(shift, st)).reshape(-1)
+        if m:
+            wg["lam"] = Lc[K:K + L].reshape(-1).copy()
+            if s:
+                wg["nu"] = Nc[K:K + L].reshape(-1).copy()
+        r = w.solve(wg, options=window_opts, verbose=verbose)
+        log.append(Level(N, K + L, r.status, r.iterations, r.build_time_s if new_build else 0.0, r.solve_time_s))
         if r.success:
-            new = {k: np.asarray(v).copy() for k, v in r.values.items()}
-            # continue the unsolved tail from the solved node Kt (shift by the jump there)
-            qn = new["q"].reshape(N + 1, n)
-            shift = qn[Kt] - cur["q"].reshape(N + 1, n)[Kt]
-            qn[Kt + 1:] += shift
-            if dm.s:
-                Zn = new["Z"].reshape(N, dm.s)
-                Zn[Kt:] += np.tile(shift, dm.scheme.stages)
-            cur = new
-            K, L = Kt, L + (L + 1) // 2
+            qw = r.values["q"].reshape(L + 1, n)
+            Qc[K + 1:K + L + 1] = qw[1:]
+            Qc[K + L + 1:] = np.asarray(guess["q"]).reshape(N + 1, n)[K + L + 1:] + \
+                (qw[-1] - np.asarray(guess["q"]).reshape(N + 1, n)[K + L])
+            if s:
+                Zc[K:K + L] = r.values["Z"].reshape(L, s)
+            if m:
+                lw = r.values["lam"].reshape(L, m).copy()
+                if K > 0:
+                    lw[0] /= 2.0  # window start weight w vs interior node weight 2w
+                Lc[K:K + L] = lw
+                if s:
+                    Nc[K:K + L] = r.values["nu"].reshape(L, st * m)
+            Zlast = Zc[K + L - 1] if s else np.zeros(0)
+            pK = np.asarray(dm.p_minus(Qc[K + L - 1], Zlast, Qc[K + L], h)).reshape(-1)
+            K, L = K + L, 2 * L
         else:
             L //= 2
             if L == 0:
-                return r
+                break  # no window converges here; the whole solve below reports the failure honestly
     res = tn.solve(cur, options=options, verbose=verbose)
     log.append(Level(N, N, res.status, res.iterations, 0.0, res.solve_time_s))
     return res
@@ -395,6 +447,8 @@ def solve_initial_value(system: LagrangianSystem, q0, qd0, T: float, N: int, sch
     p0 = np.asarray(system.momentum(q0, qd0)).reshape(-1)
     log: List[Level] = []
     prev, values = None, None
+    omega = _fastest_frequency(system, q0, qd0)
+    coarsest = max(coarsest, int(math.ceil(T * omega / COARSE_H_OMEGA)))
     for Nl in _levels(N, coarsest):
         tn = TrajectoryNLP(dm, Nl, T, "initial_value", q0, p0)
         guess = _initial_guess(tn, qd0) if prev is None else _refine(prev, values, tn)
