@@ -263,20 +263,32 @@ def time_to_error(rows: List[dict], label: str, target: float, key: str = "error
 
 
 def trajectory_order(rows: List[dict], label: str, key: str = "error_final",
-                     floor: float = 1e-11, ceiling: float = 1e-2, last: int = 3) -> dict:
+                     floor: float = 1e-11, ceiling: float = 1e-2, last: int = 3,
+                     stall_factor: float = 1.5) -> dict:
     """Observed order ``p`` in ``error ~ N^-p`` for ``label``, fitted on the asymptotic range.
 
-    The range is the ``last`` finest successful runs with ``floor < error <
-    ceiling``: above ``ceiling`` a chaotic trajectory is not yet resolved and
-    the coarsest runs are pre-asymptotic, below ``floor`` the reference and
-    round-off dominate.  Returns ``{"order", "points", "n_min", "n_max"}``
-    (order NaN with fewer than two points).
+    Candidates are the successful runs (in order of ``n``) with ``floor < error
+    < ceiling``: above ``ceiling`` a chaotic trajectory is not yet resolved,
+    below ``floor`` the reference and round-off dominate.  The candidates are
+    cut at the first *stall* (a run whose error is not at least
+    ``stall_factor`` times smaller than the previous one: an accuracy floor of
+    the method), and the fit uses the ``last`` finest runs before it.  Returns
+    ``{"order", "points", "n_min", "n_max", "stalled_at"}`` (order NaN with
+    fewer than two points; ``stalled_at`` the ``n`` of the first stalled run or NaN).
     """
-    sel = [r for r in _select(rows, label, key) if floor < r[key] < ceiling][-last:]
+    sel = [r for r in _select(rows, label, key) if floor < r[key] < ceiling]
+    stalled = math.nan
+    for j in range(1, len(sel)):
+        if sel[j][key] * stall_factor > sel[j - 1][key]:
+            stalled = float(sel[j]["n"])
+            sel = sel[:j]
+            break
+    sel = sel[-last:]
     if len(sel) < 2:
-        return {"order": math.nan, "points": len(sel), "n_min": math.nan, "n_max": math.nan}
+        return {"order": math.nan, "points": len(sel), "n_min": math.nan, "n_max": math.nan,
+                "stalled_at": stalled}
     p = -loglog_slope([r["n"] for r in sel], [r[key] for r in sel])
-    return {"order": p, "points": len(sel), "n_min": sel[0]["n"], "n_max": sel[-1]["n"]}
+    return {"order": p, "points": len(sel), "n_min": sel[0]["n"], "n_max": sel[-1]["n"], "stalled_at": stalled}
 
 
 def energy_drift_summary(t, energy, E0: float, tail_fraction: float = 0.1) -> dict:

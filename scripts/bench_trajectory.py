@@ -1,0 +1,227 @@
+#!/usr/bin/env python
+"""Benchmark of the whole-trajectory solver against the time-stepping baselines.
+
+This is a benchmark, not a test: it measures and reports, and exits with
+status 0 (2 for bad flags).  PASS/MISS lines say whether a performance goal
+was met in *this* run on *this* machine; compare ratios from one run only.
+
+Scene: double pendulum (unit masses and lengths, g = 9.81) from rest at
+``θ = (2, 1)`` rad over ``T = 5`` s (chaotic).
+
+(a) Convergence of the whole-trajectory midpoint solve
+    (``simulate(..., method="whole")``) for ``--sizes`` (default N = 1000 …
+    32 000): status, Ipopt iterations summed over all sub-solves, build and
+    solve time, number of sub-solves (``Trajectory.levels``: coarse-to-fine
+    levels plus horizon-continuation windows) and the distinct grid sizes.
+    Goal: every size converges.
+(b) At ``--n-compare`` (default 32 000): build + solve of the whole
+    trajectory against ``stepping.march`` (the same variational integrator
+    marched step by step), for midpoint and galerkin4; best of ``--repeats``.
+    Goal: whole ≤ march (ratio whole / march ≤ 1).
+(c) Time to reach a final-state error of 1e-8 (against CVODES at rtol = 1e-14)
+    for whole × galerkin4 and for RK4, each from a sweep
+    (``study.work_precision_sweep``) over ``--accuracy-sizes``, interpolated in
+    log-log between the bracketing runs (``study.time_to_error``); with
+    ``--repeats`` > 1 each run's best time is kept.  Goal: whole-galerkin4
+    faster than RK4 (ratio < 1).
+
+One untimed warm-up solve runs first (loading the Ipopt plugin).  BLAS
+threads are pinned to 1 unless the caller set them (see bench_droplet.py).
+
+    python scripts/bench_trajectory.py
+    python scripts/bench_trajectory.py --sizes 1000 4000 --n-compare 8000 --json bench.json
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import platform
+import sys
+import time
+
+BLAS_THREAD_VARS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+for _var in BLAS_THREAD_VARS:
+    os.environ.setdefault(_var, "1")
+
+import numpy as np  # noqa: E402
+
+from castrajectory import pendulum, study  # noqa: E402
+from castrajectory.simulate import simulate  # noqa: E402
+
+Q0, QD0, T = np.array([2.0, 1.0]), np.zeros(2), 5.0
+TARGET = 1e-8
+REFERENCE_RTOL = 1e-14
+
+
+def goal_line(text: str, ok, detail: str) -> str:
+    tag = "SKIP" if ok is None else ("PASS" if ok else "MISS")
+    return f"  {tag}  {text}: {detail}"
+
+
+def best_run(method: str, scheme: str, n: int, repeats: int) -> dict:
+    """``repeats`` fresh runs (fresh system each); best build+solve kept, readings of the last."""
+    sums, builds, solves, walls, run = [], [], [], [], None
+    for _ in range(repeats):
+        system = pendulum.double_pendulum()
+        t = time.perf_counter()
+        run = simulate(system, Q0, QD0, T, n, scheme, method)
+        walls.append(time.perf_counter() - t)
+        builds.append(run.build_time_s)
+        solves.append(run.solve_time_s)
+        sums.append(run.build_time_s + run.solve_time_s)
+    k = int(np.argmin(sums))
+    levels = list(getattr(run.detail, "levels", None) or [])
+    return {"method": method, "scheme": scheme, "n": n, "status": run.status, "success": bool(run.success),
+            "iterations": int(run.iterations), "build_s": builds[k], "solve_s": solves[k],
+            "build_plus_solve_s": sums[k], "wall_s": walls[k], "sub_solves": len(levels),
+            "grids": sorted({lv.n for lv in levels}),
+            "windows": sum(1 for lv in levels if lv.horizon < lv.n),
+            "message": run.message}
+
+
+def _ints(s: str) -> int:
+    try:
+        v = int(s)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {s!r}") from None
+    if v < 2:
+        raise argparse.ArgumentTypeError(f"N must be at least 2, got {v}")
+    return v
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0],
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--sizes", type=_ints, nargs="+", default=[1000, 2000, 4000, 8000, 16000, 32000],
+                   help="N for part (a) (default 1000 … 32000)")
+    p.add_argument("--n-compare", type=_ints, default=32000, help="N for part (b) (default 32000)")
+    p.add_argument("--accuracy-sizes", type=_ints, nargs="+", default=[1000, 2000, 4000, 8000, 16000],
+                   help="N sweep for part (c) (default 1000 … 16000)")
+    p.add_argument("--repeats", type=int, default=1, help="runs per measurement in (b), (c); best kept (default 1)")
+    p.add_argument("--json", metavar="PATH", help="also write all numbers as JSON to PATH")
+    args = p.parse_args(argv)
+    if args.repeats < 1:
+        p.error("--repeats must be at least 1")
+
+    import casadi
+
+    env = {"python": platform.python_version(), "casadi": casadi.__version__, "numpy": np.__version__,
+           "cpus": os.cpu_count(), "platform": platform.platform()}
+    env.update({v: os.environ.get(v) for v in BLAS_THREAD_VARS})
+    print("castrajectory trajectory benchmark: double pendulum, theta = (2, 1) rad at rest, T = 5 s")
+    print("  " + "  ".join(f"{k} {env[k]}" for k in ("python", "casadi", "numpy", "cpus")))
+    print("  " + "  ".join(f"{v}={env[v]}" for v in BLAS_THREAD_VARS) + "  (1 unless set by the caller)")
+    print(f"  {env['platform']};  load average {os.getloadavg()[0]:.2f} at start")
+    t_bench = time.perf_counter()
+    simulate(pendulum.double_pendulum(), Q0, QD0, T, 64, "midpoint", "whole")  # warm-up (Ipopt plugin)
+
+    goals, ratios = [], {}
+
+    # ------------------------------------------------------------------ (a)
+    print()
+    print("(a) whole-trajectory midpoint solve, fresh build every run; times in seconds")
+    head = (f"  {'N':>6} {'status':>6} {'iter':>5} {'build':>8} {'solve':>8} {'b+s':>8} {'wall':>8} "
+            f"{'subsolves':>9} {'windows':>7}  grids")
+    print(head)
+    print("  " + "-" * (len(head) - 2))
+    conv = []
+    for n in args.sizes:
+        r = best_run("whole", "midpoint", n, 1)
+        conv.append(r)
+        print(f"  {n:>6} {r['status']:>6} {r['iterations']:>5} {r['build_s']:8.3f} {r['solve_s']:8.3f} "
+              f"{r['build_plus_solve_s']:8.3f} {r['wall_s']:8.3f} {r['sub_solves']:>9} {r['windows']:>7}  "
+              f"{len(r['grids'])} ({r['grids'][0]}..{r['grids'][-1]})", flush=True)
+    if len(conv) > 1:
+        slope = study.loglog_slope([r["n"] for r in conv], [r["build_plus_solve_s"] for r in conv])
+        print(f"  growth exponent of build+solve vs N: {slope:.3f}")
+    ok = all(r["success"] for r in conv)
+    goals.append(("(a) whole midpoint converges at every N", ok,
+                  "all ok" if ok else "failed: " + ", ".join(f"N={r['n']} {r['status']}" for r in conv
+                                                             if not r["success"])))
+    print(goal_line(*goals[-1]))
+
+    # ------------------------------------------------------------------ (b)
+    print()
+    print(f"(b) whole trajectory vs stepping.march at N = {args.n_compare}, best of {args.repeats}; seconds")
+    head = (f"  {'scheme':10s} {'method':6s} {'status':>6} {'build':>8} {'solve':>8} {'b+s':>8} {'wall':>8}")
+    print(head)
+    print("  " + "-" * (len(head) - 2))
+    compare = {}
+    for scheme in ("midpoint", "galerkin4"):
+        for method in ("whole", "march"):
+            r = best_run(method, scheme, args.n_compare, args.repeats)
+            compare[(scheme, method)] = r
+            print(f"  {scheme:10s} {method:6s} {r['status']:>6} {r['build_s']:8.3f} {r['solve_s']:8.3f} "
+                  f"{r['build_plus_solve_s']:8.3f} {r['wall_s']:8.3f}"
+                  + (f"   ({r['sub_solves']} sub-solves, {r['iterations']} iterations)" if method == "whole" else ""),
+                  flush=True)
+    for scheme in ("midpoint", "galerkin4"):
+        w, m = compare[(scheme, "whole")], compare[(scheme, "march")]
+        ratio = w["build_plus_solve_s"] / m["build_plus_solve_s"]
+        ratios[f"whole/march {scheme} N={args.n_compare} (build+solve)"] = ratio
+        ratios[f"whole/march {scheme} N={args.n_compare} (solve only)"] = w["solve_s"] / m["solve_s"]
+        if not (w["success"] and m["success"]):
+            ok, detail = None, f"ratio {ratio:.2f}, not comparable: whole {w['status']}, march {m['status']}"
+        else:
+            ok, detail = ratio <= 1.0, (f"whole {w['build_plus_solve_s']:.3f} s, march {m['build_plus_solve_s']:.3f} s, "
+                                        f"ratio whole/march {ratio:.2f}")
+        goals.append((f"(b) whole {scheme} build+solve <= march {scheme} at N = {args.n_compare}", ok, detail))
+        print(goal_line(*goals[-1]))
+
+    # ------------------------------------------------------------------ (c)
+    print()
+    print(f"(c) time to final error {TARGET:g}: whole-galerkin4 vs rk4 (reference CVODES rtol {REFERENCE_RTOL:g})")
+    pairs = [("whole", "galerkin4"), ("rk4", None)]
+    sweeps = [study.work_precision_sweep(pendulum.double_pendulum, Q0, QD0, T, pairs, args.accuracy_sizes,
+                                         reference_rtol=REFERENCE_RTOL, warmup=(k == 0))
+              for k in range(args.repeats)]
+    rows = []
+    for group in zip(*sweeps):  # same task order in every sweep: keep each run's best time
+        best = dict(min(group, key=lambda r: r["time_s"] if np.isfinite(r["time_s"]) else math.inf))
+        rows.append(best)
+    print(f"  {'method':16s} {'N':>6} {'status':>6} {'build':>8} {'solve':>8} {'b+s':>8} {'error':>9}")
+    for r in rows:
+        print(f"  {r['label']:16s} {r['n']:>6} {r['status']:>6} {r['build_time_s']:8.4f} {r['solve_time_s']:8.4f} "
+              f"{r['time_s']:8.4f} {r['error_final']:9.2e}")
+    reach = {lab: study.time_to_error(rows, lab, TARGET) for lab in ("whole-galerkin4", "rk4")}
+    for lab, tt in reach.items():
+        o = study.trajectory_order(rows, lab)
+        print(f"  {lab:16s} time to {TARGET:g}: "
+              + (f"{tt['cost']:.4f} s at N ~ {tt['n']:.0f} ({tt['note']})" if tt["note"] != "not reached"
+                 else "not reached") + f"; observed order {o['order']:.2f}")
+    g, r = reach["whole-galerkin4"], reach["rk4"]
+    if g["note"] == "not reached" or r["note"] == "not reached":
+        ok, detail = None, f"not comparable (whole-galerkin4 {g['note']}, rk4 {r['note']}); extend --accuracy-sizes"
+    else:
+        ratio = g["cost"] / r["cost"]
+        ratios[f"time to {TARGET:g}: whole-galerkin4 / rk4"] = ratio
+        ok, detail = ratio < 1.0, f"whole-galerkin4 {g['cost']:.4f} s, rk4 {r['cost']:.4f} s, ratio {ratio:.1f}"
+    goals.append((f"(c) whole-galerkin4 reaches final error {TARGET:g} faster than rk4", ok, detail))
+    print(goal_line(*goals[-1]))
+
+    # ------------------------------------------------------------------ summary
+    print()
+    print("ratios measured in this run:")
+    for k, v in ratios.items():
+        print(f"  {k}: {v:.2f}")
+    print("goals:")
+    for gl in goals:
+        print(goal_line(*gl))
+    print(f"benchmark wall time {time.perf_counter() - t_bench:.1f} s; load average {os.getloadavg()[0]:.2f} at end")
+
+    if args.json:
+        out = {"environment": env, "convergence": conv,
+               "compare": [dict(v) for v in compare.values()],
+               "accuracy": rows, "time_to_target": reach, "ratios": ratios,
+               "goals": [{"goal": t, "result": "SKIP" if ok is None else ("PASS" if ok else "MISS"), "detail": d}
+                         for t, ok, d in goals]}
+        with open(args.json, "w") as fh:
+            json.dump(out, fh, indent=2, default=float)
+        print(f"JSON written to {args.json}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
