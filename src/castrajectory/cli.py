@@ -38,6 +38,7 @@ SCENES = {
     "n_link_pendulum": "castrajectory.problems.n_link_pendulum",
     "stiff_spring_pendulum": "castrajectory.problems.stiff_spring_pendulum",
     "thrown_ball": "castrajectory.problems.thrown_ball",
+    "collision_impulse": "castrajectory.problems.collision_impulse",
 }
 
 

@@ -1,0 +1,298 @@
+"""Impulsive contact of a planar rigid body, and the corner impact law (the analytic oracle).
+
+Coordinates ``q = (c_x, c_y, θ)``: centroid ``c`` and rotation angle ``θ``.  A
+body point with body-frame offset ``d`` sits at ``x(q) = c + R(θ) d`` with
+``R(θ) = [[cos θ, −sin θ], [sin θ, cos θ]]``; its height is
+
+    y(c, θ) = c_y + sin θ d_x + cos θ d_y.
+
+Mass matrix, two ways (they must agree; ``tests/test_collision.py`` checks it):
+
+* :func:`rectangle_atoms` — the seed's definition: ``K = ∫ ½|ẋ|² dm`` over a
+  uniform ``w × h`` rectangle, by Gauss–Legendre quadrature.  The atoms are the
+  quadrature points, with masses ``m ×`` the (normalised) weights.  The
+  integrand is quadratic in the body coordinates, so two points per direction
+  are already exact.  ``LagrangianSystem.mass_matrix`` then gives ``M``.
+* :func:`rectangle_mass_matrix` — the closed form ``M = diag(m, m, I)`` with
+  ``I = m (w² + h²)/12 = m|d|²/3`` for the corner ``d = (w/2, h/2)``.
+
+The seed's equation (8) gives ``m|d|²/3`` as the (3,3) entry of ``M/2``, which
+is twice the uniform-rectangle value.  Integrate the seed's own kinetic energy
+``∫ ½|ẋ|² dm`` with ``ẋ = ċ + θ̇ R'(θ) d``.  The cross term vanishes because
+``∫ d dm = 0`` about the centroid, and ``|R'(θ) d| = |d|``.  What is left is
+``K = ½ m|ċ|² + ½ θ̇² ∫|d|² dm``, and for a uniform rectangle
+``∫|d|² dm = m (w² + h²)/12 = m|d|²/3``.  So ``m|d|²/3`` is the moment of inertia
+``I`` itself: it is the (3,3) entry of ``M``, and the entry of ``M/2`` is
+``m|d|²/6``.  Equation (8) dropped the factor ½ on the rotational term.  Used
+as written, it doubles the body's resistance to spinning, which halves the
+angular part of the admissible direction ``M⁻¹Jᵀ`` and changes every impact
+outcome.  This module uses the physical ``M = diag(m, m, m|d|²/3)``, which the
+atom quadrature reproduces to round-off.
+
+Admissible change of velocity at a contact with gap ``y(q) ≥ 0``: the impulse
+acts along ``M⁻¹ (dy|_q)ᵀ``, so ``Δq̇ ∈ {μ M⁻¹ Jᵀ | μ ≥ 0}`` with ``J = ∂y/∂q``.
+For the rectangle's point ``d`` (:func:`admissible_direction_function`
+derives it with CasADi; :func:`admissible_direction` is the closed form)
+
+    J = (0, 1, d_x cos θ − d_y sin θ),      M⁻¹Jᵀ = (0, 1/m, (d_x cos θ − d_y sin θ)/I).
+
+Impact law (:func:`resolve_impact`, any ``(M, J)`` pair): restitution ``e``
+reverses the contact's normal velocity, ``J v⁺ = −e J v⁻``, with
+``v⁺ = v⁻ + μ M⁻¹Jᵀ``, so
+
+    μ = −(1 + e) J v⁻ / (J M⁻¹ Jᵀ)   when J v⁻ < 0 (approaching),   μ = 0 otherwise.
+
+With ``e = 1`` kinetic energy is conserved.  ``ΔK = μ (J v⁻ + ½ μ J M⁻¹ Jᵀ)``
+has two roots: ``μ = 0`` (trivial) and this ``μ``.  A point that is already
+separating (``J v⁻ ≥ 0``) gets ``μ = 0`` and keeps its velocity.  ``μ ≥ 0`` always.
+
+Flat fall onto a corner (the test oracle): ``θ = 0``, ``d = (−w/2, −h/2)``,
+``v⁻ = (0, −v, 0)``.  Then ``J = (0, 1, −w/2)``, ``J M⁻¹ Jᵀ = (4w² + h²)/(m (w² + h²))``, and
+
+    μ = (1 + e) m v (w² + h²)/(4w² + h²),   v_y⁺ = −v + μ/m,   ω⁺ = −(w/2) μ / I.
+
+For a thin rod (``h → 0``) with ``e = 0`` this is the textbook
+``μ = m v/4``, ``v_y⁺ = −3v/4``, ``ω⁺ = −3v/(2w)``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Optional, Sequence
+
+import casadi as ca
+import numpy as np
+
+from .mechanics import Atoms, LagrangianSystem, MassMatrix
+from .validation import InputError, finite, integer_at_least, positive
+
+NAMES = ["cx", "cy", "theta"]
+
+
+# ----------------------------------------------------------------------------- checks
+def restitution(value) -> float:
+    """Restitution coefficient ``e ∈ [0, 1]``."""
+    e = finite("restitution", value)
+    if not 0.0 <= e <= 1.0:
+        raise InputError(f"restitution must be between 0 and 1 (got {value})")
+    return e
+
+
+def _finite_vector(name: str, value, n: Optional[int] = None) -> np.ndarray:
+    try:
+        v = np.asarray(value, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be a vector of numbers (got {value!r})") from None
+    if n is not None and v.size != n:
+        raise InputError(f"{name} must have {n} components (got {v.size})")
+    if not np.all(np.isfinite(v)):
+        raise InputError(f"{name} must be finite (got {v.tolist()})")
+    return v
+
+
+def _body(mass, width, height):
+    return positive("mass", mass), positive("width", width), positive("height", height)
+
+
+def default_corner(width: float, height: float) -> np.ndarray:
+    """The lower-left corner ``(−w/2, −h/2)`` in the body frame."""
+    return np.array([-width / 2.0, -height / 2.0])
+
+
+# ----------------------------------------------------------------------------- geometry (symbolic)
+def rotation(theta):
+    """``R(θ) = [[cos θ, −sin θ], [sin θ, cos θ]]`` (CasADi)."""
+    c, s = ca.cos(theta), ca.sin(theta)
+    return ca.vertcat(ca.horzcat(c, -s), ca.horzcat(s, c))
+
+
+def body_point(q, d):
+    """World position ``c + R(θ) d`` of the body-frame point ``d`` (CasADi expression)."""
+    return q[0:2] + ca.mtimes(rotation(q[2]), ca.vertcat(d[0], d[1]))
+
+
+def point_height(q, d):
+    """Height ``y(c, θ) = c_y + sin θ d_x + cos θ d_y`` of the body-frame point ``d``."""
+    return body_point(q, d)[1]
+
+
+# ----------------------------------------------------------------------------- mass matrix, two ways
+def rectangle_inertia(mass: float, width: float, height: float) -> float:
+    """``I = m (w² + h²)/12 = m|d|²/3`` (corner ``d = (w/2, h/2)``) about the centroid."""
+    m, w, h = _body(mass, width, height)
+    return m * (w * w + h * h) / 12.0
+
+
+def rectangle_mass_matrix(mass: float, width: float, height: float) -> np.ndarray:
+    """Closed form ``M = diag(m, m, I)``."""
+    m = positive("mass", mass)
+    return np.diag([m, m, rectangle_inertia(mass, width, height)])
+
+
+def rectangle(mass: float, width: float, height: float) -> LagrangianSystem:
+    """Free planar rectangle with the closed-form mass matrix (no potential terms)."""
+    q = ca.SX.sym("q", 3)
+    return LagrangianSystem(q, MassMatrix(ca.SX(rectangle_mass_matrix(mass, width, height))), names=NAMES)
+
+
+def rectangle_atoms(mass: float, width: float, height: float, points: int = 2) -> LagrangianSystem:
+    """Free planar rectangle whose kinetic energy is the seed's ``∫ ½|ẋ|² dm``.
+
+    The integral is taken by a ``points × points`` Gauss–Legendre rule: atom
+    ``(i, j)`` sits at body offset ``d = (w ξ_i/2, h ξ_j/2)`` with mass
+    ``m ω_i ω_j / 4``.  Any ``points ≥ 2`` is exact for this quadratic integrand.
+    """
+    m, w, h = _body(mass, width, height)
+    n = integer_at_least("quadrature points", points, 2)
+    xi, wt = np.polynomial.legendre.leggauss(n)
+    q = ca.SX.sym("q", 3)
+    positions, masses = [], []
+    for i in range(n):
+        for j in range(n):
+            positions.append(body_point(q, (0.5 * w * xi[i], 0.5 * h * xi[j])))
+            masses.append(m * wt[i] * wt[j] / 4.0)
+    return LagrangianSystem(q, Atoms(positions, masses), names=NAMES)
+
+
+# ----------------------------------------------------------------------------- admissible direction
+def admissible_direction_function() -> ca.Function:
+    """CasADi-derived ``M⁻¹ (dy|_q)ᵀ`` per unit ``μ``, for the rectangle's body point ``d``.
+
+    Returns ``f(q, d, m, I) -> M⁻¹Jᵀ`` (3-vector), where ``J`` is
+    ``ca.jacobian`` of :func:`point_height` with respect to ``q``, and
+    ``M = diag(m, m, I)``.  Compare :func:`admissible_direction` (closed form).
+    """
+    q, d = ca.SX.sym("q", 3), ca.SX.sym("d", 2)
+    m, inertia = ca.SX.sym("m"), ca.SX.sym("I")
+    J = ca.jacobian(point_height(q, d), q)  # 1 x 3
+    M = ca.diag(ca.vertcat(m, m, inertia))
+    return ca.Function("admissible_direction", [q, d, m, inertia], [ca.solve(M, J.T)],
+                       ["q", "d", "m", "I"], ["direction"])
+
+
+def corner_jacobian(theta: float, corner: Sequence[float]) -> np.ndarray:
+    """Closed form ``J = ∂y/∂q = (0, 1, d_x cos θ − d_y sin θ)``."""
+    th = finite("angle", theta)
+    dx, dy = _finite_vector("corner", corner, 2)
+    return np.array([0.0, 1.0, dx * np.cos(th) - dy * np.sin(th)])
+
+
+def admissible_direction(mass: float, inertia: float, theta: float, corner: Sequence[float]) -> np.ndarray:
+    """Closed form ``M⁻¹Jᵀ = (0, 1/m, (d_x cos θ − d_y sin θ)/I)`` per unit ``μ``."""
+    m, inertia = positive("mass", mass), positive("inertia", inertia)
+    return corner_jacobian(theta, corner) / np.array([m, m, inertia])
+
+
+# ----------------------------------------------------------------------------- impact law
+@dataclass
+class Impact:
+    """One resolved impact: ``v⁺ = v⁻ + μ M⁻¹Jᵀ``."""
+
+    mu: float
+    v_before: np.ndarray
+    v_after: np.ndarray
+    direction: np.ndarray          # M⁻¹Jᵀ, the velocity change per unit μ
+    jacobian: np.ndarray           # J = ∂gap/∂q
+    ke_before: float
+    ke_after: float
+    restitution: float
+
+    @property
+    def normal_velocity_before(self) -> float:
+        return float(self.jacobian @ self.v_before)
+
+    @property
+    def normal_velocity_after(self) -> float:
+        return float(self.jacobian @ self.v_after)
+
+
+def resolve_impact(M, J, v_before, e: float) -> Impact:
+    """Impulsive contact of a system with mass matrix ``M`` and contact-gap gradient ``J``.
+
+    ``M`` (n × n, symmetric positive definite) and ``J`` (n, or 1 × n) are
+    numbers, for example ``LagrangianSystem.mass_matrix(q)`` and the Jacobian
+    of a gap at ``q`` (see :func:`system_impact`).  The impulse acts along
+    ``M⁻¹Jᵀ`` with ``μ = −(1 + e) J v⁻ / (J M⁻¹ Jᵀ)`` when the contact is
+    approaching (``J v⁻ < 0``), and ``μ = 0`` otherwise.
+    """
+    e = restitution(e)
+    v = _finite_vector("velocity", v_before)
+    n = v.size
+    try:
+        M = np.asarray(M, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError("mass matrix must be a matrix of numbers") from None
+    if M.shape != (n, n):
+        raise InputError(f"mass matrix must be {n} x {n} to match the velocity (got shape {M.shape})")
+    if not np.all(np.isfinite(M)):
+        raise InputError("mass matrix must be finite")
+    if not np.allclose(M, M.T, rtol=1e-12, atol=0.0):
+        raise InputError("mass matrix must be symmetric")
+    try:
+        chol = np.linalg.cholesky(M)
+    except np.linalg.LinAlgError:
+        raise InputError("mass matrix must be positive definite") from None
+    J = _finite_vector("contact Jacobian", J, n)
+    direction = np.linalg.solve(chol.T, np.linalg.solve(chol, J))   # M⁻¹Jᵀ
+    a = float(J @ direction)                                         # J M⁻¹ Jᵀ
+    if not a > 0.0:
+        raise InputError("contact Jacobian must be nonzero")
+    vn = float(J @ v)
+    mu = -(1.0 + e) * vn / a if vn < 0.0 else 0.0
+    v_after = v + mu * direction if mu > 0.0 else v.copy()
+    return Impact(mu, v, v_after, direction, J, 0.5 * float(v @ M @ v), 0.5 * float(v_after @ M @ v_after), e)
+
+
+def system_impact(system: LagrangianSystem, gap, q, v_before, e: float) -> Impact:
+    """:func:`resolve_impact` for a :class:`LagrangianSystem` and a gap expression ``gap(system.q) ≥ 0``."""
+    qv = _finite_vector("q", q, system.nq)
+    J = ca.Function("J", [system.q], [ca.densify(ca.jacobian(gap, system.q))])
+    return resolve_impact(np.asarray(system.mass_matrix(qv)), np.asarray(J(qv)).reshape(-1), v_before, e)
+
+
+@dataclass
+class CornerImpact(Impact):
+    """:class:`Impact` of a rectangle's body point, with the body data."""
+
+    mass: float = 0.0
+    width: float = 0.0
+    height: float = 0.0
+    inertia: float = 0.0
+    angle: float = 0.0
+    corner: Optional[np.ndarray] = None
+
+    def point_velocity(self, v) -> np.ndarray:
+        """World velocity ``ċ + ω R'(θ) d`` of the body point."""
+        dx, dy = self.corner
+        s, c = np.sin(self.angle), np.cos(self.angle)
+        return np.array([v[0] + v[2] * (-s * dx - c * dy), v[1] + v[2] * (c * dx - s * dy)])
+
+    def as_dict(self) -> dict:
+        vb, va = self.v_before, self.v_after
+        return {
+            "status": "ok", "mu": self.mu,
+            "vx": va[0], "vy": va[1], "omega": va[2],
+            "v_before": vb, "v_after": va,
+            "ke_before": self.ke_before, "ke_after": self.ke_after,
+            "admissible_direction": self.direction, "jacobian": self.jacobian,
+            "corner_velocity_before": self.point_velocity(vb), "corner_velocity_after": self.point_velocity(va),
+            "corner_normal_velocity_before": self.normal_velocity_before,
+            "corner_normal_velocity_after": self.normal_velocity_after,
+            "mass": self.mass, "width": self.width, "height": self.height, "inertia": self.inertia,
+            "angle": self.angle, "corner": self.corner, "restitution": self.restitution,
+        }
+
+
+def rectangle_impact(mass: float, width: float, height: float, angle: float, v_before,
+                     e: float, corner: Optional[Sequence[float]] = None) -> CornerImpact:
+    """Impact of a uniform rectangle's body point ``corner`` (default lower-left) on the ground ``y = 0``.
+
+    ``v_before = (v_x, v_y, ω)``; closed-form ``M`` and ``J``, general law :func:`resolve_impact`.
+    """
+    m, w, h = _body(mass, width, height)
+    th = finite("angle", angle)
+    d = default_corner(w, h) if corner is None else _finite_vector("corner", corner, 2)
+    v = _finite_vector("velocity", v_before, 3)
+    e = restitution(e)
+    r = resolve_impact(rectangle_mass_matrix(m, w, h), corner_jacobian(th, d), v, e)
+    return CornerImpact(**vars(r), mass=m, width=w, height=h, inertia=rectangle_inertia(m, w, h),
+                        angle=th, corner=d)
