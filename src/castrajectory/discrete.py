@@ -99,7 +99,7 @@ class DiscreteMechanics:
     * ``del_residual(qm, Zm, q, Zp, qp, lam, h)`` — ``[D₂L_d(qm,q) + D₁L_d(q,qp)]/h − 2w ∇c(q)ᵀλ``
       (``w`` the end-node quadrature weight, so ``2w = 1`` for the two-point schemes);
     * ``stage_residual(a, Z, b, nu, h)`` — ``∂L_d/∂Z / h − w ∇c(Z)ᵀν`` (only if ``s > 0``);
-    * ``initial_residual(q0, Z0, q1, p0, lam0, h)`` — ``[p0 + D₁L_d(q0,q1)]/h − ½∇c(q0)ᵀλ0``;
+    * ``initial_residual(q0, Z0, q1, p0, lam0, h)`` — ``[p0 + D₁L_d(q0,q1)]/h − w∇c(q0)ᵀλ0``;
     * ``p_plus(a, Z, b, h) = −D₁L_d``, ``p_minus(a, Z, b, h) = D₂L_d``.
     """
 

@@ -25,10 +25,11 @@ Robust strategy (initial value), chosen by the library:
    then interpolate (cubic) each solution as the guess of the next level;
 2. **horizon continuation** — if a level does not converge from its guess
    (chaotic motion: a coarse solution can differ O(1) from the fine one at
-   late times), grow the active horizon window by window: equations beyond
-   the window are switched off and their unknowns held fixed, the window
-   doubles after each success and halves after a failure; finally the whole
-   trajectory is solved once more with every equation active.
+   late times), march a window over the trajectory: each window is itself a
+   small whole-trajectory initial-value solve of ``L`` steps started from the
+   last solved node and its discrete momentum ``p⁻ = D₂L_d``; ``L`` doubles
+   after a success and halves after a failure.  The assembled trajectory is
+   the guess of a final whole solve at that level with every equation active.
 
 The status reported is always that of the last whole-trajectory solve at the
 requested N; levels and windows are listed in :attr:`Trajectory.levels`.
@@ -123,15 +124,16 @@ class TrajectoryNLP:
         nlp.variable("q", (N + 1) * n, init=q_init)
         if s:
             nlp.variable("Z", N * s)
-        nlam = (N if mode == "initial_value" else N - 1) * m
-        if m:
-            nlp.variable("lam", nlam)
+        if m and mode == "initial_value":
+            # boundary mode: the constraint multipliers are Ipopt's own (see _finish)
+            nlp.variable("lam", N * m)
             if s:
                 nlp.variable("nu", N * st * m)
         Q = nlp.index("q").reshape(N + 1, n)
         Zi = nlp.index("Z").reshape(N, s) if s else np.zeros((N, 0), dtype=np.int64)
-        Li = nlp.index("lam").reshape(-1, m) if m else None
-        Ni = nlp.index("nu").reshape(N, st * m) if (m and s) else None
+        ivp_m = m and mode == "initial_value"
+        Li = nlp.index("lam").reshape(-1, m) if ivp_m else None
+        Ni = nlp.index("nu").reshape(N, st * m) if (ivp_m and s) else None
         none = np.zeros(0)
         hh = np.array([h])
         zarg = (lambda rows: X(Zi[rows])) if s else (lambda rows: none)
@@ -176,70 +178,23 @@ class TrajectoryNLP:
             self.nlp.set_parameter("p0", self.end)
 
     # --------------------------------------------------------------- solve
-    def _fixed_bounds(self, guess: Dict[str, np.ndarray], window: Optional[tuple]):
-        """Bounds fixing q0 (and q_N); with ``window = (K0, K1)`` also everything outside it.
-
-        In a window only the unknowns of nodes ``K0+1..K1`` (and steps/multipliers
-        ``K0..K1-1``) are free and only the equations that determine them are
-        active; all other unknowns are held at ``guess`` and their equations are
-        switched off (bounds ``±inf``).
-        """
-        N, n, m, s = self.N, self.dm.n, self.dm.m, self.dm.s
-        st = self.dm.scheme.stages
+    def _fixed_bounds(self) -> Dict[str, tuple]:
+        """Bounds fixing ``q_0`` (and ``q_N`` in boundary mode); Ipopt removes fixed unknowns."""
+        N, n = self.N, self.dm.n
         qlo = np.full((N + 1, n), -np.inf)
         qhi = np.full((N + 1, n), np.inf)
         qlo[0] = qhi[0] = self.q0
         if self.mode == "boundary":
             qlo[N] = qhi[N] = self.end
-        b: Dict[str, tuple] = {}
-        if window is not None:
-            K0, K1 = window
-            gq = guess["q"].reshape(N + 1, n)
-            fixed = np.ones(N + 1, bool)
-            fixed[K0 + 1:K1 + 1] = False
-            qlo[fixed] = qhi[fixed] = gq[fixed]
-            step_off = np.ones(N, bool)
-            step_off[K0:K1] = False  # steps / multipliers K0..K1-1 are free
+        return {"q": (qlo.reshape(-1), qhi.reshape(-1))}
 
-            def hold(name, width):
-                g = guess[name].reshape(N, width)
-                lo = np.full((N, width), -np.inf)
-                hi = np.full((N, width), np.inf)
-                lo[step_off] = hi[step_off] = g[step_off]
-                b[name] = (lo.reshape(-1), hi.reshape(-1))
-
-            def rows(name, off_mask, width):
-                lo = np.zeros((off_mask.size, width))
-                hi = np.zeros((off_mask.size, width))
-                lo[off_mask], hi[off_mask] = -np.inf, np.inf
-                b[name] = (lo.reshape(-1), hi.reshape(-1))
-
-            if K0 > 0:
-                rows("initial", np.ones(1, bool), n)
-            if N > 1:
-                k = np.arange(1, N)
-                rows("del", (k < K0) | (k > K1 - 1), n)
-            if s:
-                hold("Z", s)
-                rows("stage", step_off, s)
-            if m:
-                hold("lam", m)
-                k = np.arange(1, N + 1)
-                rows("constraint", (k < K0 + 1) | (k > K1), m)
-                if s:
-                    hold("nu", st * m)
-                    for j in range(st):
-                        rows(f"stage_constraint{j}", step_off, m)
-        b["q"] = (qlo.reshape(-1), qhi.reshape(-1))
-        return b
-
-    def solve(self, guess: Dict[str, np.ndarray], window: Optional[tuple] = None,
-              options: Optional[dict] = None, verbose: bool = False) -> Result:
+    def solve(self, guess: Dict[str, np.ndarray], options: Optional[dict] = None,
+              verbose: bool = False) -> Result:
         opts = dict(TRAJECTORY_IPOPT)
         opts.update(options or {})
         init = {k: v for k, v in guess.items() if k in self.nlp.variable_names}
         return self.nlp.solve(init=init, options=opts, verbose=verbose,
-                              bounds=self._fixed_bounds(guess, window))
+                              bounds=self._fixed_bounds())
 
 
 # ----------------------------------------------------------------------------- guesses
@@ -272,13 +227,9 @@ def _refine(prev: TrajectoryNLP, values: Dict[str, np.ndarray], nxt: TrajectoryN
         ts = np.concatenate([t_new[:-1, None] + (j + 1) / (st + 1) * nxt.h for j in range(st)], axis=1)
         Zn = np.hstack([_resample(t_old, q_old, ts[:, j]) for j in range(st)])
         out["Z"] = Zn.reshape(-1)
-    if m:
+    if m and prev.mode == "initial_value":
         lam_old = values["lam"].reshape(-1, m)
-        if prev.mode == "initial_value":
-            tl_old, tl_new = t_old[:-1], t_new[:-1]
-        else:
-            tl_old, tl_new = t_old[1:-1], t_new[1:-1]
-        out["lam"] = _resample(tl_old, lam_old, tl_new).reshape(-1) if tl_old.size else np.zeros(tl_new.size * m)
+        out["lam"] = _resample(t_old[:-1], lam_old, t_new[:-1]).reshape(-1)
         if s:
             nu_old = values["nu"].reshape(prev.N, st * m)
             tc_old = t_old[:-1] + prev.h / 2
@@ -298,9 +249,8 @@ def _initial_guess(tn: TrajectoryNLP, qd0: np.ndarray) -> Dict[str, np.ndarray]:
     out = {"q": q.reshape(-1)}
     if dm.s:
         out["Z"] = dm.stage_guess(q[:-1], q[1:]).reshape(-1)
-    if dm.m:
-        nl = N if tn.mode == "initial_value" else N - 1
-        out["lam"] = np.zeros(nl * dm.m)
+    if dm.m and tn.mode == "initial_value":
+        out["lam"] = np.zeros(N * dm.m)
         if dm.s:
             out["nu"] = np.zeros(N * dm.scheme.stages * dm.m)
     return out
@@ -400,8 +350,10 @@ def _solve_level(tn: TrajectoryNLP, guess, options, verbose, log: List[Level], a
             L //= 2
             if L == 0:
                 break  # no window converges here; the whole solve below reports the failure honestly
+    solver_before = tn.nlp._solver
     res = tn.solve(cur, options=options, verbose=verbose)
-    log.append(Level(N, N, res.status, res.iterations, 0.0, res.solve_time_s))
+    rebuilt = tn.nlp._solver is not solver_before  # other Ipopt options than the first attempt
+    log.append(Level(N, N, res.status, res.iterations, res.build_time_s if rebuilt else 0.0, res.solve_time_s))
     return res
 
 
@@ -414,8 +366,11 @@ def _finish(tn: TrajectoryNLP, res: Result, log: List[Level], mode: str) -> Traj
     energy = tn.dm.system.energies(q, v)
     lam = None
     if dm.m:
-        lam = res.values["lam"].reshape(-1, dm.m) if mode == "initial_value" else \
-            res.multipliers["constraint"].reshape(-1, dm.m)
+        if mode == "initial_value":
+            lam = res.values["lam"].reshape(-1, dm.m)
+        else:
+            # Ipopt's multiplier of c(q_k) = 0 in min S_d/h is the quadrature weight 2w times λ_k
+            lam = res.multipliers["constraint"].reshape(-1, dm.m) / (2 * dm.scheme.node_weight)
     return Trajectory(
         t=np.linspace(0.0, tn.T, N + 1), q=q, stages=Z, p=p, v=v, energy=energy, multipliers=lam,
         status=res.status, success=res.success, message=res.message,
