@@ -280,6 +280,8 @@ def _levels(N: int, coarsest: int) -> List[int]:
 #: Iteration budget of a whole-trajectory attempt from an interpolated guess before the
 #: horizon continuation takes over (a good guess converges in 0-6 Newton iterations).
 FIRST_ATTEMPT_MAX_ITER = 10
+#: A level that converged in at most this many iterations lets the next level be 4x finer.
+EASY_LEVEL_ITERATIONS = 2
 #: Iteration budget of one window of the horizon continuation.
 WINDOW_MAX_ITER = 10
 
@@ -404,13 +406,22 @@ def solve_initial_value(system: LagrangianSystem, q0, qd0, T: float, N: int, sch
     prev, values = None, None
     omega = _fastest_frequency(system, q0, qd0)
     coarsest = max(coarsest, int(math.ceil(T * omega / COARSE_H_OMEGA)))
-    for Nl in _levels(N, coarsest):
-        tn = TrajectoryNLP(dm, Nl, T, "initial_value", q0, p0)
+    levels = _levels(N, coarsest)
+    i = 0
+    while i < len(levels):
+        tn = TrajectoryNLP(dm, levels[i], T, "initial_value", q0, p0)
         guess = _initial_guess(tn, qd0) if prev is None else _refine(prev, values, tn)
+        n_log = len(log)
         res = _solve_level(tn, guess, options, verbose, log, allow_windows=True)
+        step = 1
         if res.success:
             prev, values = tn, res.values
+            # Converged from the interpolated guess in a couple of Newton steps: the guess is
+            # in the asymptotic regime, so a 4x finer grid will converge from it too.
+            if len(log) == n_log + 1 and res.iterations <= EASY_LEVEL_ITERATIONS:
+                step = 2
         # A coarse level that fails is too coarse to resolve the motion: drop it and go finer.
+        i = min(i + step, len(levels) - 1) if i < len(levels) - 1 else i + 1
     return _finish(tn, res, log, "initial_value")
 
 
