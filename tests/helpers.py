@@ -178,3 +178,51 @@ def droplet_errors(sol, cap: Cap) -> dict:
         "energy": abs(sol.energy - cap.energy) / abs(cap.energy),
         "pressure": abs(sol.pressure - cap.pressure) / cap.pressure,
     }
+
+
+# ----------------------------------------------------------------------------- mechanics oracles
+def free_fall(t, x0, xT, T: float, g: float):
+    """Free flight under gravity ``-g e_y`` from ``x0`` at t = 0 to ``xT`` at t = T.
+
+    ``ẍ = 0, ÿ = -g`` with both ends fixed: the unique solution is the chord plus
+    the parabola that vanishes at both ends, ``y = chord_y(t) - g t (t - T) / 2``
+    (check: ``ÿ = -g``, zero correction at t = 0 and t = T).  Returns
+    ``(q, qd)`` of shape ``(len(t), 2)``.
+    """
+    t = np.asarray(t, dtype=float)
+    x0, xT = np.asarray(x0, float), np.asarray(xT, float)
+    q = x0[None, :] + (t[:, None] / T) * (xT - x0)[None, :]
+    q[:, 1] -= 0.5 * g * t * (t - T)
+    qd = np.tile((xT - x0) / T, (t.size, 1))
+    qd[:, 1] -= 0.5 * g * (2.0 * t - T)
+    return q, qd
+
+
+def sampled_frequency(eta, h: float) -> float:
+    """Angular frequency of a uniformly sampled sinusoid ``eta_k = a cos(w t_k) + b sin(w t_k)``.
+
+    Any such sequence satisfies ``eta_{k+1} + eta_{k-1} = 2 cos(w h) eta_k`` exactly;
+    ``cos(w h)`` is fitted by least squares over all interior samples.
+    """
+    eta = np.asarray(eta, dtype=float)
+    c = np.sum(eta[1:-1] * (eta[2:] + eta[:-2])) / (2.0 * np.sum(eta[1:-1] ** 2))
+    return math.acos(c) / h
+
+
+def pendulum_rod_force(m: float, l: float, g: float, theta, omega):
+    """Magnitude of the rod force on a pendulum bob (theta from the downward vertical).
+
+    Radial balance: ``T - m g cos(theta) = m l omega²`` (centripetal), so
+    ``T = m (g cos(theta) + l omega²)``.  For the constraint ``c = (x² + y² - l²)/2``
+    (``∇c = (x, y)``, length ``l``) the force ``-λ ∇c`` equals the tension pulling the
+    bob towards the pivot when ``λ = T / l``.
+    """
+    return m * (g * np.cos(theta) + l * np.asarray(omega) ** 2)
+
+
+def energy_growth(dE, fraction: float = 0.1):
+    """``(second half / first half, last fraction / first fraction)`` of max |energy error|."""
+    dE = np.abs(np.asarray(dE, dtype=float))
+    half = dE.size // 2
+    k = max(1, int(round(fraction * dE.size)))
+    return dE[half:].max() / dE[:half].max(), dE[-k:].max() / dE[:k].max()
