@@ -242,7 +242,7 @@ def _work_precision_axes(ax, rows: List[dict], x: str, y: str, group: Sequence[s
         pts.sort(key=lambda p: p[0])
         xs = [p[1] for p in pts]
         ys = [p[2] for p in pts]
-        label = " / ".join(str(v) for v in key)
+        label = " / ".join(str(v) for v in key if v is not None)
         ax.plot(xs, ys, "-", marker=_WP_MARKERS[k % len(_WP_MARKERS)], ms=4, lw=1, label=label)
     ax.set_xscale("log")
     ax.set_yscale("log")
