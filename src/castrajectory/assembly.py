@@ -16,7 +16,7 @@ decides what is an element.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import List, Sequence, Tuple
+from typing import Sequence, Tuple
 
 import casadi as ca
 import numpy as np

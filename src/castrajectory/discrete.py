@@ -39,7 +39,7 @@ galerkin4  4     quadratic Galerkin: ``q(τ)`` through ``a, Z, b`` at
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Dict, List, Tuple
+from typing import Dict, Tuple
 
 import casadi as ca
 import numpy as np

@@ -29,7 +29,7 @@ Example (planar pendulum, one atom)::
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import List, Optional, Sequence
+from typing import Optional, Sequence
 
 import casadi as ca
 import numpy as np

@@ -37,7 +37,6 @@ requested N; levels and windows are listed in :attr:`Trajectory.levels`.
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass, field
 from typing import Dict, List, Optional
 
