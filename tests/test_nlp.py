@@ -9,7 +9,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from castrajectory.nlp import NLP
+from castrajectory.nlp import NLP, X
 from castrajectory.result import SolveError
 
 SYMBOLICS = pytest.mark.parametrize("sym", [ca.SX, ca.MX], ids=["SX", "MX"])
@@ -346,6 +346,47 @@ def test_complementarity_vector_pairs():
     assert res["y"] == pytest.approx([2.0, 0.0, 1.0], abs=1e-5)
     assert res.complementarity_residual <= 1e-8
     assert np.all(res.multipliers["c.a"] >= -1e-8) and np.all(res.multipliers["c.b"] >= -1e-8)
+
+
+def _mpcc(targets_a, targets_b, elements: bool):
+    """min |x - A|² + |y - B|²  s.t.  0 <= x_i ⟂ y_i >= 0 (oracle: keep the larger target, zero the other)."""
+    E = len(targets_a)
+    nlp = NLP()
+    x = nlp.variable("x", E, init=0.5)
+    y = nlp.variable("y", E, init=0.5)
+    nlp.minimize(ca.sumsqr(x - targets_a) + ca.sumsqr(y - targets_b))
+    if elements:
+        a, b = ca.SX.sym("a"), ca.SX.sym("b")
+        pair = ca.Function("pair", [a, b], [ca.vertcat(a, b)])
+        nlp.complementarity_elements("c", pair, [X(nlp.index("x")[:, None]), X(nlp.index("y")[:, None])])
+    else:
+        nlp.complementarity("c", x, y)
+    return nlp.solve()
+
+
+def test_complementarity_elements_match_expressions_and_oracle():
+    rng = np.random.default_rng(0)
+    A, B = rng.uniform(0.2, 2.0, 40), rng.uniform(0.2, 2.0, 40)
+    ref, res = _mpcc(A, B, elements=False), _mpcc(A, B, elements=True)
+    assert res.success and ref.success
+    assert res.iterations == ref.iterations
+    assert np.max(np.abs(res["x"] - ref["x"])) <= 1e-10 and np.max(np.abs(res["y"] - ref["y"])) <= 1e-10
+    # oracle (the final sigma = 0 step is degenerate for Ipopt: accurate to ~sqrt(tol))
+    assert res["x"] == pytest.approx(np.where(A > B, A, 0.0), abs=1e-5)
+    assert res["y"] == pytest.approx(np.where(A > B, 0.0, B), abs=1e-5)
+    assert res.complementarity_residual <= 1e-12
+    assert [s.sigma for s in res.homotopy] == [1e-1, 1e-2, 1e-3, 1e-5, 1e-7, 0.0]
+    for step in res.homotopy:  # each relaxation step reports a residual at most its sigma
+        assert step.status == "Solve_Succeeded" and step.complementarity_residual <= step.sigma + 1e-12
+    assert np.all(res.multipliers["c.a"] >= -1e-8) and np.all(res.multipliers["c.b"] >= -1e-8)
+
+
+def test_complementarity_elements_need_pairs():
+    nlp = NLP()
+    nlp.variable("x", 3)
+    a = ca.SX.sym("a")
+    with pytest.raises(ValueError):
+        nlp.complementarity_elements("c", ca.Function("odd", [a], [a]), [X(nlp.index("x")[:, None])])
 
 
 def test_complementarity_size_mismatch():

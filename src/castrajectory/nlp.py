@@ -188,6 +188,7 @@ class NLP:
         self._cons: Dict[str, Constraint] = {}
         self._ng = 0
         self._comps: List[tuple] = []  # (name, a, b) expressions
+        self._comp_groups: List[tuple] = []  # (name, |a b| function, element args, count)
         self._f = None
         self._f_groups: List[_Group] = []
         self._solver = None
@@ -310,9 +311,40 @@ class NLP:
         self._f_groups.append(grp)
         self._t_described = time.perf_counter()
 
+    def complementarity_elements(self, name: str, fn: ca.Function, args: Sequence) -> Constraint:
+        """Add ``0 <= a_e ⟂ b_e >= 0`` for every element, with ``[a; b] = fn(args_e)``.
+
+        ``fn`` returns one column of even length ``2r``: the first ``r`` entries
+        are ``a``, the last ``r`` are ``b``.  As for :meth:`complementarity`, the
+        rows ``"<name>.a" >= 0``, ``"<name>.b" >= 0`` and the relaxed products
+        ``"<name>": a_i b_i - sigma <= 0`` are added (element families), and
+        :meth:`solve` runs the Scholtes homotopy ``sigma -> 0``.
+        """
+        k = fn.size1_out(0) * fn.size2_out(0)
+        if k % 2:
+            raise ValueError(f"{name}: a complementarity element returns [a; b] of even length")
+        r = k // 2
+        syms = [ca.SX.sym(f"a{i}", fn.size1_in(i), fn.size2_in(i)) for i in range(fn.n_in())]
+        out = ca.vec(fn(*syms))
+        a, b = out[:r], out[r:]
+        sig = ca.SX.sym("sigma")
+        fa = ca.Function(f"{name}_a", syms, [a])
+        fb = ca.Function(f"{name}_b", syms, [b])
+        fprod = ca.Function(f"{name}_prod", syms + [sig], [a * b - sig])
+        nargs, count = _element_args(fn, args, name)
+        if "__sigma" not in [p.name for p in self._params]:
+            self.parameter("__sigma", 1, 0.0)
+        n = count * r
+        self.inequality_elements(f"{name}.a", fa, args, lb=np.zeros(n))
+        self.inequality_elements(f"{name}.b", fb, args, lb=np.zeros(n))
+        con = self.inequality_elements(name, fprod, list(args) + [P(self.parameter_index("__sigma"))],
+                                       ub=np.zeros(n))
+        self._comp_groups.append((name, ca.Function(f"{name}_abs", syms, [ca.fabs(a * b)]), nargs, count))
+        return con
+
     @property
     def has_complementarity(self) -> bool:
-        return bool(self._comps)
+        return bool(self._comps or self._comp_groups)
 
     def constraint(self, name: str) -> Constraint:
         return self._cons[name]
@@ -353,7 +385,7 @@ class NLP:
     # ------------------------------------------------------------------ solving
     def _ipopt_options(self, options, verbose):
         ipopt = dict(DEFAULT_IPOPT_OPTIONS)
-        if self._comps:
+        if self.has_complementarity:
             ipopt["bound_relax_factor"] = 0.0
         ipopt.update(options or {})
         if not verbose:
@@ -547,12 +579,27 @@ class NLP:
         return [np.asarray(v, float).reshape(-1) for v in out]
 
     def _comp_residual(self, x: np.ndarray, p: np.ndarray) -> Optional[float]:
-        if not self._comps:
+        """``max |a_i b_i|`` over every complementarity pair (expressions and element families)."""
+        if not self.has_complementarity:
             return None
-        if getattr(self, "_comp_fun", None) is None:
-            self._comp_fun = self.evaluator(ca.vertcat(*[ca.fabs(a * b) for _, a, b in self._comps]))
-        vals = np.asarray(self._comp_fun(x, p)).reshape(-1)
-        return float(vals.max()) if vals.size else 0.0
+        worst = 0.0
+        if self._comps:
+            if getattr(self, "_comp_fun", None) is None:
+                self._comp_fun = self.evaluator(ca.vertcat(*[ca.fabs(a * b) for _, a, b in self._comps]))
+            vals = np.asarray(self._comp_fun(x, p)).reshape(-1)
+            worst = max(worst, float(vals.max()) if vals.size else 0.0)
+        for _, fabs, args, count in self._comp_groups:
+            call = []
+            for i, a in enumerate(args):
+                if isinstance(a, X):
+                    src = p if isinstance(a, P) else x
+                    vals_i = src[a.index]
+                    call.append(vals_i.T if vals_i.ndim == 2 else vals_i.reshape(-1, 1))
+                else:
+                    call.append(a.T if a.ndim == 2 else a.reshape(-1, 1))
+            vals = np.asarray((fabs.map(count) if count > 1 else fabs)(*call)).reshape(-1)
+            worst = max(worst, float(vals.max()) if vals.size else 0.0)
+        return worst
 
     def solve(self, init: Optional[Dict[str, object]] = None, *, warm: Optional[Result] = None,
               options: Optional[dict] = None, verbose: bool = False, expand: bool = False,
@@ -603,7 +650,7 @@ class NLP:
         if warm is not None and warm.lam_g is not None:
             args.update(lam_x0=warm.lam_x, lam_g0=warm.lam_g)
 
-        sigmas = list(homotopy) if self._comps else [None]
+        sigmas = list(homotopy) if self.has_complementarity else [None]
         steps: List[HomotopyStep] = []
         total_iter, total_time = 0, 0.0
         sol, status = None, "Not_Solved"
@@ -632,7 +679,7 @@ class NLP:
         p = np.concatenate([b.init for b in self._params]) if self._params else np.zeros(0)
         success = status in SUCCESS_STATUSES
         message = Result.describe_status(status)
-        if self._comps and success and steps[-1].sigma != 0.0:
+        if self.has_complementarity and success and steps[-1].sigma != 0.0:
             message += f"; relaxation stopped at sigma = {steps[-1].sigma:g}"
         res = Result(
             values=self._split(x, self._vars),
