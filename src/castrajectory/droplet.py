@@ -242,8 +242,9 @@ class Curve:
 
     name = "curve"
 
-    def __init__(self, n: int):
+    def __init__(self, n: int, guess: Optional[np.ndarray] = None):
         self.n = n
+        self.guess = guess  # (n + 1, 2) vertices in scaled units, or None for the default
 
     @staticmethod
     def element() -> ca.Function:
@@ -254,7 +255,9 @@ class Curve:
 
     def build(self, nlp: NLP, span: Optional[float]) -> Geometry:
         n = self.n
-        if span is None:
+        if self.guess is not None:
+            guess = np.array(self.guess, dtype=float)
+        elif span is None:
             guess = arc_points(0.5 * math.pi, math.sqrt(1.0 / segment_area_factor(0.5 * math.pi)), n)
         else:  # half-ellipse of area 1 over the pinned span, resampled to equal arc length
             phi = np.linspace(math.pi, 0.0, 64 * n + 1)
@@ -406,7 +409,20 @@ class DropletSolution:
         }
 
 
-def make_nlp(drop: Droplet, n: int, formulation: str = "curve"):
+def resample_polyline(x: np.ndarray, y: np.ndarray, n: int) -> np.ndarray:
+    """``n + 1`` points equally spaced in arclength along the polyline ``(x, y)`` (ends kept)."""
+    s = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(x), np.diff(y)))])
+    t = np.linspace(0.0, s[-1], n + 1)
+    return np.column_stack([np.interp(t, s, x), np.interp(t, s, y)])
+
+
+#: Coarse grid of the fallback ladder (see :func:`solve`).
+COARSE_N = 40
+#: Iteration budget of the direct curve solve before the ladder takes over.
+FIRST_ATTEMPT_MAX_ITER = 30
+
+
+def make_nlp(drop: Droplet, n: int, formulation: str = "curve", guess: Optional[np.ndarray] = None):
     """Build (but do not solve) the droplet NLP in scaled units; return ``(nlp, geometry, area_constraint)``."""
     n = integer_at_least("n", n, MIN_N)
     one_of("formulation", formulation, FORMULATIONS)
@@ -417,7 +433,8 @@ def make_nlp(drop: Droplet, n: int, formulation: str = "curve"):
             f"(this drop's angle is {math.degrees(cap.contact_angle):.4g} degrees); use the curve formulation")
     L = drop.length_scale
     nlp = NLP(ca.MX)
-    geo = DISCRETISATIONS[formulation](n).build(nlp, None if drop.span is None else drop.span / L)
+    disc = Curve(n, guess) if formulation == "curve" else DISCRETISATIONS[formulation](n)
+    geo = disc.build(nlp, None if drop.span is None else drop.span / L)
     # The scene's terms: surface tension always; the wetting term only when the span is free and it is non-zero.
     energy = geo.length
     w = drop.wetting / drop.gamma_gl
@@ -430,9 +447,23 @@ def make_nlp(drop: Droplet, n: int, formulation: str = "curve"):
 
 def solve(drop: Droplet, n: int = 400, formulation: str = "curve", *, options: Optional[dict] = None,
           verbose: bool = False) -> DropletSolution:
-    """Minimise the discrete droplet energy; never raises on non-convergence (see ``Result``)."""
+    """Minimise the discrete droplet energy; never raises on non-convergence (see ``Result``).
+
+    Robust strategy (curve form): if the solve from the default guess fails, a
+    ladder of coarser solves (``COARSE_N``, doubling up to ``n``) is run, each
+    resampled by arclength as the next guess; the reported times and
+    iterations include every solve, and the status is that of the final solve
+    at ``n``.
+    """
+    opts = {**SOLVER_OPTIONS, **(options or {})}
     nlp, geo, _ = make_nlp(drop, n, formulation)
-    res = nlp.solve(options={**SOLVER_OPTIONS, **(options or {})}, verbose=verbose)
+    ladder = formulation == "curve" and n > COARSE_N
+    first = dict(opts)
+    if ladder:  # a good start converges in <= 15 iterations; do not spend a long failing run
+        first["max_iter"] = min(int(opts.get("max_iter", 200)), FIRST_ATTEMPT_MAX_ITER)
+    res = nlp.solve(options=first, verbose=verbose)
+    if not res.success and ladder:
+        res, nlp, geo = _coarse_to_fine(drop, n, opts, verbose, res)
     L, g = drop.length_scale, drop.gamma_gl
     xs, ys, span, length = nlp.evaluate(res, geo.x, geo.y, geo.span, geo.length)
     x, y = L * xs, L * ys
@@ -450,6 +481,23 @@ def solve(drop: Droplet, n: int = 400, formulation: str = "curve", *, options: O
         "pressure": abs(pressure - cap.pressure) / cap.pressure,
     }
     return DropletSolution(drop, formulation, n, res, x, y, theta, span, pressure, energy, young, cap, errors)
+
+
+def _coarse_to_fine(drop: Droplet, n: int, opts: dict, verbose: bool, failed: Result):
+    """Fallback ladder COARSE_N, 2 COARSE_N, ..., n; every solve's time and iterations are counted."""
+    build, solve_t, iters = failed.build_time_s, failed.solve_time_s, failed.iterations
+    guess, m = None, COARSE_N
+    while True:
+        nlp, geo, _ = make_nlp(drop, m, "curve", guess)
+        res = nlp.solve(options=opts, verbose=verbose)
+        build, solve_t, iters = build + res.build_time_s, solve_t + res.solve_time_s, iters + res.iterations
+        if not res.success or m == n:
+            break
+        xs, ys = nlp.evaluate(res, geo.x, geo.y)
+        m = min(2 * m, n)
+        guess = resample_polyline(xs, ys, m)
+    res.build_time_s, res.solve_time_s, res.iterations = build, solve_t, iters
+    return res, nlp, geo
 
 
 # ---------------------------------------------------------------------------- reduced problem in theta
