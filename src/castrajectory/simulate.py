@@ -40,12 +40,14 @@ class Run:
         return self.build_time_s + self.solve_time_s
 
     def as_dict(self) -> dict:
-        return {
-            "status": self.status, "iterations": self.iterations,
-            "build_time_s": self.build_time_s, "solve_time_s": self.solve_time_s,
-            "scheme": self.scheme, "method": self.method,
-            "t": self.t, "q": self.q, "energy": self.energy,
-        }
+        """The JSON keys shared by every mechanics scene (see DESIGN.md and issue 3)."""
+        return trajectory_json(self)
+
+
+def trajectory_json(run) -> dict:
+    """``status, iterations, build_time_s, solve_time_s, scheme, method, t, q, energy`` of a run."""
+    return {k: getattr(run, k) for k in ("status", "iterations", "build_time_s", "solve_time_s",
+                                         "scheme", "method", "t", "q", "energy")}
 
 
 def simulate(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str = "midpoint",

@@ -91,13 +91,8 @@ class Trajectory:
         return self.build_time_s + self.solve_time_s
 
     def as_dict(self) -> dict:
-        return {
-            "status": self.status, "iterations": self.iterations,
-            "build_time_s": self.build_time_s, "solve_time_s": self.solve_time_s,
-            "scheme": self.scheme, "method": self.method, "mode": self.mode,
-            "t": self.t, "q": self.q, "energy": self.energy,
-            "levels": [vars(lv) for lv in self.levels],
-        }
+        from .simulate import trajectory_json
+        return {**trajectory_json(self), "mode": self.mode, "levels": [vars(lv) for lv in self.levels]}
 
 
 def _check_state(name, value, n):
