@@ -162,7 +162,6 @@ class TrajectoryNLP:
                     nlp.equal_elements(f"stage_constraint{j}", dm.constraint_rows,
                                        [X(Zi[:, j * n:(j + 1) * n])])
         self.set_start(q0, end)
-        self._built = False
 
     def set_start(self, q0, end) -> None:
         """New ``q0`` and ``p0`` (initial value) or ``q_N`` (boundary) without rebuilding."""
