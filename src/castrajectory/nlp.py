@@ -429,6 +429,9 @@ class NLP:
         xs = ca.vertcat(*[b.sym for b in self._vars])
         ps = ca.vertcat(*[b.sym for b in self._params]) if self._params else ca.SX(0, 1)
 
+        exact_hessian = self._hessian == "exact"
+        if not exact_hessian and (self._f is not None and ca.depends_on(self._f, xs) or self._f_groups):
+            raise ValueError("hessian='zero' needs a constant objective (a square feasibility problem)")
         g_parts, jac, hess, grad = [], [], [], []
         f_total = ca.MX(0)
         # Expression part: ordinary SX automatic differentiation on the (small) expression rows.
@@ -446,21 +449,20 @@ class NLP:
             le = ca.SX.sym("le", ge.numel())
             sf = ca.SX.sym("sf")
             Je = ca.jacobian(ge, xs)
-            He = ca.triu(ca.hessian(sf * f_expr + ca.dot(le, ge), xs)[0])
             ge_grad = ca.gradient(f_expr, xs)
             fe = ca.Function("expr", [xs, ps],
                              [f_expr, ge, _nz(Je), _nz(ge_grad)])
-            fh = ca.Function("expr_hess", [xs, ps, sf, le], [_nz(He)])
-            lam_e = lam_g[rows_of_ge.tolist()] if rows_of_ge.size else ca.MX(0, 1)
             fv, gv, jv, gfv = fe(Xm, Pm)
-            hv = fh(Xm, Pm, lam_f, lam_e)
             f_total = f_total + fv
             jr, jc = Je.sparsity().get_triplet()
             jac.append(Contribution(jv, rows_of_ge[np.asarray(jr, dtype=np.int64)], np.asarray(jc, dtype=np.int64)))
-            hr, hc = He.sparsity().get_triplet()
-            hr, hc = np.asarray(hr, dtype=np.int64), np.asarray(hc, dtype=np.int64)
-            # He is already upper triangular; mirror it so assemble(triu=True) keeps each entry once.
-            hess.append(Contribution(hv, hr, hc))
+            if exact_hessian:
+                He = ca.triu(ca.hessian(sf * f_expr + ca.dot(le, ge), xs)[0])
+                fh = ca.Function("expr_hess", [xs, ps, sf, le], [_nz(He)])
+                lam_e = lam_g[rows_of_ge.tolist()] if rows_of_ge.size else ca.MX(0, 1)
+                hr, hc = (np.asarray(v, dtype=np.int64) for v in He.sparsity().get_triplet())
+                # He is already the upper triangle, so assemble(triu=True) keeps every entry once.
+                hess.append(Contribution(fh(Xm, Pm, lam_f, lam_e), hr, hc))
             gr, _ = ge_grad.sparsity().get_triplet()
             grad.append(Contribution(gfv, np.asarray(gr, dtype=np.int64), np.zeros(len(gr), dtype=np.int64)))
             g_expr_by_slice = {s.start: gv[i0:i0 + (s.stop - s.start)]
@@ -468,27 +470,26 @@ class NLP:
         else:
             g_expr_by_slice = {}
 
-        if self._hessian == "zero":
-            if self._f is not None and ca.depends_on(self._f, xs) or self._f_groups:
-                raise ValueError("hessian='zero' needs a constant objective (a square feasibility problem)")
         for con, g in zip(self._cons.values(), self._g):
             if isinstance(g, _Group):
-                gv, jc_, hc_ = self._element_derivatives(g, Xm, Pm, lam_g[con.slice.start:con.slice.stop], con.slice.start)
+                gv, jc_, hc_ = self._element_derivatives(g, Xm, Pm, lam_g[con.slice.start:con.slice.stop],
+                                                         con.slice.start, exact_hessian)
                 g_parts.append(gv)
                 jac.append(jc_)
-                hess.append(hc_)
+                if hc_ is not None:
+                    hess.append(hc_)
             else:
                 g_parts.append(g_expr_by_slice[con.slice.start])
         for grp in self._f_groups:
-            fv, gc_, hc_ = self._element_derivatives(grp, Xm, Pm, lam_f, None)
+            fv, gc_, hc_ = self._element_derivatives(grp, Xm, Pm, lam_f, None, exact_hessian)
             f_total = f_total + fv
             grad.append(gc_)
-            hess.append(hc_)
+            hess.append(hc_)  # objective families only exist with the exact Hessian
 
         f_total = ca.densify(f_total)
         G = ca.densify(ca.vertcat(*g_parts)) if g_parts else ca.MX(0, 1)
         Jg = assemble(jac, (self._ng, nx))
-        Hl = assemble(hess, (nx, nx), triu=True) if self._hessian == "exact" else ca.MX(nx, nx)
+        Hl = assemble(hess, (nx, nx), triu=True) if exact_hessian else ca.MX(nx, nx)
         gf = dense_vector(grad, nx)
         funcs = {
             "grad_f": ca.Function("grad_f", [Xm, Pm], [f_total, gf], ["x", "p"], ["f", "grad_f_x"]),
@@ -504,12 +505,13 @@ class NLP:
         return self._solver
 
     @staticmethod
-    def _element_derivatives(grp: _Group, Xm, Pm, weight, row0):
+    def _element_derivatives(grp: _Group, Xm, Pm, weight, row0, hessian: bool = True):
         """Values, first-derivative and Hessian contributions of one element family.
 
         ``row0`` is the first constraint row (None for an objective family, whose
         first derivative is a gradient).  ``weight`` is the multiplier slice
-        (constraints) or the objective factor.
+        (constraints) or the objective factor.  With ``hessian=False`` no Hessian is
+        formed and the third contribution is None.
         """
         fn, E, r = grp.fn, grp.count, grp.size
         syms, call_args, var_idx = [], [], []
@@ -531,23 +533,22 @@ class NLP:
         # Global position of each local unknown, per element: (E, nz).
         zidx = np.hstack([np.broadcast_to(idx.reshape(-1, idx.shape[-1]), (E, idx.shape[-1])) for _, idx in var_idx]) \
             if var_idx else np.zeros((E, 0), dtype=np.int64)
-        w = ca.SX.sym("w", r)
         J = ca.jacobian(out, z)
-        H = ca.hessian(ca.dot(w, out), z)[0]
         f_el = ca.Function("el", syms, [out])
         fJ = ca.Function("el_jac", syms, [_nz(J)])
-        fH = ca.Function("el_hess", syms + [w], [_nz(H)])
         mapped = lambda f: f.map(E, MAP_PARALLELIZATION, MAP_THREADS) if E > 1 else f  # noqa: E731
-        if row0 is None:
-            wv = weight
-        else:
-            wv = ca.reshape(weight, r, E)
         values = ca.vec(mapped(f_el)(*call_args))
         jv = ca.vec(mapped(fJ)(*call_args))
-        hv = ca.vec(mapped(fH)(*call_args, wv))
         jr, jc = (np.asarray(v, dtype=np.int64) for v in J.sparsity().get_triplet())
-        hr, hc = (np.asarray(v, dtype=np.int64) for v in H.sparsity().get_triplet())
-        hcon = Contribution(hv, zidx[:, hr].reshape(-1), zidx[:, hc].reshape(-1))
+        hcon = None
+        if hessian:
+            w = ca.SX.sym("w", r)
+            H = ca.hessian(ca.dot(w, out), z)[0]
+            fH = ca.Function("el_hess", syms + [w], [_nz(H)])
+            wv = weight if row0 is None else ca.reshape(weight, r, E)
+            hv = ca.vec(mapped(fH)(*call_args, wv))
+            hr, hc = (np.asarray(v, dtype=np.int64) for v in H.sparsity().get_triplet())
+            hcon = Contribution(hv, zidx[:, hr].reshape(-1), zidx[:, hc].reshape(-1))
         if row0 is None:
             # Objective family: value is the sum, first derivative is a gradient.
             fsum = ca.sum1(values)

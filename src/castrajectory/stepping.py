@@ -186,6 +186,14 @@ def _corrections(fn: ca.Function, Y: np.ndarray, P: np.ndarray) -> np.ndarray:
     return np.column_stack([np.asarray(d).reshape(-1), np.asarray(ynorm).reshape(-1)])
 
 
+def _timed_march(march_fn: ca.Function, x0: np.ndarray, T: float, N: int):
+    """Run a ``mapaccum`` march from ``x0``: ``(t, states with x0 as row 0, wall time of the march)``."""
+    t0 = time.perf_counter()
+    Xs = march_fn(x0)
+    solve = time.perf_counter() - t0
+    return np.linspace(0.0, T, N + 1), np.vstack([x0, np.asarray(Xs).T]), solve
+
+
 def _first_bad(arr: np.ndarray) -> int:
     """Index of the first row of ``arr`` with a non-finite entry (or -1)."""
     bad = ~np.all(np.isfinite(arr.reshape(arr.shape[0], -1)), axis=1)
@@ -231,13 +239,7 @@ def rk4(system: LagrangianSystem, q0, qd0, T: float, N: int) -> Stepped:
     march_fn = step.mapaccum("rk4_march", N)
     build = time.perf_counter() - t0
 
-    x0 = np.concatenate([q0, qd0])
-    t0 = time.perf_counter()
-    X = march_fn(x0)
-    solve = time.perf_counter() - t0
-
-    X = np.vstack([x0, np.asarray(X).T])
-    t = np.linspace(0.0, T, N + 1)
+    t, X, solve = _timed_march(march_fn, np.concatenate([q0, qd0]), T, N)
     ok, msg, _ = _verdict(t, X, None, "rk4")
     q, qd = X[:, :n], X[:, n:]
     return Stepped(t, q, qd, system.energies(q, qd), "rk4", None, build, solve, ok, msg)
@@ -259,13 +261,7 @@ def implicit_euler(system: LagrangianSystem, q0, qd0, T: float, N: int) -> Stepp
     march_fn = step.mapaccum("ie_march", N)
     build = time.perf_counter() - t0
 
-    x0 = np.concatenate([q0, qd0])
-    t0 = time.perf_counter()
-    Xs = march_fn(x0)
-    solve = time.perf_counter() - t0
-
-    X = np.vstack([x0, np.asarray(Xs).T])
-    t = np.linspace(0.0, T, N + 1)
+    t, X, solve = _timed_march(march_fn, np.concatenate([q0, qd0]), T, N)
     corr = _corrections(_correction(r, x, xo), X[1:], X[:-1]) if _first_bad(X) < 0 else None
     ok, msg, worst = _verdict(t, X, corr, "implicit_euler")
     q, qd = X[:, :n], X[:, n:]
