@@ -53,6 +53,14 @@ What is measured
 An untimed warm-up solve at small ``N`` runs first, so that loading the Ipopt
 plugin is not billed to the first size.
 
+Compiled element functions (``castrajectory.jit``).  Families of at least
+``nlp.JIT_MIN_ELEMENTS`` elements are compiled to machine code once per machine
+and then loaded from a per-user disk cache.  A second untimed warm-up at that
+size does any compiling before the timings; the script prints how many
+libraries were compiled (and how long the warm-up took) and checks that no
+compilation happened inside the timed runs.  ``--jit off`` measures CasADi's
+virtual machine instead (the state before compilation was introduced).
+
 BLAS threads: unless the caller already set them, ``OPENBLAS_NUM_THREADS``,
 ``OMP_NUM_THREADS`` and ``MKL_NUM_THREADS`` are set to 1 before numpy is
 imported.  SLSQP's dense linear algebra goes through numpy/scipy's OpenBLAS;
@@ -88,6 +96,8 @@ for _var in BLAS_THREAD_VARS:
 import numpy as np  # noqa: E402
 
 from castrajectory import droplet as d  # noqa: E402
+from castrajectory import jit  # noqa: E402
+from castrajectory import nlp as nlp_mod  # noqa: E402
 
 #: The benchmarked scene (partial wetting, Young's angle 60 degrees).
 DROP = d.Droplet(gamma_gl=1.0, gamma_sl=0.5, gamma_sg=1.0, area=1.0)
@@ -332,6 +342,8 @@ def parse_args(argv=None):
     p.add_argument("--repeats", type=_repeats, default=3, help="runs per measurement; best time kept (default 3)")
     p.add_argument("--formulation", choices=d.FORMULATIONS, default="curve",
                    help="droplet discretisation (default curve; the SLSQP baseline always poses the curve)")
+    p.add_argument("--jit", choices=("on", "off"), default="on",
+                   help="compiled element functions (default on; off: CasADi's virtual machine)")
     p.add_argument("--json", metavar="PATH", help="also write all numbers as JSON to PATH")
     return p.parse_args(argv)
 
@@ -357,7 +369,19 @@ def main(argv=None) -> int:
     print("  " + "  ".join(f"{v}={env[v]}" for v in BLAS_THREAD_VARS) + "  (1 unless set by the caller)")
     print(f"  {env['platform']}")
 
+    nlp_mod.JIT = args.jit == "on"
     d.solve(DROP, 20, args.formulation)  # warm-up: load the Ipopt plugin outside the timings
+    t = time.perf_counter()
+    d.solve(DROP, nlp_mod.JIT_MIN_ELEMENTS, args.formulation)  # warm-up: compile (or load) element code
+    if args.formulation != "curve" and slsqp_sizes:
+        d.solve(DROP, nlp_mod.JIT_MIN_ELEMENTS, "curve")
+    warm = time.perf_counter() - t
+    jit_before = dict(jit.stats)
+    env["jit"] = {"on": nlp_mod.JIT and jit.enabled(), "compiler": jit.compiler(), "cache": str(jit.cache_dir()),
+                  "warmup_stats": jit_before, "warmup_s": warm}
+    print(f"  jit: {'on' if env['jit']['on'] else 'off'}, compiler {jit.compiler()}, cache {jit.cache_dir()}; "
+          f"warm-up {warm:.2f} s compiled {jit_before['compiled']} and loaded {jit_before['cache_hits']} "
+          f"cached libraries")
 
     # -------------------------------------------------------------- 1. scaling
     print()
@@ -463,6 +487,10 @@ def main(argv=None) -> int:
             goals.append((text, ok, detail))
             print(goal_line(ok, text, detail))
 
+    compiled_in_timed = jit.stats["compiled"] - jit_before["compiled"]
+    print()
+    print(f"  compilations inside the timed runs: {compiled_in_timed}"
+          + ("" if not compiled_in_timed else "  (their cost is included in the build times above)"))
     if args.json:
         out = {"environment": env, "drop": {"gamma_gl": DROP.gamma_gl, "gamma_sl": DROP.gamma_sl,
                                             "gamma_sg": DROP.gamma_sg, "area": DROP.area},

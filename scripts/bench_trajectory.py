@@ -28,6 +28,14 @@ Scene: double pendulum (unit masses and lengths, g = 9.81) from rest at
 One untimed warm-up solve runs first (loading the Ipopt plugin).  BLAS
 threads are pinned to 1 unless the caller set them (see bench_droplet.py).
 
+Compiled element functions (``castrajectory.jit``): element families of at
+least ``nlp.JIT_MIN_ELEMENTS`` elements run compiled code, built once per
+machine and loaded from a per-user disk cache afterwards.  A second untimed
+warm-up (both schemes at N = 4 ``JIT_MIN_ELEMENTS``) does any compiling before
+the timings; the script prints what it compiled and how many compilations fell
+inside the timed runs (normally none).  ``--jit off`` measures CasADi's
+virtual machine instead.
+
     python scripts/bench_trajectory.py
     python scripts/bench_trajectory.py --sizes 1000 4000 --n-compare 8000 --json bench.json
 """
@@ -47,7 +55,8 @@ for _var in BLAS_THREAD_VARS:
 
 import numpy as np  # noqa: E402
 
-from castrajectory import pendulum, study  # noqa: E402
+from castrajectory import jit, pendulum, study  # noqa: E402
+from castrajectory import nlp as nlp_mod  # noqa: E402
 from castrajectory.simulate import simulate  # noqa: E402
 
 Q0, QD0, T = np.array([2.0, 1.0]), np.zeros(2), 5.0
@@ -100,6 +109,8 @@ def main(argv=None) -> int:
     p.add_argument("--accuracy-sizes", type=_ints, nargs="+", default=[1000, 2000, 4000, 8000, 16000],
                    help="N sweep for part (c) (default 1000 … 16000)")
     p.add_argument("--repeats", type=int, default=1, help="runs per measurement in (b), (c); best kept (default 1)")
+    p.add_argument("--jit", choices=("on", "off"), default="on",
+                   help="compiled element functions (default on; off: CasADi's virtual machine)")
     p.add_argument("--json", metavar="PATH", help="also write all numbers as JSON to PATH")
     args = p.parse_args(argv)
     if args.repeats < 1:
@@ -115,7 +126,18 @@ def main(argv=None) -> int:
     print("  " + "  ".join(f"{v}={env[v]}" for v in BLAS_THREAD_VARS) + "  (1 unless set by the caller)")
     print(f"  {env['platform']};  load average {os.getloadavg()[0]:.2f} at start")
     t_bench = time.perf_counter()
+    nlp_mod.JIT = args.jit == "on"
     simulate(pendulum.double_pendulum(), Q0, QD0, T, 64, "midpoint", "whole")  # warm-up (Ipopt plugin)
+    t = time.perf_counter()
+    for scheme in ("midpoint", "galerkin4"):  # warm-up: compile (or load) the element code
+        simulate(pendulum.double_pendulum(), Q0, QD0, T, 4 * nlp_mod.JIT_MIN_ELEMENTS, scheme, "whole")
+    warm = time.perf_counter() - t
+    jit_before = dict(jit.stats)
+    env["jit"] = {"on": nlp_mod.JIT and jit.enabled(), "compiler": jit.compiler(), "cache": str(jit.cache_dir()),
+                  "warmup_stats": jit_before, "warmup_s": warm}
+    print(f"  jit: {'on' if env['jit']['on'] else 'off'}, compiler {jit.compiler()}, cache {jit.cache_dir()}; "
+          f"warm-up {warm:.2f} s compiled {jit_before['compiled']} and loaded {jit_before['cache_hits']} "
+          f"cached libraries")
 
     goals, ratios = [], {}
 
@@ -209,6 +231,7 @@ def main(argv=None) -> int:
     print("goals:")
     for gl in goals:
         print(goal_line(*gl))
+    print(f"compilations inside the timed runs: {jit.stats['compiled'] - jit_before['compiled']}")
     print(f"benchmark wall time {time.perf_counter() - t_bench:.1f} s; load average {os.getloadavg()[0]:.2f} at end")
 
     if args.json:

@@ -444,3 +444,161 @@ def test_symbolic_kinds_agree(sym):
         assert res[k] == pytest.approx(ref[k], abs=1e-9)
     for k in ref.multipliers:
         assert res.multipliers[k] == pytest.approx(ref.multipliers[k], abs=1e-7)
+
+
+# ----------------------------------------------------------------------------- compiled element functions
+def _element_chain_nlp(E: int, hessian: str = "exact") -> NLP:
+    """A nonlinear chain with every kind of element argument (shared variable, parameter, constants)."""
+    from castrajectory.nlp import P
+
+    a, b, s, c, k = (ca.SX.sym(n) for n in "abs" "ck")
+    con = ca.Function("con", [a, b, s, c, k], [ca.vertcat(ca.sin(a) * b ** 2 + s * c - k, a * ca.exp(0.1 * b) * s)])
+    obj = ca.Function("obj", [a, b, s], [ca.cos(a) * b ** 2 + ca.log(1 + s ** 2) * a])
+    nlp = NLP(hessian=hessian)
+    nlp.variable("x", E + 1, init=np.linspace(0.3, 1.1, E + 1))
+    nlp.variable("s", 1, init=0.7)
+    nlp.parameter("k", 1, value=0.4)
+    xi, si = nlp.index("x"), nlp.index("s")
+    e = np.arange(E)
+    cst = np.linspace(-1.0, 1.0, E)[:, None]
+    nlp.equal_elements("con", con, [X(xi[e, None]), X(xi[e + 1, None]), X(si), cst, P(nlp.parameter_index("k"))])
+    if hessian == "exact":
+        nlp.minimize_elements("obj", obj, [X(xi[e, None]), X(xi[e + 1, None]), X(si)])
+    else:
+        nlp.minimize(ca.SX(0))
+    return nlp
+
+
+def _evaluate_functions(nlp: NLP, seed: int = 0) -> dict:
+    rng = np.random.default_rng(seed)
+    fns = nlp.functions()
+    nx = fns["jac_g"].size1_in(0)
+    ng = fns["jac_g"].size1_out(0)
+    x, p = rng.uniform(0.2, 1.2, nx), np.array([0.4])
+    lam_g = rng.standard_normal(ng)
+    out = {"g": fns["jac_g"](x, p)[0], "jac_g": fns["jac_g"](x, p)[1], "grad_f": fns["grad_f"](x, p)[1],
+           "hess": fns["hess_lag"](x, p, 0.8, lam_g)}
+    return {k: ca.DM(v) for k, v in out.items()}
+
+
+@pytest.mark.parametrize("E", [5, 200, 1301])  # a plain map; chunks of 64 plus a rest (200, 1301)
+def test_compiled_elements_match_virtual_machine(monkeypatch, tmp_path, E):
+    """Compiled and interpreted element functions give the same Jacobian and Hessian (1e-12)."""
+    from castrajectory import jit, nlp as nlp_mod
+
+    if jit.compiler() is None:
+        pytest.skip("no C compiler")
+    monkeypatch.setenv("CASTRAJECTORY_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(nlp_mod, "JIT_MIN_ELEMENTS", 1)
+    before = dict(jit.stats)
+    monkeypatch.setattr(nlp_mod, "JIT", True)
+    compiled = _evaluate_functions(_element_chain_nlp(E))
+    assert jit.stats["compiled"] + jit.stats["memory_hits"] + jit.stats["cache_hits"] > \
+        before["compiled"] + before["memory_hits"] + before["cache_hits"]
+    monkeypatch.setattr(nlp_mod, "JIT", False)
+    vm = _evaluate_functions(_element_chain_nlp(E))
+    for k in vm:
+        assert compiled[k].sparsity() == vm[k].sparsity(), k
+        scale = max(1.0, float(ca.mmax(ca.fabs(vm[k]))))
+        assert float(ca.mmax(ca.fabs(compiled[k] - vm[k]))) <= 1e-12 * scale, k
+
+
+def _square_chain(E: int) -> NLP:
+    """``x_0 = 0.5``, ``x_{e+1} = x_e + 0.01 sin(x_e)``: a square system (zero Hessian is exact)."""
+    a, b = ca.SX.sym("a"), ca.SX.sym("b")
+    nlp = NLP(hessian="zero")
+    nlp.variable("x", E + 1, init=0.5)
+    xi = nlp.index("x")
+    e = np.arange(E)
+    nlp.minimize(ca.SX(0))
+    nlp.equal_elements("first", ca.Function("first", [a], [a - 0.5]), [X(xi[:1, None])])
+    nlp.equal_elements("step", ca.Function("step", [a, b], [b - a - 0.01 * ca.sin(a)]),
+                       [X(xi[e, None]), X(xi[e + 1, None])])
+    return nlp
+
+
+def test_compiled_solve_matches_virtual_machine(monkeypatch, tmp_path):
+    from castrajectory import jit, nlp as nlp_mod
+
+    monkeypatch.setenv("CASTRAJECTORY_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(nlp_mod, "JIT_MIN_ELEMENTS", 1)
+    results = {}
+    for on in (True, False):
+        monkeypatch.setattr(nlp_mod, "JIT", on)
+        n0 = jit.stats["compiled"]
+        results[on] = _square_chain(300).solve()
+        assert results[on].success
+        assert (jit.stats["compiled"] > n0) == (on and jit.compiler() is not None)
+    assert np.max(np.abs(results[True].x - results[False].x)) <= 1e-12
+
+
+def _fresh_function(tag: float) -> ca.Function:
+    x = ca.SX.sym("x", 2)
+    return ca.Function("jit_probe", [x], [ca.vertcat(ca.sin(x[0]) * x[1] + tag, x[0] ** 3)])
+
+
+def test_jit_disk_cache_hit_does_not_recompile(monkeypatch, tmp_path):
+    from castrajectory import jit
+
+    if jit.compiler() is None:
+        pytest.skip("no C compiler")
+    monkeypatch.setenv("CASTRAJECTORY_CACHE_DIR", str(tmp_path))
+    f = _fresh_function(float(np.random.default_rng().uniform()))
+    n0 = dict(jit.stats)
+    g = jit.compiled(f)
+    assert g is not f and g.class_name() == "External"
+    assert jit.stats["compiled"] == n0["compiled"] + 1
+    libs = list((tmp_path / "jit").glob("jit_probe_*.so"))
+    assert len(libs) == 1
+    assert float(g([0.3, 2.0])[0]) == pytest.approx(float(f([0.3, 2.0])[0]), abs=1e-15)
+    # same process: memory hit; a new process (memory cleared): disk hit; no recompilation either way
+    assert jit.compiled(f) is g
+    monkeypatch.setattr(jit, "_loaded", {})
+    h = jit.compiled(_fresh_function(float(f([0.0, 0.0])[0])))  # an identical function built anew
+    assert h.class_name() == "External"
+    assert jit.stats["compiled"] == n0["compiled"] + 1
+    assert jit.stats["cache_hits"] == n0["cache_hits"] + 1
+    # build=False never compiles
+    other = _fresh_function(-7.25)
+    assert jit.compiled(other, build=False) is other
+    assert jit.stats["compiled"] == n0["compiled"] + 1
+
+
+@pytest.mark.parametrize("how", ["missing", "failing", "disabled"])
+def test_jit_falls_back_to_virtual_machine(monkeypatch, tmp_path, how):
+    from castrajectory import jit, nlp as nlp_mod
+
+    monkeypatch.setenv("CASTRAJECTORY_CACHE_DIR", str(tmp_path))
+    if how == "missing":
+        monkeypatch.setenv("CC", str(tmp_path / "no-such-compiler"))
+    elif how == "failing":
+        fail = tmp_path / "failing-cc"
+        fail.write_text("#!/bin/sh\nexit 1\n")
+        fail.chmod(0o755)
+        monkeypatch.setenv("CC", str(fail))
+    else:
+        monkeypatch.setenv("CASTRAJECTORY_JIT", "0")
+    f = _fresh_function(float(np.random.default_rng().uniform()))
+    assert jit.compiled(f) is f
+    assert not list(tmp_path.glob("jit/*.so"))
+    # an NLP with element families still solves, on the virtual machine
+    monkeypatch.setattr(nlp_mod, "JIT_MIN_ELEMENTS", 1)
+    nlp = NLP()
+    nlp.variable("x", 200, init=1.0)
+    a = ca.SX.sym("a")
+    nlp.minimize_elements("sq", ca.Function("sq", [a], [(a - 2.0) ** 2 + 0.1 * a ** 4]), [X(nlp.index("x")[:, None])])
+    res = nlp.solve()
+    assert res.success
+    assert not list(tmp_path.glob("jit/*.so"))
+
+
+def test_jit_cache_dir_is_per_user_and_overridable(monkeypatch, tmp_path):
+    from castrajectory import jit
+
+    monkeypatch.delenv("CASTRAJECTORY_CACHE_DIR", raising=False)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    assert jit.cache_dir() == tmp_path / "xdg" / "castrajectory"
+    monkeypatch.delenv("XDG_CACHE_HOME")
+    assert jit.cache_dir() == __import__("pathlib").Path.home() / ".cache" / "castrajectory"
+    monkeypatch.setenv("CASTRAJECTORY_CACHE_DIR", str(tmp_path / "mine"))
+    assert jit.cache_dir() == tmp_path / "mine"

@@ -36,7 +36,7 @@ from typing import Dict, Optional
 import casadi as ca
 import numpy as np
 
-from .nlp import NLP
+from .nlp import NLP, X
 from .result import Result
 from .validation import InputError, finite, integer_at_least, one_of, positive
 
@@ -198,29 +198,82 @@ def analytic(drop: Droplet) -> CircularCap:
 # ---------------------------------------------------------------------------- discretise
 @dataclass
 class Geometry:
-    """What a discretisation hands to the energy: CasADi expressions in scaled units."""
+    """What a discretisation leaves in the NLP: where the vertices are, and how to read them back.
 
-    x: object
-    y: object
-    length: object
-    span: object
-    area: object
-
-
-def _cumulative_area(nlp: NLP, pieces, init_pieces) -> object:
-    """Area as a running sum ``c_k = c_{k-1} + t_k`` with ``c`` as unknowns; returns the total.
-
-    Summing all ``n`` pieces into one constraint gives the Jacobian a dense row;
-    together with any variable shared by all elements (the graph's grid step)
-    no one-sided colouring is then sparse, and CasADi's derivative construction
-    becomes quadratic in ``n``.  The running sum keeps every row local; the
-    multiplier of the last link (the ``area`` constraint) is still ``dE*/dA``.
+    ``x_index``/``y_index`` are the positions of the ``n + 1`` vertex coordinates in
+    the decision vector (the contact points, and a pinned span, are unknowns fixed
+    by their bounds; Ipopt removes fixed unknowns, so the problem it solves has
+    only the free ones).  ``span_index`` is the position of the span ``a``.
     """
-    n = pieces.numel()
-    c = nlp.variable("partial_area", n - 1, init=np.cumsum(init_pieces)[:-1])
-    prev = ca.vertcat(0.0, c[:-1])
-    nlp.equal("area_links", n * (c - prev - pieces[:-1]))
-    return c[-1] + pieces[-1]
+
+    x_index: Optional[np.ndarray]
+    y_index: np.ndarray
+    span_index: int
+    span: object  # the span's symbol (for the wetting term of the energy)
+    graph_n: Optional[int] = None  # graph form: x_i = i a / n (x is not stored)
+
+    def vertices(self, res: Result):
+        """``(x, y, span)`` in scaled units from a result of this NLP."""
+        x = res.x[self.x_index] if self.graph_n is None else \
+            res.x[self.span_index] * np.arange(self.graph_n + 1) / self.graph_n
+        return x, res.x[self.y_index], float(res.x[self.span_index])
+
+
+#: Scene-independent element functions (built once; the same functions serve every size, so their
+#: compiled code, see :mod:`castrajectory.jit`, is cached once).
+_ELEMENTS: Dict[str, ca.Function] = {}
+
+
+def _element(name: str) -> ca.Function:
+    if name not in _ELEMENTS:
+        p0, p1, p2 = ca.SX.sym("p0", 2), ca.SX.sym("p1", 2), ca.SX.sym("p2", 2)
+        y0, y1, a, n = ca.SX.sym("y0"), ca.SX.sym("y1"), ca.SX.sym("a"), ca.SX.sym("n")
+        c0, c1, s = ca.SX.sym("c0"), ca.SX.sym("c1"), ca.SX.sym("s")
+        sq = lambda u, v: ca.sumsqr(v - u)  # noqa: E731
+        tri = 0.5 * (p1[0] * p0[1] - p0[0] * p1[1])  # shoelace piece of the chord p0 -> p1
+        trap = 0.5 * (a / n) * (y0 + y1)  # trapezoid piece of the cell [y0, y1]
+        fns = {
+            # curve: chord length, equal consecutive chords (scaled by s), area link, shoelace piece
+            "chord": ([p0, p1], ca.sqrt(sq(p0, p1))),
+            "equal_chords": ([p0, p1, p2, s], s * (sq(p1, p2) - sq(p0, p1))),
+            "curve_link": ([c0, c1, p0, p1, n], n * (c1 - c0 - tri)),
+            "curve_last": ([c0, p0, p1, n], c0 + tri),
+            # graph: cell length, area link, trapezoid piece
+            "cell": ([y0, y1, a, n], ca.sqrt((a / n) ** 2 + (y1 - y0) ** 2)),
+            "graph_link": ([c0, c1, y0, y1, a, n], n * (c1 - c0 - trap)),
+            "graph_last": ([c0, y0, y1, a, n], c0 + trap),
+        }
+        for key, (args, out) in fns.items():
+            _ELEMENTS[key] = ca.Function(key, args, [out])
+    return _ELEMENTS[name]
+
+
+def _cumulative_area(nlp: NLP, link: str, last: str, args, init_pieces) -> None:
+    """Area as a running sum ``c_k = c_{k-1} + t_k`` with ``c`` as unknowns, ending in the ``area`` row.
+
+    Summing all ``n`` pieces into one constraint would give the Jacobian a dense
+    row; the running sum keeps every row local (a banded KKT matrix), and the
+    multiplier of the last link (the ``area`` constraint) is still ``dE*/dA``.
+    ``args(rows)`` returns the element arguments of the pieces ``rows``; the links
+    are ``n (c_k - c_{k-1} - t_{k-1}) = 0`` for ``k = 1..n-1`` with ``c_0 = 0``.
+    """
+    n = init_pieces.size
+    init = np.concatenate([[0.0], np.cumsum(init_pieces)[:-1]])
+    lb = np.full(n, -np.inf)
+    lb[0] = 0.0
+    nlp.variable("partial_area", n, lb=lb, ub=-lb, init=init)  # c_0 fixed at 0 by its bounds
+    c = nlp.index("partial_area")
+    k = np.arange(1, n)
+    nlp.equal_elements("area_links", _element(link), [X(c[k - 1, None]), X(c[k, None]), *args(k - 1), np.array([float(n)])])
+    return nlp.equal_elements("area", _element(last), [X(c[n - 1:]), *args(np.array([n - 1])), np.array([float(n)])],
+                              1.0)
+
+
+def _fixed(values, free):
+    """Bounds that fix every entry where ``free`` is False at ``values``."""
+    values = np.asarray(values, dtype=float)
+    lb = np.where(free, -np.inf, values)
+    return lb, np.where(free, np.inf, values)
 
 
 class Curve:
@@ -235,6 +288,9 @@ class Curve:
     the segment lengths.  No graph assumption is made, so overhanging drops
     (``theta > 90°``) are fine.
 
+    Every piece is an element family of :class:`~castrajectory.nlp.NLP` (one chord,
+    one pair of chords, one area link), differentiated once per element type.
+
     Default initial guess: the half-disc (``theta = 90°``) of the given area,
     or the half-ellipse of the given area over a pinned span; neither uses the
     answer (Young's angle or the pinned arc).
@@ -245,13 +301,6 @@ class Curve:
     def __init__(self, n: int, guess: Optional[np.ndarray] = None):
         self.n = n
         self.guess = guess  # (n + 1, 2) vertices in scaled units, or None for the default
-
-    @staticmethod
-    def element() -> ca.Function:
-        p0, p1 = ca.SX.sym("p0", 2), ca.SX.sym("p1", 2)
-        d = p1 - p0
-        sq = ca.dot(d, d)
-        return ca.Function("segment", [p0, p1], [sq, ca.sqrt(sq), 0.5 * (p1[0] * p0[1] - p0[0] * p1[1])])
 
     def build(self, nlp: NLP, span: Optional[float]) -> Geometry:
         n = self.n
@@ -265,20 +314,32 @@ class Curve:
             s = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(ell, axis=0).T))])
             t = np.linspace(0.0, s[-1], n + 1)
             guess = np.column_stack([np.interp(t, s, ell[:, 0]), np.interp(t, s, ell[:, 1])])
-            guess[[0, -1], 1] = 0.0
+        guess[0] = 0.0
+        guess[-1, 1] = 0.0
+        if span is not None:
             guess[-1, 0] = span
         seg0 = float(np.hypot(*np.diff(guess, axis=0).T).mean())
-        px = nlp.variable("x", n - 1, init=guess[1:-1, 0])
-        py = nlp.variable("y", n - 1, init=guess[1:-1, 1])
-        a = nlp.variable("span", 1, lb=1e-8, init=guess[-1, 0]) if span is None else span
-        x = ca.vertcat(0.0, px, a)
-        y = ca.vertcat(0.0, py, 0.0)
-        pts = ca.horzcat(x, y).T
-        sq, length, tri = self.element().map(n)(pts[:, :-1], pts[:, 1:])
-        nlp.equal("equal_segments", ((sq[1:] - sq[:-1]) / (2.0 * seg0 ** 2)).T)
+        free = np.ones(n + 1, dtype=bool)
+        free[0] = False
+        free_x = free.copy()
+        free[-1] = False
+        if span is not None:
+            free_x[-1] = False
+        lbx, ubx = _fixed(guess[:, 0], free_x)
+        if span is None:
+            lbx[-1] = 1e-8
+        xs = nlp.variable("x", n + 1, lb=lbx, ub=ubx, init=guess[:, 0])
+        nlp.variable("y", n + 1, *_fixed(guess[:, 1], free), init=guess[:, 1])
+        P = np.column_stack([nlp.index("x"), nlp.index("y")])  # (n + 1, 2) positions of the vertices
+        k = np.arange(n)
+        nlp.minimize_elements("length", _element("chord"), [X(P[k]), X(P[k + 1])])
+        j = np.arange(n - 1)
+        nlp.equal_elements("equal_segments", _element("equal_chords"),
+                           [X(P[j]), X(P[j + 1]), X(P[j + 2]), np.array([1.0 / (2.0 * seg0 ** 2)])])
         gx, gy = guess[:, 0], guess[:, 1]
-        area = _cumulative_area(nlp, tri.T, 0.5 * (gx[1:] * gy[:-1] - gx[:-1] * gy[1:]))
-        return Geometry(x, y, ca.sum2(length), a, area)
+        _cumulative_area(nlp, "curve_link", "curve_last", lambda r: [X(P[r]), X(P[r + 1])],
+                         0.5 * (gx[1:] * gy[:-1] - gx[:-1] * gy[1:]))
+        return Geometry(P[:, 0], P[:, 1], int(P[-1, 0]), xs[n])
 
 
 class Graph:
@@ -298,11 +359,6 @@ class Graph:
     def __init__(self, n: int):
         self.n = n
 
-    @staticmethod
-    def element() -> ca.Function:
-        y0, y1, h = ca.SX.sym("y0"), ca.SX.sym("y1"), ca.SX.sym("h")
-        return ca.Function("cell", [y0, y1, h], [ca.sqrt(h * h + (y1 - y0) ** 2), 0.5 * h * (y0 + y1)])
-
     def build(self, nlp: NLP, span: Optional[float]) -> Geometry:
         n = self.n
         if span is None:
@@ -317,17 +373,20 @@ class Graph:
             ys = 6.0 / a0 ** 3 * xs * (a0 - xs)
         ys = np.maximum(ys, 0.0)
         ys[[0, -1]] = 0.0
-        yv = nlp.variable("y", n - 1, init=ys[1:-1])
+        free = np.ones(n + 1, dtype=bool)
+        free[[0, -1]] = False
+        nlp.variable("y", n + 1, *_fixed(ys, free), init=ys)
         if span is None:
             a = nlp.variable("span", 1, lb=1e-8, init=a0)
         else:
-            a = span
-        h = ca.repmat(a / n, n, 1)
-        y = ca.vertcat(0.0, yv, 0.0)
-        length, trap = self.element().map(n)(y[:-1].T, y[1:].T, h.T)
-        area = _cumulative_area(nlp, trap.T, 0.5 * (a0 / n) * (ys[:-1] + ys[1:]))
-        x = ca.vertcat(0.0, ca.cumsum(h))
-        return Geometry(x, y, ca.sum2(length), a, area)
+            a = nlp.variable("span", 1, lb=span, ub=span, init=span)
+        Y, A = nlp.index("y")[:, None], nlp.index("span")
+        nn = np.array([float(n)])
+        k = np.arange(n)
+        nlp.minimize_elements("length", _element("cell"), [X(Y[k]), X(Y[k + 1]), X(A), nn])
+        _cumulative_area(nlp, "graph_link", "graph_last", lambda r: [X(Y[r]), X(Y[r + 1]), X(A)],
+                         0.5 * (a0 / n) * (ys[:-1] + ys[1:]))
+        return Geometry(None, Y[:, 0], int(A[0]), a, graph_n=n)
 
 
 DISCRETISATIONS = {"curve": Curve, "graph": Graph}
@@ -432,17 +491,15 @@ def make_nlp(drop: Droplet, n: int, formulation: str = "curve", guess: Optional[
             f"the graph formulation y(x) cannot represent contact angles of 90 degrees or more "
             f"(this drop's angle is {math.degrees(cap.contact_angle):.4g} degrees); use the curve formulation")
     L = drop.length_scale
-    nlp = NLP(ca.MX)
+    nlp = NLP()
     disc = Curve(n, guess) if formulation == "curve" else DISCRETISATIONS[formulation](n)
+    # The scene's terms: surface tension (the length elements, added by the discretisation) always;
+    # the wetting term only when the span is free and it is non-zero.
     geo = disc.build(nlp, None if drop.span is None else drop.span / L)
-    # The scene's terms: surface tension always; the wetting term only when the span is free and it is non-zero.
-    energy = geo.length
     w = drop.wetting / drop.gamma_gl
     if drop.span is None and w != 0.0:
-        energy = energy + w * geo.span
-    nlp.minimize(energy)
-    area = nlp.equal("area", geo.area, 1.0)
-    return nlp, geo, area
+        nlp.minimize(w * geo.span)
+    return nlp, geo, nlp.constraint("area")
 
 
 def solve(drop: Droplet, n: int = 400, formulation: str = "curve", *, options: Optional[dict] = None,
@@ -465,9 +522,9 @@ def solve(drop: Droplet, n: int = 400, formulation: str = "curve", *, options: O
     if not res.success and ladder:
         res, nlp, geo = _coarse_to_fine(drop, n, opts, verbose, res)
     L, g = drop.length_scale, drop.gamma_gl
-    xs, ys, span, length = nlp.evaluate(res, geo.x, geo.y, geo.span, geo.length)
+    xs, ys, span = geo.vertices(res)
     x, y = L * xs, L * ys
-    span, length = L * float(span[0]), L * float(length[0])
+    span, length = L * span, L * float(np.sum(np.hypot(np.diff(xs), np.diff(ys))))
     cap = analytic(drop)
     theta = contact_angle_estimate(x, y)
     pressure = g / L * float(res.multipliers["area"][0])
@@ -493,7 +550,7 @@ def _coarse_to_fine(drop: Droplet, n: int, opts: dict, verbose: bool, failed: Re
         build, solve_t, iters = build + res.build_time_s, solve_t + res.solve_time_s, iters + res.iterations
         if not res.success or m == n:
             break
-        xs, ys = nlp.evaluate(res, geo.x, geo.y)
+        xs, ys, _ = geo.vertices(res)
         m = min(2 * m, n)
         guess = resample_polyline(xs, ys, m)
     res.build_time_s, res.solve_time_s, res.iterations = build, solve_t, iters

@@ -37,6 +37,7 @@ from typing import Dict, List, Optional, Sequence, Union
 import casadi as ca
 import numpy as np
 
+from . import jit
 from .assembly import Contribution, assemble, dense_vector
 from .result import SUCCESS_STATUSES, HomotopyStep, Result
 
@@ -62,6 +63,121 @@ DEFAULT_IPOPT_OPTIONS: Dict[str, object] = {
 #: How element families are evaluated: CasADi ``map`` parallelization and thread count.
 MAP_PARALLELIZATION = "serial"
 MAP_THREADS = 1
+#: Compile element functions to machine code (:mod:`castrajectory.jit`: disk-cached, falls back to
+#: CasADi's virtual machine when no C compiler works; ``CASTRAJECTORY_JIT=0`` also switches it off).
+JIT = True
+#: Families with at least this many elements compile their element functions (about 0.1-0.5 s
+#: once per element type and machine, then loaded from the disk cache in a few milliseconds);
+#: smaller families use a compiled version only when one is cached already.  Below this size
+#: the virtual machine costs less than a compilation.
+JIT_MIN_ELEMENTS = 1000
+
+
+#: Elements per compiled chunk: a family of E elements runs E // CHUNK calls of one compiled loop
+#: over CHUNK elements plus E % CHUNK calls of the compiled element, so the per-call overhead of
+#: CasADi's ``map`` is paid once per chunk and the compiled code does not depend on E.
+CHUNK = 64
+
+
+class _Mapped:
+    """One element function evaluated for E elements, compiled when that pays (see :data:`JIT`).
+
+    A family of at least :data:`JIT_MIN_ELEMENTS` elements compiles the element (and a loop
+    over :data:`CHUNK` elements); smaller families use a compiled version only if one is
+    already cached, and CasADi's virtual machine otherwise.
+    """
+
+    def __init__(self, fn: ca.Function, compile_: bool):
+        self.fn = fn
+        self.compile_ = compile_
+        self.el = self.chunk = None  # compiled versions, once available
+        self.looked_up = False  # the disk cache was searched (for the element and the chunk)
+
+    def _compiled(self, E: int) -> None:
+        build = E >= JIT_MIN_ELEMENTS
+        if self.el is None and (build or not self.looked_up):
+            el = jit.compiled(self.fn, build)
+            self.el = el if el is not self.fn else None
+        if self.el is not None and self.chunk is None and E >= 2 * CHUNK and (build or not self.looked_up):
+            m = self.fn.map(CHUNK, "serial")
+            c = jit.compiled(m, build)
+            self.chunk = c if c is not m else None
+        self.looked_up = self.looked_up or E >= 2 * CHUNK
+
+    @staticmethod
+    def _map(f, E):
+        return f.map(E, MAP_PARALLELIZATION, MAP_THREADS) if E > 1 else f
+
+    def __call__(self, E: int, args: list):
+        """``fn`` for every element; ``args`` have E columns (one per element) or one (shared)."""
+        if self.compile_ and jit.enabled():
+            self._compiled(E)
+        el = self.el if self.compile_ and self.el is not None else self.fn
+        if not self.compile_ or self.chunk is None or E < 2 * CHUNK:
+            return self._map(el, E)(*args)
+        q, r = divmod(E, CHUNK)
+        k = q * CHUNK
+        main = self._map(self.chunk, q)(*[a[:, :k] if a.size2() == E else a for a in args])
+        if not r:
+            return main
+        rest = self._map(el, r)(*[a[:, k:] if a.size2() == E else a for a in args])
+        return ca.horzcat(main, rest)
+
+
+@dataclass
+class _Kernels:
+    """Value, Jacobian and Hessian functions of one element type (see :func:`_kernels`)."""
+
+    fn: ca.Function  # kept alive: the cache key holds its id
+    value: _Mapped
+    jac: _Mapped
+    jac_rc: tuple
+    hess: Optional[_Mapped]
+    hess_rc: Optional[tuple]
+
+
+_KERNELS: Dict[tuple, _Kernels] = {}
+_KERNELS_MAX = 256
+
+
+def _kernels(fn: ca.Function, kinds: tuple, hessian: bool, compile_: bool) -> _Kernels:
+    """Element derivatives of ``fn`` with respect to its arguments marked ``"x"`` in ``kinds``.
+
+    Cached per process (by function identity), so NLPs rebuilt with the same element
+    function (coarse-to-fine levels, horizon windows, repeated solves) differentiate
+    and compile it once.
+    """
+    key = (id(fn), kinds, hessian, compile_, CHUNK)
+    hit = _KERNELS.get(key)
+    if hit is not None and hit.fn is fn:
+        return hit
+    syms = [ca.SX.sym(f"a{i}", fn.size1_in(i) * fn.size2_in(i)) for i in range(fn.n_in())]
+    out = ca.vec(fn(*[ca.reshape(s, fn.size1_in(i), fn.size2_in(i)) for i, s in enumerate(syms)]))
+    z = ca.vertcat(*[s for s, k in zip(syms, kinds) if k == "x"]) if "x" in kinds else ca.SX(0, 1)
+    J = ca.jacobian(out, z)
+    rc = lambda M: tuple(np.asarray(v, dtype=np.int64) for v in M.sparsity().get_triplet())  # noqa: E731
+    hess = hess_rc = None
+    if hessian:
+        w = ca.SX.sym("w", out.numel())
+        H = ca.hessian(ca.dot(w, out), z)[0]
+        hess, hess_rc = _Mapped(ca.Function("el_hess", syms + [w], [_nz(H)]), compile_), rc(H)
+    kern = _Kernels(fn, _Mapped(ca.Function("el", syms, [out]), compile_),
+                    _Mapped(ca.Function("el_jac", syms, [_nz(J)]), compile_), rc(J), hess, hess_rc)
+    if len(_KERNELS) >= _KERNELS_MAX:
+        _KERNELS.clear()
+    _KERNELS[key] = kern
+    return kern
+
+
+def _gather(src, flat: np.ndarray):
+    """``src[flat]`` for an MX column; a slice when the positions are evenly spaced (much cheaper)."""
+    if flat.size > 1:
+        step = int(flat[1] - flat[0])
+        if step > 0 and np.all(np.diff(flat) == step):
+            return src[int(flat[0]):int(flat[-1]) + 1:step]
+    elif flat.size == 1:
+        return src[int(flat[0])]
+    return src[flat.tolist()]
 
 
 @dataclass(frozen=True)
@@ -194,6 +310,7 @@ class NLP:
         self._solver = None
         self._solver_key = None
         self._build_time = None
+        self._functions: Dict[str, ca.Function] = {}
 
     # ------------------------------------------------------------------ description
     def variable(self, name: str, size: int = 1, lb: Number = -np.inf, ub: Number = np.inf, init=0.0):
@@ -426,18 +543,21 @@ class NLP:
         npar = sum(b.init.size for b in self._params)
         Xm, Pm = ca.MX.sym("x", nx), ca.MX.sym("p", npar)
         lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", self._ng)
-        xs = ca.vertcat(*[b.sym for b in self._vars])
         ps = ca.vertcat(*[b.sym for b in self._params]) if self._params else ca.SX(0, 1)
+        expr_rows = [(c.slice, g) for c, g in zip(self._cons.values(), self._g) if not isinstance(g, _Group)]
+        f_expr = ca.SX(self._f) if self._f is not None else ca.SX(0)
+        f_const = f_expr.is_constant() or not self._vars
+        if not f_const or expr_rows:
+            # (stacking every variable symbol costs milliseconds at large N: only when needed)
+            xs = ca.vertcat(*[b.sym for b in self._vars])
+            f_const = not ca.depends_on(f_expr, xs)
 
         exact_hessian = self._hessian == "exact"
-        if not exact_hessian and (self._f is not None and ca.depends_on(self._f, xs) or self._f_groups):
+        if not exact_hessian and (not f_const or self._f_groups):
             raise ValueError("hessian='zero' needs a constant objective (a square feasibility problem)")
         g_parts, jac, hess, grad = [], [], [], []
         f_total = ca.MX(0)
         # Expression part: ordinary SX automatic differentiation on the (small) expression rows.
-        expr_rows = [(c.slice, g) for c, g in zip(self._cons.values(), self._g) if not isinstance(g, _Group)]
-        f_expr = self._f if self._f is not None else ca.SX(0)
-        f_const = not ca.depends_on(f_expr, xs)
         if f_const and not expr_rows:
             # Nothing symbolic to differentiate: a constant objective and only element families.
             f_total = f_total + ca.Function("f0", [ps], [f_expr])(Pm)
@@ -497,8 +617,11 @@ class NLP:
             "hess_lag": ca.Function("hess_lag", [Xm, Pm, lam_f, lam_g], [Hl],
                                     ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"]),
         }
+        self._functions = funcs
+        # no_nlp_grad: CasADi would otherwise differentiate the whole graph once more (slow to build,
+        # and impossible through compiled element functions); Ipopt's own f, g and multipliers are used.
         opts = {"ipopt": self._ipopt_options(options, verbose), "print_time": bool(verbose),
-                "error_on_fail": False, **funcs}
+                "error_on_fail": False, "calc_lam_p": False, "no_nlp_grad": True, **funcs}
         self._solver = ca.nlpsol("castrajectory", "ipopt", {"x": Xm, "p": Pm, "f": f_total, "g": G}, opts)
         self._solver_key = key
         self._build_time = (self._t_described - self._t0) + (time.perf_counter() - t)
@@ -514,40 +637,31 @@ class NLP:
         formed and the third contribution is None.
         """
         fn, E, r = grp.fn, grp.count, grp.size
-        syms, call_args, var_idx = [], [], []
+        kinds = tuple("x" if isinstance(a, X) and not isinstance(a, P) else "o" for a in grp.args)
+        kern = _kernels(fn, kinds, hessian, JIT)
+        call_args, var_idx = [], []
         for i, a in enumerate(grp.args):
             n = fn.size1_in(i) * fn.size2_in(i)
-            s = ca.SX.sym(f"a{i}", n)
-            syms.append(s)
             if isinstance(a, X):
                 src = Pm if isinstance(a, P) else Xm
                 idx = a.index
-                col = src[idx.reshape(-1).tolist()]
+                col = _gather(src, idx.reshape(-1))
                 call_args.append(ca.reshape(col, n, idx.shape[0] if idx.ndim == 2 else 1))
                 if not isinstance(a, P):
-                    var_idx.append((s, idx))
+                    var_idx.append(idx)
             else:
                 call_args.append(ca.DM(a.T if a.ndim == 2 else a.reshape(-1, 1)))
-        out = ca.vec(fn(*[ca.reshape(s, fn.size1_in(i), fn.size2_in(i)) for i, s in enumerate(syms)]))
-        z = ca.vertcat(*[s for s, _ in var_idx]) if var_idx else ca.SX(0, 1)
         # Global position of each local unknown, per element: (E, nz).
-        zidx = np.hstack([np.broadcast_to(idx.reshape(-1, idx.shape[-1]), (E, idx.shape[-1])) for _, idx in var_idx]) \
+        zidx = np.hstack([np.broadcast_to(idx.reshape(-1, idx.shape[-1]), (E, idx.shape[-1])) for idx in var_idx]) \
             if var_idx else np.zeros((E, 0), dtype=np.int64)
-        J = ca.jacobian(out, z)
-        f_el = ca.Function("el", syms, [out])
-        fJ = ca.Function("el_jac", syms, [_nz(J)])
-        mapped = lambda f: f.map(E, MAP_PARALLELIZATION, MAP_THREADS) if E > 1 else f  # noqa: E731
-        values = ca.vec(mapped(f_el)(*call_args))
-        jv = ca.vec(mapped(fJ)(*call_args))
-        jr, jc = (np.asarray(v, dtype=np.int64) for v in J.sparsity().get_triplet())
+        values = ca.vec(kern.value(E, call_args))
+        jv = ca.vec(kern.jac(E, call_args))
+        jr, jc = kern.jac_rc
         hcon = None
         if hessian:
-            w = ca.SX.sym("w", r)
-            H = ca.hessian(ca.dot(w, out), z)[0]
-            fH = ca.Function("el_hess", syms + [w], [_nz(H)])
             wv = weight if row0 is None else ca.reshape(weight, r, E)
-            hv = ca.vec(mapped(fH)(*call_args, wv))
-            hr, hc = (np.asarray(v, dtype=np.int64) for v in H.sparsity().get_triplet())
+            hv = ca.vec(kern.hess(E, call_args + [wv]))
+            hr, hc = kern.hess_rc
             hcon = Contribution(hv, zidx[:, hr].reshape(-1), zidx[:, hc].reshape(-1))
         if row0 is None:
             # Objective family: value is the sum, first derivative is a gradient.
@@ -557,6 +671,15 @@ class NLP:
         rows = (row0 + np.arange(E, dtype=np.int64)[:, None] * r + jr[None, :]).reshape(-1)
         jcon = Contribution(jv, rows, zidx[:, jc].reshape(-1))
         return values, jcon, hcon
+
+    def functions(self) -> Dict[str, ca.Function]:
+        """The derivative functions handed to Ipopt (``grad_f``, ``jac_g``, ``hess_lag``).
+
+        Only NLPs with element families assemble them (built on first use); others return ``{}``.
+        """
+        if self._solver is None:
+            self.build()
+        return dict(self._functions)
 
     def _split(self, vec, blocks) -> Dict[str, np.ndarray]:
         out, i = {}, 0

@@ -1,0 +1,177 @@
+"""Compile small CasADi functions to machine code, with a disk cache and a silent fallback.
+
+CasADi evaluates an SX function in a virtual machine: one interpreted
+instruction per scalar operation.  For the element functions of
+:mod:`castrajectory.nlp` (one discrete Euler–Lagrange residual, its Jacobian,
+one polyline segment ...) evaluated tens of thousands of times per Ipopt
+iteration, that interpreter is the bulk of the function-evaluation time.
+:func:`compiled` turns such a function into C with CasADi's code generator,
+compiles it with the system C compiler into a shared library and loads it with
+``casadi.external``.  The compiled function has the same inputs, outputs and
+sparsity; it is meant to be ``map``-ped over elements, so the code (and the
+compile time) does not grow with the number of elements.
+
+Cache.  The library is stored under :func:`cache_dir` with a name made of a
+SHA-256 hash of the generated C code, the compiler and its flags, so a later
+run (tests, the report, the benchmarks) loads it instead of recompiling.  A
+change to the function changes its code and therefore its hash; stale entries
+are never reused.  Writes go to a temporary file renamed into place, so
+concurrent processes can share the cache.
+
+Fallback.  Whenever no C compiler is found, compilation or loading fails, or
+compilation is switched off, :func:`compiled` returns the function unchanged
+(CasADi's virtual machine): results are the same, only slower.
+
+Environment:
+
+``CASTRAJECTORY_JIT``
+    ``0``/``off``/``false``/``no`` switches compilation off.
+``CASTRAJECTORY_CACHE_DIR``
+    cache directory (default ``$XDG_CACHE_HOME/castrajectory``, else
+    ``~/.cache/castrajectory``); compiled libraries go to its ``jit`` subfolder.
+``CC``
+    the C compiler (default: the first of ``cc``, ``gcc``, ``clang`` on ``PATH``).
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+from typing import Dict, Optional
+
+import casadi as ca
+
+#: Compiler flags.  ``-O2`` keeps the IEEE semantics of the virtual machine (no fast-math, and no
+#: ``-march=native``, so a shared cache stays valid on other machines of the same architecture).
+FLAGS = ("-O2", "-fPIC", "-shared")
+#: Seconds before a compilation is abandoned (the function is then evaluated by the VM).
+COMPILE_TIMEOUT_S = 60.0
+
+#: Counters (per process), for tests and diagnostics.
+stats: Dict[str, int] = {"compiled": 0, "cache_hits": 0, "memory_hits": 0, "fallbacks": 0}
+
+#: Largest number of compiled libraries kept in the cache (least recently used ones are deleted).
+MAX_ENTRIES = 2000
+
+_loaded: Dict[str, ca.Function] = {}  # key -> loaded external function (this process)
+_failed: set = set()  # keys whose compilation or loading failed in this process
+_compiler_checked: Dict[str, Optional[str]] = {}
+
+
+def enabled() -> bool:
+    """False when ``CASTRAJECTORY_JIT`` switches compilation off."""
+    return os.environ.get("CASTRAJECTORY_JIT", "1").strip().lower() not in ("0", "off", "false", "no")
+
+
+def cache_dir() -> Path:
+    """Per-user cache directory (see the module docstring for the environment variables)."""
+    root = os.environ.get("CASTRAJECTORY_CACHE_DIR")
+    if root:
+        return Path(root).expanduser()
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    base = Path(xdg).expanduser() if xdg else Path.home() / ".cache"
+    return base / "castrajectory"
+
+
+def compiler() -> Optional[str]:
+    """Path of the C compiler to use, or None."""
+    cc = os.environ.get("CC")
+    if cc in _compiler_checked:
+        return _compiler_checked[cc]
+    found = None
+    for name in ([cc] if cc else ["cc", "gcc", "clang"]):
+        path = shutil.which(name)
+        if path:
+            found = path
+            break
+    _compiler_checked[cc] = found
+    return found
+
+
+def c_code(fn: ca.Function) -> str:
+    """CasADi's C code of ``fn`` (entry point named ``fn.name()``)."""
+    cg = ca.CodeGenerator(fn.name(), {"with_header": False})
+    cg.add(fn)
+    return cg.dump()
+
+
+def _key(code: str, cc: str) -> str:
+    h = hashlib.sha256()
+    for part in (code, os.path.basename(cc), " ".join(FLAGS), ca.__version__):
+        h.update(part.encode())
+        h.update(b"\0")
+    return h.hexdigest()[:24]
+
+
+def compiled(fn: ca.Function, build: bool = True) -> ca.Function:
+    """A compiled equivalent of ``fn`` (SX function), or ``fn`` itself when that is not possible.
+
+    With ``build=False`` only an already compiled library (this process or the disk
+    cache) is used; nothing is compiled.
+    """
+    if not enabled():
+        return fn
+    try:
+        cc = compiler()
+        if cc is None:
+            stats["fallbacks"] += 1
+            return fn
+        code = c_code(fn)
+        key = _key(code, cc)
+        if key in _loaded:
+            stats["memory_hits"] += 1
+            return _loaded[key]
+        if key in _failed:
+            return fn
+        folder = cache_dir() / "jit"
+        lib = folder / f"{fn.name()}_{key}.so"
+        if lib.exists():
+            stats["cache_hits"] += 1
+            _touch(lib)
+        elif not build:
+            return fn
+        else:
+            _build(code, cc, folder, lib)
+            stats["compiled"] += 1
+            _prune(folder)
+        out = ca.external(fn.name(), str(lib))
+        if out.n_in() != fn.n_in() or out.n_out() != fn.n_out():
+            raise RuntimeError("compiled function has another signature")
+        _loaded[key] = out
+        return out
+    except Exception:  # no compiler, failed compile, unwritable cache, failed load: use the VM
+        stats["fallbacks"] += 1
+        if "key" in locals():
+            _failed.add(key)
+        return fn
+
+
+def _touch(lib: Path) -> None:
+    try:
+        os.utime(lib)  # recently used: kept by _prune
+    except OSError:
+        pass
+
+
+def _prune(folder: Path) -> None:
+    """Keep at most :data:`MAX_ENTRIES` libraries, dropping the least recently used."""
+    try:
+        libs = sorted(folder.glob("*.so"), key=lambda q: q.stat().st_mtime)
+        for old in libs[:max(0, len(libs) - MAX_ENTRIES)]:
+            old.unlink()
+    except OSError:
+        pass
+
+
+def _build(code: str, cc: str, folder: Path, lib: Path) -> None:
+    folder.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(dir=folder, prefix=".build-") as tmp:
+        src = Path(tmp) / "f.c"
+        src.write_text(code)
+        tmp_lib = Path(tmp) / "f.so"
+        subprocess.run([cc, *FLAGS, "-o", str(tmp_lib), str(src), "-lm"], check=True,
+                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, timeout=COMPILE_TIMEOUT_S)
+        os.replace(tmp_lib, lib)  # atomic: a concurrent reader sees no half-written library
