@@ -128,16 +128,14 @@ def main(argv=None) -> int:
     t_bench = time.perf_counter()
     nlp_mod.JIT = args.jit == "on"
     simulate(pendulum.double_pendulum(), Q0, QD0, T, 64, "midpoint", "whole")  # warm-up (Ipopt plugin)
-    t = time.perf_counter()
-    for scheme in ("midpoint", "galerkin4"):  # warm-up: compile (or load) the element code
-        simulate(pendulum.double_pendulum(), Q0, QD0, T, 4 * nlp_mod.JIT_MIN_ELEMENTS, scheme, "whole")
-    warm = time.perf_counter() - t
+
+    def compile_element_code():  # untimed: compile (or load) the element code of both schemes
+        for scheme in ("midpoint", "galerkin4"):
+            simulate(pendulum.double_pendulum(), Q0, QD0, T, 4 * nlp_mod.JIT_MIN_ELEMENTS, scheme, "whole")
+
+    env["jit"], line = jit.warm_up(compile_element_code, nlp_mod.JIT)
     jit_before = dict(jit.stats)
-    env["jit"] = {"on": nlp_mod.JIT and jit.enabled(), "compiler": jit.compiler(), "cache": str(jit.cache_dir()),
-                  "warmup_stats": jit_before, "warmup_s": warm}
-    print(f"  jit: {'on' if env['jit']['on'] else 'off'}, compiler {jit.compiler()}, cache {jit.cache_dir()}; "
-          f"warm-up {warm:.2f} s compiled {jit_before['compiled']} and loaded {jit_before['cache_hits']} "
-          f"cached libraries")
+    print("  " + line)
 
     goals, ratios = [], {}
 

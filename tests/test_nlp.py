@@ -481,7 +481,7 @@ def _evaluate_functions(nlp: NLP, seed: int = 0) -> dict:
     return {k: ca.DM(v) for k, v in out.items()}
 
 
-@pytest.mark.parametrize("E", [5, 200, 1301])  # a plain map; chunks of 64 plus a rest (200, 1301)
+@pytest.mark.parametrize("E", [5, 200, 1301])  # a plain map (5, 200); chunks of 64 plus a rest (1301)
 def test_compiled_elements_match_virtual_machine(monkeypatch, tmp_path, E):
     """Compiled and interpreted element functions give the same Jacobian and Hessian (1e-12)."""
     from castrajectory import jit, nlp as nlp_mod

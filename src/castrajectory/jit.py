@@ -39,6 +39,7 @@ import os
 import shutil
 import subprocess
 import tempfile
+import time
 from pathlib import Path
 from typing import Dict, Optional
 
@@ -137,9 +138,13 @@ def compiled(fn: ca.Function, build: bool = True) -> ca.Function:
             _build(code, cc, folder, lib)
             stats["compiled"] += 1
             _prune(folder)
-        out = ca.external(fn.name(), str(lib))
-        if out.n_in() != fn.n_in() or out.n_out() != fn.n_out():
-            raise RuntimeError("compiled function has another signature")
+        try:
+            out = ca.external(fn.name(), str(lib))
+            if out.n_in() != fn.n_in() or out.n_out() != fn.n_out():
+                raise RuntimeError("compiled function has another signature")
+        except Exception:
+            lib.unlink(missing_ok=True)  # a damaged library: the next run compiles it again
+            raise
         _loaded[key] = out
         return out
     except Exception:  # no compiler, failed compile, unwritable cache, failed load: use the VM
@@ -147,6 +152,22 @@ def compiled(fn: ca.Function, build: bool = True) -> ca.Function:
         if "key" in locals():
             _failed.add(key)
         return fn
+
+
+def warm_up(run, active: bool = True):
+    """Run ``run()`` (untimed work that compiles or loads element code); describe what happened.
+
+    Returns ``(info, line)``: a JSON-ready dict (switch, compiler, cache, counters, seconds) and a
+    one-line summary for benchmark output.
+    """
+    t = time.perf_counter()
+    run()
+    info = {"on": bool(active and enabled()), "compiler": compiler(), "cache": str(cache_dir()),
+            "warmup_stats": dict(stats), "warmup_s": time.perf_counter() - t}
+    line = (f"jit: {'on' if info['on'] else 'off'}, compiler {info['compiler']}, cache {info['cache']}; "
+            f"warm-up {info['warmup_s']:.2f} s compiled {stats['compiled']} and loaded {stats['cache_hits']} "
+            f"cached libraries")
+    return info, line
 
 
 def _touch(lib: Path) -> None:

@@ -77,6 +77,9 @@ JIT_MIN_ELEMENTS = 1000
 #: over CHUNK elements plus E % CHUNK calls of the compiled element, so the per-call overhead of
 #: CasADi's ``map`` is paid once per chunk and the compiled code does not depend on E.
 CHUNK = 64
+#: Smallest family evaluated in chunks (below it the plain map of the compiled element is as fast,
+#: and the graph is smaller to build).
+CHUNK_MIN_ELEMENTS = 8 * CHUNK
 
 
 class _Mapped:
@@ -98,11 +101,11 @@ class _Mapped:
         if self.el is None and (build or not self.looked_up):
             el = jit.compiled(self.fn, build)
             self.el = el if el is not self.fn else None
-        if self.el is not None and self.chunk is None and E >= 2 * CHUNK and (build or not self.looked_up):
+        if self.el is not None and self.chunk is None and E >= CHUNK_MIN_ELEMENTS and (build or not self.looked_up):
             m = self.fn.map(CHUNK, "serial")
             c = jit.compiled(m, build)
             self.chunk = c if c is not m else None
-        self.looked_up = self.looked_up or E >= 2 * CHUNK
+        self.looked_up = self.looked_up or E >= CHUNK_MIN_ELEMENTS
 
     @staticmethod
     def _map(f, E):
@@ -113,7 +116,7 @@ class _Mapped:
         if self.compile_ and jit.enabled():
             self._compiled(E)
         el = self.el if self.compile_ and self.el is not None else self.fn
-        if not self.compile_ or self.chunk is None or E < 2 * CHUNK:
+        if not self.compile_ or self.chunk is None or E < CHUNK_MIN_ELEMENTS:
             return self._map(el, E)(*args)
         q, r = divmod(E, CHUNK)
         k = q * CHUNK
@@ -169,15 +172,31 @@ def _kernels(fn: ca.Function, kinds: tuple, hessian: bool, compile_: bool) -> _K
     return kern
 
 
+def _evenly_spaced(flat: np.ndarray) -> bool:
+    return flat.size < 2 or (flat[1] > flat[0] and bool(np.all(np.diff(flat) == flat[1] - flat[0])))
+
+
 def _gather(src, flat: np.ndarray):
     """``src[flat]`` for an MX column; a slice when the positions are evenly spaced (much cheaper)."""
-    if flat.size > 1:
-        step = int(flat[1] - flat[0])
-        if step > 0 and np.all(np.diff(flat) == step):
-            return src[int(flat[0]):int(flat[-1]) + 1:step]
-    elif flat.size == 1:
+    if flat.size > 1 and _evenly_spaced(flat):
+        return src[int(flat[0]):int(flat[-1]) + 1:int(flat[1] - flat[0])]
+    if flat.size == 1:
         return src[int(flat[0])]
     return src[flat.tolist()]
+
+
+def _gather_columns(src, idx: np.ndarray, n: int):
+    """Element argument matrix ``(n, E)`` (or ``(n, 1)`` for a shared row) read from ``src`` at ``idx``.
+
+    When every column of ``idx`` (one local entry over all elements) is evenly spaced but the
+    rows are not, the matrix is stacked from ``n`` slices instead of one list gather (for
+    many elements; for a few the list is cheaper).
+    """
+    flat = idx.reshape(-1)
+    if idx.ndim == 2 and n > 1 and idx.shape[0] >= 256 and not _evenly_spaced(flat) \
+            and all(_evenly_spaced(idx[:, j]) for j in range(n)):
+        return ca.vertcat(*[ca.transpose(_gather(src, idx[:, j])) for j in range(n)])
+    return ca.reshape(_gather(src, flat), n, idx.shape[0] if idx.ndim == 2 else 1)
 
 
 @dataclass(frozen=True)
@@ -546,11 +565,7 @@ class NLP:
         ps = ca.vertcat(*[b.sym for b in self._params]) if self._params else ca.SX(0, 1)
         expr_rows = [(c.slice, g) for c, g in zip(self._cons.values(), self._g) if not isinstance(g, _Group)]
         f_expr = ca.SX(self._f) if self._f is not None else ca.SX(0)
-        f_const = f_expr.is_constant() or not self._vars
-        if not f_const or expr_rows:
-            # (stacking every variable symbol costs milliseconds at large N: only when needed)
-            xs = ca.vertcat(*[b.sym for b in self._vars])
-            f_const = not ca.depends_on(f_expr, xs)
+        f_const = f_expr.is_constant() or not any(ca.depends_on(f_expr, b.sym) for b in self._vars)
 
         exact_hessian = self._hessian == "exact"
         if not exact_hessian and (not f_const or self._f_groups):
@@ -568,23 +583,27 @@ class NLP:
                 else np.zeros(0, dtype=np.int64)
             le = ca.SX.sym("le", ge.numel())
             sf = ca.SX.sym("sf")
-            Je = ca.jacobian(ge, xs)
-            ge_grad = ca.gradient(f_expr, xs)
-            fe = ca.Function("expr", [xs, ps],
+            # Differentiate with respect to the variables the expressions use (positions zpos, increasing),
+            # not all of them: the cost then does not grow with the size of the element families.
+            z, zpos = self._used_variables(ca.vertcat(f_expr, ge))
+            Xz = _gather(Xm, zpos)
+            Je = ca.jacobian(ge, z)
+            ge_grad = ca.gradient(f_expr, z)
+            fe = ca.Function("expr", [z, ps],
                              [f_expr, ge, _nz(Je), _nz(ge_grad)])
-            fv, gv, jv, gfv = fe(Xm, Pm)
+            fv, gv, jv, gfv = fe(Xz, Pm)
             f_total = f_total + fv
-            jr, jc = Je.sparsity().get_triplet()
-            jac.append(Contribution(jv, rows_of_ge[np.asarray(jr, dtype=np.int64)], np.asarray(jc, dtype=np.int64)))
+            jr, jc = (np.asarray(v, dtype=np.int64) for v in Je.sparsity().get_triplet())
+            jac.append(Contribution(jv, rows_of_ge[jr], zpos[jc]))
             if exact_hessian:
-                He = ca.triu(ca.hessian(sf * f_expr + ca.dot(le, ge), xs)[0])
-                fh = ca.Function("expr_hess", [xs, ps, sf, le], [_nz(He)])
+                He = ca.triu(ca.hessian(sf * f_expr + ca.dot(le, ge), z)[0])
+                fh = ca.Function("expr_hess", [z, ps, sf, le], [_nz(He)])
                 lam_e = lam_g[rows_of_ge.tolist()] if rows_of_ge.size else ca.MX(0, 1)
                 hr, hc = (np.asarray(v, dtype=np.int64) for v in He.sparsity().get_triplet())
-                # He is already the upper triangle, so assemble(triu=True) keeps every entry once.
-                hess.append(Contribution(fh(Xm, Pm, lam_f, lam_e), hr, hc))
+                # He is the upper triangle in z; zpos is increasing, so it maps to the global upper triangle.
+                hess.append(Contribution(fh(Xz, Pm, lam_f, lam_e), zpos[hr], zpos[hc]))
             gr, _ = ge_grad.sparsity().get_triplet()
-            grad.append(Contribution(gfv, np.asarray(gr, dtype=np.int64), np.zeros(len(gr), dtype=np.int64)))
+            grad.append(Contribution(gfv, zpos[np.asarray(gr, dtype=np.int64)], np.zeros(len(gr), dtype=np.int64)))
             g_expr_by_slice = {s.start: gv[i0:i0 + (s.stop - s.start)]
                                for (s, _), i0 in zip(expr_rows, np.cumsum([0] + [s.stop - s.start for s, _ in expr_rows]))}
         else:
@@ -627,6 +646,20 @@ class NLP:
         self._build_time = (self._t_described - self._t0) + (time.perf_counter() - t)
         return self._solver
 
+    def _used_variables(self, e):
+        """The variable symbols ``e`` depends on, stacked, and their positions in the decision vector."""
+        syms, pos, off = [], [], 0
+        for b in self._vars:
+            n = b.init.size
+            if ca.depends_on(e, b.sym):
+                dep = np.flatnonzero(ca.which_depends(e, b.sym, 1, False))
+                syms.append(b.sym[dep.tolist()])
+                pos.append(off + dep)
+            off += n
+        if not syms:
+            return ca.SX(0, 1), np.zeros(0, dtype=np.int64)
+        return ca.vertcat(*syms), np.concatenate(pos).astype(np.int64)
+
     @staticmethod
     def _element_derivatives(grp: _Group, Xm, Pm, weight, row0, hessian: bool = True):
         """Values, first-derivative and Hessian contributions of one element family.
@@ -645,8 +678,7 @@ class NLP:
             if isinstance(a, X):
                 src = Pm if isinstance(a, P) else Xm
                 idx = a.index
-                col = _gather(src, idx.reshape(-1))
-                call_args.append(ca.reshape(col, n, idx.shape[0] if idx.ndim == 2 else 1))
+                call_args.append(_gather_columns(src, idx, n))
                 if not isinstance(a, P):
                     var_idx.append(idx)
             else:
