@@ -56,6 +56,7 @@ For a thin rod (``h → 0``) with ``e = 0`` this is the textbook
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Optional, Sequence
 
@@ -296,3 +297,95 @@ def rectangle_impact(mass: float, width: float, height: float, angle: float, v_b
     r = resolve_impact(rectangle_mass_matrix(m, w, h), corner_jacobian(th, d), v, e)
     return CornerImpact(**vars(r), mass=m, width=w, height=h, inertia=rectangle_inertia(m, w, h),
                         angle=th, corner=d)
+
+
+# ----------------------------------------------------------------------------- contact scenes
+def corners(width: float, height: float) -> np.ndarray:
+    """The four body-frame corners, counter-clockwise from the lower left."""
+    w, h = width / 2.0, height / 2.0
+    return np.array([[-w, -h], [w, -h], [w, h], [-w, h]])
+
+
+def bouncing_ball(mass: float = 1.0, g: float = 9.81, restitution_coefficient: float = 1.0) -> LagrangianSystem:
+    """Point mass at height ``y`` above the ground ``y = 0``: ``L = ½ m ẏ² − m g y``, gap ``φ = y``.
+
+    Gravity is omitted when ``g = 0``; the :class:`~castrajectory.mechanics.Contact`
+    term is the only contact machinery.
+    """
+    from .mechanics import Contact, Gravity
+    m = positive("mass", mass)
+    g = finite("g", g)
+    e = restitution(restitution_coefficient)
+    y = ca.SX.sym("y", 1)
+    point = ca.vertcat(0, y[0])
+    terms = [Gravity(g)] if g != 0.0 else []
+    return LagrangianSystem(y, Atoms([point], [m]), terms, names=["y"],
+                            contact=Contact([y[0]], e, ["ball"]))
+
+
+def ball_oracle(height: float, velocity: float, g: float, e: float, T: float):
+    """Analytic bounce times, apex heights and impact speeds of a ball dropped from ``height`` with ``velocity``.
+
+    First impact at ``t₁ = (v₀ + √(v₀² + 2gH))/g`` with speed ``V = √(v₀² + 2gH)``;
+    then speeds ``eᵏV``, flights ``2eᵏV/g`` and apexes ``(eᵏV)²/(2g)``.  Returns
+    ``(times, apexes, speeds)`` of the bounces before ``T`` (apexes[0] is the first
+    flight's apex ``H + v₀²/2g`` when ``v₀ ≥ 0``, else ``H``).
+    """
+    V = math.sqrt(velocity ** 2 + 2 * g * height)
+    t = (velocity + V) / g
+    times, apexes, speeds = [], [height + max(velocity, 0.0) ** 2 / (2 * g)], []
+    k = 0
+    while t < T and k < 10000 and e ** k * V > 1e-12 * V:
+        times.append(t)
+        speeds.append(e ** k * V)
+        apexes.append((e ** (k + 1) * V) ** 2 / (2 * g))
+        t += 2 * e ** (k + 1) * V / g
+        k += 1
+    return np.array(times), np.array(apexes), np.array(speeds)
+
+
+def ball_height(height: float, velocity: float, g: float, e: float, t) -> np.ndarray:
+    """Analytic height of the bouncing ball at times ``t`` (0 after the Zeno accumulation time)."""
+    t = np.asarray(t, float)
+    times, _, speeds = ball_oracle(height, velocity, g, e, float(t.max()) + 1.0)
+    y = np.zeros_like(t)
+    first = t < (times[0] if times.size else np.inf)
+    y[first] = height + velocity * t[first] - 0.5 * g * t[first] ** 2
+    for k, t0 in enumerate(times):
+        v = e * speeds[k]
+        t1 = times[k + 1] if k + 1 < times.size else t0 + 2 * v / g
+        sel = (t >= t0) & (t < t1)
+        y[sel] = v * (t[sel] - t0) - 0.5 * g * (t[sel] - t0) ** 2
+    return np.maximum(y, 0.0)
+
+
+def _rectangle_contact_system(mass, width, height, g, e, ground):
+    from .mechanics import Contact, Gravity
+    m, w, h = _body(mass, width, height)
+    g = finite("g", g)
+    e = restitution(e)
+    q = ca.SX.sym("q", 3)
+    pts = [body_point(q, d) for d in corners(w, h)]
+    gaps = [ground(p) for p in pts]
+    terms = [Gravity(g, heights=[q[1]], masses=[m])] if g != 0.0 else []
+    names = ["lower left", "lower right", "upper right", "upper left"]
+    return LagrangianSystem(q, MassMatrix(ca.SX(rectangle_mass_matrix(m, w, h))), terms, names=NAMES,
+                            points_expr=pts + [pts[0]], contact=Contact(gaps, e, names))
+
+
+def rectangle_drop(mass: float = 1.0, width: float = 2.0, height: float = 1.0, g: float = 9.81,
+                   restitution_coefficient: float = 1.0) -> LagrangianSystem:
+    """Rigid ``w × h`` rectangle over the ground ``y = 0``: four corner gaps ``y_j(q) ≥ 0``."""
+    return _rectangle_contact_system(mass, width, height, g, restitution_coefficient, lambda p: p[1])
+
+
+def bowl(mass: float = 1.0, width: float = 0.4, height: float = 0.2, g: float = 9.81,
+         restitution_coefficient: float = 1.0, radius: float = 2.0) -> LagrangianSystem:
+    """Rectangle in the parabolic bowl ``y = x²/(2R)``: corner gaps ``φ_j = y_j − x_j²/(2R)``.
+
+    The gap is the vertical distance to the bowl, whose gradient is normal to the
+    bowl's level set ``y − x²/2R = 0``: the impulse acts along ``M⁻¹∇φᵀ``.
+    """
+    R = positive("bowl radius", radius)
+    return _rectangle_contact_system(mass, width, height, g, restitution_coefficient,
+                                     lambda p: p[1] - p[0] ** 2 / (2 * R))

@@ -20,6 +20,11 @@ scene names; in particular a scene with ``g = 0`` simply omits
 Holonomic constraints ``c(q) = 0`` are a list of expressions; their
 multipliers are unknowns of the trajectory NLP.
 
+Unilateral contact is one more term, :class:`Contact`: gap expressions
+``φ_j(q) ≥ 0`` (one per contact point) and a restitution coefficient.  A
+system without it builds no contact variables anywhere
+(:mod:`castrajectory.contact` transcribes it).
+
 Example (planar pendulum, one atom)::
 
     q = casadi.SX.sym("q", 1)
@@ -117,6 +122,36 @@ class Potential:
         return self.expr
 
 
+# ----------------------------------------------------------------------------- contact
+@dataclass
+class Contact:
+    """Unilateral contacts: gaps ``φ_j(q) ≥ 0`` (SX expressions of q) with Newton restitution ``e``.
+
+    An impact of contact ``j`` reverses its normal velocity ``∇φ_j q̇`` by the
+    factor ``e`` (``e = 1``: elastic, the default); impulses act along
+    ``M⁻¹∇φ_jᵀ`` with ``μ_j ≥ 0``.  ``names`` label the contact points in output.
+    """
+
+    gaps: Sequence[object]
+    restitution: float = 1.0
+    names: Optional[Sequence[str]] = None
+
+    def __post_init__(self):
+        from .validation import InputError, finite
+        e = finite("restitution", self.restitution)
+        if not 0.0 <= e <= 1.0:
+            raise InputError(f"restitution must be between 0 and 1 (got {self.restitution})")
+        self.restitution = e
+        self.gaps = [ca.SX(g) if not isinstance(g, ca.SX) else g for g in self.gaps]
+        if not self.gaps or any(g.numel() != 1 for g in self.gaps):
+            raise ValueError("a Contact needs at least one scalar gap expression")
+        self.names = list(self.names) if self.names else [f"contact{j}" for j in range(len(self.gaps))]
+
+    @property
+    def count(self) -> int:
+        return len(self.gaps)
+
+
 # ----------------------------------------------------------------------------- the system
 @dataclass
 class LagrangianSystem:
@@ -130,6 +165,7 @@ class LagrangianSystem:
     constraints: holonomic constraint expressions ``c_i(q) = 0``.
     names: coordinate names, for output.
     points: optional SX points (e.g. atom positions) returned by :meth:`points` for plots.
+    contact: optional :class:`Contact` term (unilateral gaps with restitution).
     """
 
     q: object
@@ -138,6 +174,7 @@ class LagrangianSystem:
     constraints: Sequence[object] = ()
     names: Optional[Sequence[str]] = None
     points_expr: Optional[Sequence[object]] = None
+    contact: Optional[Contact] = None
     _fn: dict = field(default_factory=dict, init=False, repr=False)
 
     def __post_init__(self):
@@ -156,6 +193,11 @@ class LagrangianSystem:
     @property
     def nc(self) -> int:
         return int(sum(ca.vec(c).numel() for c in self.constraints))
+
+    @property
+    def ncontact(self) -> int:
+        """Number of contact points (0 without a :class:`Contact` term)."""
+        return self.contact.count if self.contact is not None else 0
 
     # -- symbolic pieces (expressions in self.q, self.qd)
     def kinetic_expr(self):
@@ -211,6 +253,14 @@ class LagrangianSystem:
         """``c(q)`` and its Jacobian ``C(q) = ∂c/∂q``."""
         c = self.constraint_expr()
         return self._get("c", lambda: ca.Function("c", [self.q], [c, ca.densify(ca.jacobian(c, self.q))]))
+
+    @property
+    def gap(self) -> ca.Function:
+        """Contact gaps ``φ(q)`` and their Jacobian ``∂φ/∂q`` (only with a :class:`Contact` term)."""
+        if self.contact is None:
+            raise ValueError("this system has no contact term")
+        phi = ca.vertcat(*self.contact.gaps)
+        return self._get("gap", lambda: ca.Function("gap", [self.q], [phi, ca.densify(ca.jacobian(phi, self.q))]))
 
     @property
     def acceleration(self) -> ca.Function:

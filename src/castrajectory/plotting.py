@@ -324,7 +324,7 @@ class _SharedPaletteGifWriter(animation.PillowWriter):
 
 def animate_points(positions, t, path: str, trail: bool = True, fps: int = 30, max_frames: int = 300,
                    links: bool = True, pivot=(0.0, 0.0), title: Optional[str] = None,
-                   trail_time: float = 1.0, dpi: int = 80) -> str:
+                   trail_time: float = 1.0, dpi: int = 80, ground=None) -> str:
     """Animate moving points (e.g. a pendulum's bobs) and write a GIF or an MP4.
 
     ``positions`` has shape (K, n_points, 2) and ``t`` length K.  With
@@ -334,6 +334,8 @@ def animate_points(positions, t, path: str, trail: bool = True, fps: int = 30, m
     subsampled evenly in time to at most ``max_frames``.  ``path`` ending in
     ``.gif`` is written with Pillow; ``.mp4`` needs ffmpeg (``ValueError``
     otherwise).  The axes are fixed, equal-aspect and cover every position.
+    ``pivot=None`` joins only the points (a rigid body's outline); ``ground``
+    (an (M, 2) polyline, e.g. the floor or a bowl) is drawn under them.
     Returns ``path``.
     """
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -367,11 +369,19 @@ def animate_points(positions, t, path: str, trail: bool = True, fps: int = 30, m
     # frames evenly in time: the last sample at or before each target time
     targets = np.linspace(t[0], t[-1], min(K, int(max_frames)))
     frames = np.unique(np.clip(np.searchsorted(t, targets, side="right") - 1, 0, K - 1))
-    pivot = np.asarray(pivot, dtype=float).reshape(2)
+    has_pivot = pivot is not None
+    pivot = np.asarray(pivot if has_pivot else (0.0, 0.0), dtype=float).reshape(2)
 
     allpts = P.reshape(-1, 2)
-    if links:
+    if links and has_pivot:
         allpts = np.vstack([allpts, pivot])
+    if ground is not None:
+        ground = np.asarray(ground, dtype=float).reshape(-1, 2)
+        lo0, hi0 = allpts.min(axis=0), allpts.max(axis=0)
+        span = max(hi0[0] - lo0[0], 1e-9)
+        inside = (ground[:, 0] >= lo0[0] - 0.25 * span) & (ground[:, 0] <= hi0[0] + 0.25 * span)
+        ground = ground[inside] if inside.sum() >= 2 else ground
+        allpts = np.vstack([allpts, ground])
     lo, hi = allpts.min(axis=0), allpts.max(axis=0)
     centre, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
     half = np.maximum(half, 0.5 * max(half.max(), 1e-9)) * 1.08 + 1e-9
@@ -395,8 +405,10 @@ def animate_points(positions, t, path: str, trail: bool = True, fps: int = 30, m
     ax.grid(True, alpha=0.2)
     if title:
         ax.set_title(title, fontsize=9)
-    if links:
+    if links and has_pivot:
         ax.plot([pivot[0]], [pivot[1]], "s", color="k", ms=4)
+    if ground is not None:
+        ax.plot(ground[:, 0], ground[:, 1], "-", color="0.3", lw=1.5)
     # The static part (frame, ticks, grid, title, pivot) is rendered once and
     # laid under the axes as a figure image; each frame then redraws only the
     # moving artists, which keeps a 300-frame GIF at a few seconds.
@@ -418,7 +430,7 @@ def animate_points(positions, t, path: str, trail: bool = True, fps: int = 30, m
         for i in frames:
             pts = P[i]
             if links:
-                chain = np.vstack([pivot, pts])
+                chain = np.vstack([pivot, pts]) if has_pivot else pts
                 link_line.set_data(chain[:, 0], chain[:, 1])
             markers.set_data(pts[:, 0], pts[:, 1])
             if trail:
@@ -440,3 +452,34 @@ def animate_points(positions, t, path: str, trail: bool = True, fps: int = 30, m
             stamp.set_text(f"t = {t[i]:.2f}")
             writer.grab_frame()
     return str(path)
+
+
+def contact_plot(t, series: Dict[str, np.ndarray], t_impulse, impulses, reference: Optional[Dict[str, tuple]] = None,
+                 ylabel: str = "height", title: Optional[str] = None) -> Figure:
+    """A contact trajectory: curves against time (with analytic references) over a stem plot of impulses.
+
+    ``series`` maps labels to values at ``t``; ``reference`` maps labels to
+    ``(t_ref, y_ref)`` drawn dashed; ``impulses`` (at ``t_impulse``) go in the
+    lower panel.
+    """
+    fig = Figure(figsize=(6.4, 5.2), layout="constrained")
+    ax, bx = fig.subplots(2, 1, sharex=True, height_ratios=[2, 1])
+    t = _as_time(t, "contact_plot")
+    for label, y in series.items():
+        ax.plot(t, np.asarray(y, float), lw=1.2, label=label)
+    for label, (tr, yr) in (reference or {}).items():
+        ax.plot(np.asarray(tr, float), np.asarray(yr, float), "--", lw=1.0, color="k", label=label)
+    ax.axhline(0.0, color="0.4", lw=0.8)
+    ax.set_ylabel(ylabel)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title(title or "Contact trajectory", fontsize=10)
+    ti = np.asarray(t_impulse, float).reshape(-1)
+    mu = np.asarray(impulses, float).reshape(-1)
+    if ti.size:
+        bx.vlines(ti, 0.0, mu, color="C3", lw=1.2)
+        bx.plot(ti, mu, "o", color="C3", ms=3)
+    bx.set_ylabel("impulse")
+    bx.set_xlabel("t")
+    bx.grid(True, alpha=0.3)
+    return fig

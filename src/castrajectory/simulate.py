@@ -14,7 +14,7 @@ import numpy as np
 from . import stepping, trajectory
 from .discrete import SCHEMES
 from .mechanics import LagrangianSystem
-from .validation import one_of
+from .validation import InputError, one_of
 
 METHODS = ("whole", "march", "rk4", "implicit-euler")
 
@@ -55,6 +55,8 @@ def simulate(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str = 
     """Trajectory from ``(q0, q̇0)`` over ``[0, T]`` on ``N`` uniform steps."""
     one_of("method", method, METHODS)
     one_of("scheme", scheme, tuple(SCHEMES))
+    if system.contact is not None and method != "whole":
+        raise InputError(f"the {method} baseline has no contact model; contact scenes use method 'whole'")
     if method == "whole":
         tr = trajectory.solve_initial_value(system, q0, qd0, T, N, scheme, options=options, verbose=verbose)
         status = "ok" if tr.success else tr.status

@@ -391,8 +391,17 @@ def _validate(system, T, N):
 def solve_initial_value(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str = "midpoint",
                         options: Optional[dict] = None, verbose: bool = False,
                         coarsest: int = 32) -> Trajectory:
-    """Solve the initial-value problem as one whole-trajectory NLP (robust strategy in the module doc)."""
+    """Solve the initial-value problem as one whole-trajectory NLP (robust strategy in the module doc).
+
+    A system with a :class:`~castrajectory.mechanics.Contact` term is transcribed by
+    :func:`castrajectory.contact.solve_contact` (collision sub-nodes and complementarity)
+    and returns a :class:`~castrajectory.contact.ContactTrajectory`.
+    """
     T, N = _validate(system, T, N)
+    if system.contact is not None:
+        from .contact import solve_contact
+        return solve_contact(system, _check_state("q0", q0, system.nq), _check_state("qd0", qd0, system.nq),
+                             T, N, scheme, options=options, verbose=verbose)
     q0 = _check_state("q0", q0, system.nq)
     qd0 = _check_state("qd0", qd0, system.nq)
     if system.nc:
@@ -428,6 +437,8 @@ def solve_boundary(system: LagrangianSystem, q0, qT, T: float, N: int, scheme: s
                    options: Optional[dict] = None, verbose: bool = False, coarsest: int = 32) -> Trajectory:
     """Least action proper: minimise the discrete action with ``q(0) = q0`` and ``q(T) = qT``."""
     T, N = _validate(system, T, N)
+    if system.contact is not None:
+        raise InputError("the two-point boundary mode does not handle contact; use the initial-value mode")
     q0 = _check_state("q0", q0, system.nq)
     qT = _check_state("qT", qT, system.nq)
     dm = DiscreteMechanics(system, scheme)

@@ -1,0 +1,605 @@
+"""Contact trajectories: the whole-trajectory discrete action under unilateral gaps.
+
+A :class:`~castrajectory.mechanics.LagrangianSystem` with a
+:class:`~castrajectory.mechanics.Contact` term (gaps ``φ_j(q) ≥ 0``,
+restitution ``e``) is transcribed here; a system without one never reaches
+this module (:func:`castrajectory.trajectory.solve_initial_value` dispatches).
+
+Transcription (initial value, two-point schemes; derivation in
+``docs/derivations.md``, "Contact trajectories")
+-----------------------------------------------------------------------------
+Every step ``k`` of the grid ``t_k = k h`` holds a *collision sub-node* ``q̃_k``
+at ``t_k + α_k h`` with ``α_k = ½ + β_k ∈ [ε, 1 − ε]`` (Fetecau, Marsden, Ortiz
+and West 2003: the impact time is an unknown, not a grid node).  The discrete
+action is ``S_d = Σ_k L_d(q_k, q̃_k; α_k h) + L_d(q̃_k, q_{k+1}; (1 − α_k) h)``.
+Its stationarity under the unilateral constraints gives, with ``D₁, D₂`` the
+slot derivatives of ``L_d``:
+
+* sub-node ``k``: ``D₂L_d(q_k, q̃_k) + D₁L_d(q̃_k, q_{k+1}) + ∇φ(q̃_k)ᵀ μ_k = 0``
+  with ``0 ≤ φ(q̃_k) ⟂ μ_k ≥ 0`` — ``μ_k`` is the impulse of an impact inside
+  step ``k``: the sub-node momenta ``p̃⁻ = D₂L_d(q_k, q̃_k)`` and
+  ``p̃⁺ = −D₁L_d(q̃_k, q_{k+1})`` jump by ``∇φᵀμ``, the set ``M⁻¹∇φᵀμ, μ ≥ 0``
+  of Exercise 2.2;
+* node ``k``: ``D₂L_d(q̃_{k−1}, q_k) + D₁L_d(q_k, q̃_k) + h ∇φ(q_k)ᵀ ν_k = 0``
+  with ``0 ≤ φ(q_k) ⟂ ν_k ≥ 0`` — ``ν_k`` is a contact *force* (impulse
+  ``h ν_k`` per node): persistent contact, e.g. a body resting on the ground,
+  where ``h ν_k = m g h``;
+* impact law (Newton restitution on the contact's normal velocity, evaluated
+  with the exact discrete momenta at the sub-node):
+  ``μ_{jk} · ∇φ_j(q̃_k) M(q̃_k)⁻¹ (p̃⁺ + e p̃⁻) = 0``.  With ``e = 1`` the kinetic
+  energy ``½ p̃ᵀM⁻¹p̃`` is the same on both sides of the impact, exactly;
+* centred splits and the least force at the last node: a tiny objective
+  ``w_β Σ β_k² + w_ν h ν_{N−1}``.  A body on the ground at the last node with
+  a force is otherwise free to "launch itself" into ``q_N``, which no later
+  equation forbids (interior nodes are pinned by the next node's
+  complementarity); the least force makes that last contact plastic.
+
+Complementarity is imposed by exact (ℓ1) penalties rather than by relaxed
+product constraints: the objective gains ``ρ (Σ φ(q_k)·h ν_k + Σ φ(q̃_k)·μ_k)``
+(both factors are bounded below by 0, so each product is ≥ 0) and
+``ρ Σ (s⁺ + s⁻)`` for the impact law written as ``μ r − s⁺ + s⁻ = 0``,
+``s± ≥ 0``; ``bound_relax_factor = 0``.  Every constraint then has a gradient
+that never vanishes, whereas the relaxed products ``|μ r| ≤ σ`` are degenerate
+wherever ``μ = r = 0`` (every sub-node of a resting body), where Ipopt's
+multipliers diverged in our trials.  ``ρ`` rises (10, 100, ...) with warm
+starts until the scaled residual is at most :data:`COMPLEMENTARITY_TOL`; each
+step is recorded.
+
+Solution strategy (chosen by the library)
+-----------------------------------------
+1. **Event-located guess.**  The smooth equations of motion are integrated
+   (RK4) from the start; every gap crossing is located by bisection, the
+   impact law of :func:`castrajectory.collision.resolve_impact` is applied
+   there and the flight continues.  The sub-node of that step is placed at the
+   crossing with the impact's ``μ``.  When an impact leaves too little normal
+   velocity for a flight longer than ``2h`` (the accumulation point of Zeno
+   bouncing), the guess rests on the ground from there on.
+2. **Whole solve** of all ``N`` steps from that guess, first at ``σ = 0``; then a
+   short homotopy ``σ = σ₀ (1, 10⁻², 0)`` on the problem's own scale
+   (gap × impulse of one step); then **horizon windows** (small contact NLPs
+   marched over the horizon, each with its own event-located guess) whose
+   assembled solution starts a final whole solve at ``σ = 0``.
+
+The reported status is that of the last whole-trajectory solve.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Dict, List, Optional
+
+import casadi as ca
+import numpy as np
+
+from .collision import resolve_impact
+from .discrete import DiscreteMechanics
+from .mechanics import LagrangianSystem
+from .nlp import NLP, P, X
+from .result import HomotopyStep, Result
+from .validation import InputError
+
+#: The sub-node's time fraction stays in [ALPHA_MIN, 1 − ALPHA_MIN].
+ALPHA_MIN = 1e-3
+#: Gap tolerance (relative to the body's length scale) below which a guess counts as touching.
+TOUCH_TOL = 1e-9
+#: Ipopt options of contact solves: bound_relax_factor 0 (the NLP core sets it for
+#: complementarity), tiny bound push so guesses on the ground are not pushed away.
+CONTACT_IPOPT = {"tol": 1e-10, "max_iter": 200, "bound_relax_factor": 0.0,
+                 "bound_push": 1e-8, "bound_frac": 1e-8, "slack_bound_push": 1e-8, "slack_bound_frac": 1e-8,
+                 "mu_init": 1e-8, "constr_mult_init_max": 0}
+#: Penalty weights tried in turn (each warm-started from the last) until the scaled
+#: complementarity residual is at most COMPLEMENTARITY_TOL.
+PENALTY = (10.0, 100.0, 1e3, 1e4)
+#: Scaled complementarity residual accepted as exact (products over gap × impulse scales).
+COMPLEMENTARITY_TOL = 1e-8
+#: Weight of Σβ² (the split of impact-free steps), far below the penalties.
+SPLIT_WEIGHT = 1e-6
+#: Weight of the least-force selection Σ h ν_k / p_ref among exact solutions (see module docstring).
+FORCE_WEIGHT = 1e-4
+#: Iteration budget of the first whole attempt from the event-located guess.
+FIRST_ATTEMPT_MAX_ITER = 60
+#: A sub-node impulse counts as an impact when the contact approaches faster than this many
+#: steps' worth of its normal acceleration (resting contact approaches at about ½ step's worth).
+IMPACT_SPEED_STEPS = 2.0
+#: ... and its impulse exceeds this fraction of the momentum scale (interior-point noise is far below).
+IMPULSE_TOL = 1e-6
+#: RK4 substeps per step in the event-located guess.
+GUESS_SUBSTEPS = 4
+
+
+@dataclass
+class Impact:
+    """One impact found in a solution: step ``k``, time, contact, impulse and velocities."""
+
+    step: int
+    t: float
+    contact: int
+    mu: float
+    q: np.ndarray
+    v_before: np.ndarray
+    v_after: np.ndarray
+
+    def as_dict(self) -> dict:
+        return {"step": self.step, "t": self.t, "contact": self.contact, "mu": self.mu,
+                "q": self.q, "v_before": self.v_before, "v_after": self.v_after}
+
+
+@dataclass
+class ContactTrajectory:
+    """Solution of a contact trajectory (fields as :class:`castrajectory.trajectory.Trajectory`, plus contact data)."""
+
+    t: np.ndarray
+    q: np.ndarray
+    p: np.ndarray               # node momenta p_k⁺ (p_N⁻ at the end)
+    v: np.ndarray
+    energy: np.ndarray
+    t_sub: np.ndarray           # sub-node times t_k + α_k h, one per step
+    q_sub: np.ndarray
+    mu: np.ndarray              # (N, contacts) sub-node impulses
+    nu: np.ndarray              # (N + 1, contacts) node impulses h ν_k (last row: 0, no node force at T)
+    gap: np.ndarray             # (N + 1, contacts) gaps at the nodes
+    gap_sub: np.ndarray         # (N, contacts) gaps at the sub-nodes
+    impacts: List[Impact]
+    complementarity_residual: float
+    status: str
+    success: bool
+    message: str
+    iterations: int
+    build_time_s: float
+    solve_time_s: float
+    scheme: str
+    homotopy: List[HomotopyStep] = field(default_factory=list)
+    attempts: List[dict] = field(default_factory=list)
+    mode: str = "initial_value"
+    method: str = "whole"
+
+    @property
+    def time_s(self) -> float:
+        return self.build_time_s + self.solve_time_s
+
+    @property
+    def impulse(self) -> np.ndarray:
+        """Total impulse per contact and step: sub-node impulse plus the node impulse at the step's start."""
+        return self.mu + self.nu[:-1]
+
+    def as_dict(self) -> dict:
+        return {"status": "ok" if self.success else self.status, "iterations": self.iterations,
+                "build_time_s": self.build_time_s, "solve_time_s": self.solve_time_s,
+                "scheme": self.scheme, "method": self.method, "t": self.t, "q": self.q,
+                "energy": self.energy, "t_sub": self.t_sub, "mu": self.mu, "nu": self.nu,
+                "gap": self.gap, "complementarity_residual": self.complementarity_residual,
+                "impacts": [i.as_dict() for i in self.impacts],
+                "homotopy": [vars(s) for s in self.homotopy], "attempts": self.attempts}
+
+
+# ----------------------------------------------------------------------------- element functions
+class ContactMechanics:
+    """CasADi element functions of the contact transcription for one system and scheme."""
+
+    def __init__(self, system: LagrangianSystem, scheme: str):
+        if system.contact is None:
+            raise ValueError("the system has no contact term")
+        dm = DiscreteMechanics(system, scheme)
+        if dm.s:
+            raise InputError(f"contact trajectories need a two-point scheme (midpoint or trapezoid), not {scheme}")
+        if dm.m:
+            raise InputError("contact trajectories with holonomic constraints are not supported")
+        self.system, self.dm = system, dm
+        self.n, self.c, self.e = n, c, e = dm.n, system.ncontact, system.contact.restitution
+        z = ca.SX(0, 1)
+        D1 = lambda a, b, tau: dm.D1(a, z, b, tau)  # noqa: E731
+        D2 = lambda a, b, tau: dm.D2(a, z, b, tau)  # noqa: E731
+        gapf = system.gap
+        Mf = system.mass_matrix
+        sym = ca.SX.sym
+        q0, qk, qs, qsm, qk1 = sym("q0", n), sym("q", n), sym("qs", n), sym("qsm", n), sym("qk1", n)
+        b, bm, h = sym("beta"), sym("betam"), sym("h")
+        mu, nu, p0 = sym("mu", c), sym("nu", c), sym("p0", n)
+        a, am = 0.5 + b, 0.5 + bm
+        J = lambda q: gapf(q)[1]  # noqa: E731
+        phi = lambda q: gapf(q)[0]  # noqa: E731
+        self.initial = ca.Function("c_initial", [q0, qs, b, p0, nu, h],
+                                   [(p0 + D1(q0, qs, a * h)) / h + ca.mtimes(J(q0).T, nu)])
+        self.node = ca.Function("c_node", [qsm, bm, qk, qs, b, nu, h],
+                                [(D2(qsm, qk, (1 - am) * h) + D1(qk, qs, a * h)) / h + ca.mtimes(J(qk).T, nu)])
+        self.sub = ca.Function("c_sub", [qk, qs, qk1, b, mu, h],
+                               [(D2(qk, qs, a * h) + D1(qs, qk1, (1 - a) * h) + ca.mtimes(J(qs).T, mu)) / h])
+        pm = D2(qk, qs, a * h)
+        pp = -D1(qs, qk1, (1 - a) * h)
+        Js = J(qs)
+        r = ca.mtimes(Js, ca.solve(Mf(qs), pp + e * pm))
+        # Newton's law on the normal velocity at the sub-node, waived when the contact is closed
+        # again at the next node: the body is caught (the accumulation point of Zeno bouncing,
+        # where no step-resolved flight is left, and a body resting on the ground).
+        law = mu * r * phi(qk1)
+        self.impact_law = ca.Function("c_law", [qk, qs, qk1, b, mu, h], [law])
+        self.pair = ca.Function("c_pair", [qk, nu], [ca.vertcat(phi(qk), nu)])
+        self.gap_row = ca.Function("c_gap", [qk], [phi(qk)])
+        self.split = ca.Function("c_split", [b], [SPLIT_WEIGHT * b * b])
+        self._law_parts = (qk, qs, qk1, b, mu, h, law)
+        self._rho = sym("rho")
+        self.p_minus = ca.Function("p_minus_sub", [qk, qs, b, h], [pm])
+        self.p_plus = ca.Function("p_plus_sub", [qs, qk1, b, h], [pp])
+        self.p_node_plus = ca.Function("p_node_plus", [qk, qs, b, h], [-D1(qk, qs, a * h)])
+        self.p_node_minus = ca.Function("p_node_minus", [qsm, bm, qk, h], [D2(qsm, qk, (1 - am) * h)])
+        # free sub-node (no impact, α = ½): Newton function for the guess
+        F = D2(qk, qs, 0.5 * h) + D1(qs, qk1, 0.5 * h)
+        self.free_sub = ca.Function("free_sub", [qk, qs, qk1, h], [F, ca.jacobian(F, qs)])
+        # RK4 flow over tau with GUESS_SUBSTEPS substeps, for the event-located guess
+        v, tau = sym("v", n), sym("tau")
+        acc = system.acceleration
+        x, dt = ca.vertcat(qk, v), tau / GUESS_SUBSTEPS
+        f = lambda x: ca.vertcat(x[n:], acc(x[:n], x[n:]))  # noqa: E731
+        for _ in range(GUESS_SUBSTEPS):
+            k1 = f(x)
+            k2 = f(x + dt / 2 * k1)
+            k3 = f(x + dt / 2 * k2)
+            k4 = f(x + dt * k3)
+            x = x + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        self.flow = ca.Function("flow", [qk, v, tau], [x[:n], x[n:], phi(x[:n])])
+        self.acc_normal = ca.Function("acc_normal", [qk, v], [ca.mtimes(J(qk), acc(qk, v))])
+
+
+    def law_slack(self, scale: float) -> ca.Function:
+        """``law/scale − s⁺ + s⁻`` (the impact law with its l1 slacks)."""
+        qk, qs, qk1, b, mu, h, law = self._law_parts
+        sp, sm = ca.SX.sym("sp", self.c), ca.SX.sym("sm", self.c)
+        return ca.Function("c_law_slack", [qk, qs, qk1, b, mu, sp, sm, h], [law / scale - sp + sm])
+
+    def product_penalty(self, scale: float) -> ca.Function:
+        """``ρ Σ_j φ_j(q) λ_j / scale`` for a gap and its impulse (or force)."""
+        q, lam = ca.SX.sym("q", self.n), ca.SX.sym("lam", self.c)
+        phi = self.system.gap(q)[0]
+        return ca.Function("c_pen", [q, lam, self._rho], [self._rho * ca.dot(phi, lam) / scale])
+
+    def force_weight(self, scale: float) -> ca.Function:
+        nu = ca.SX.sym("nu", self.c)
+        return ca.Function("c_force", [nu], [FORCE_WEIGHT * ca.sum1(nu) / scale])
+
+    @property
+    def slack_penalty(self) -> ca.Function:
+        sp, sm = ca.SX.sym("sp", self.c), ca.SX.sym("sm", self.c)
+        return ca.Function("c_slack_pen", [sp, sm, self._rho], [self._rho * ca.sum1(sp + sm)])
+
+
+# ----------------------------------------------------------------------------- the NLP
+class ContactNLP:
+    """Initial-value contact NLP over ``L`` steps of length ``h`` (see module docstring).
+
+    ``scales = (length, momentum, velocity)`` normalise the penalty terms.
+    """
+
+    def __init__(self, cm: ContactMechanics, L: int, h: float, scales):
+        self.cm, self.L, self.h = cm, L, h
+        n, c = cm.n, cm.c
+        ell, pref, vref = scales
+        self.scales_p = ell * pref
+        self.scales_ell = ell
+        self.scales_law = pref * vref * ell
+        self.nlp = nlp = NLP(hessian="exact")
+        nlp.variable("q", (L + 1) * n)
+        nlp.variable("qs", L * n)
+        nlp.variable("beta", L, lb=ALPHA_MIN - 0.5, ub=0.5 - ALPHA_MIN)
+        nlp.variable("mu", L * c, lb=0.0)
+        nlp.variable("nu", L * c, lb=0.0)
+        nlp.variable("s_plus", L * c, lb=0.0)
+        nlp.variable("s_minus", L * c, lb=0.0)
+        nlp.parameter("p0", n)
+        nlp.parameter("rho", 1, value=PENALTY[0])
+        Q = nlp.index("q").reshape(L + 1, n)
+        S = nlp.index("qs").reshape(L, n)
+        B = nlp.index("beta").reshape(L, 1)
+        MU = nlp.index("mu").reshape(L, c)
+        NU = nlp.index("nu").reshape(L, c)
+        SP = nlp.index("s_plus").reshape(L, c)
+        SM = nlp.index("s_minus").reshape(L, c)
+        hh = np.array([h])
+        k = np.arange(L)
+        rho = P(nlp.parameter_index("rho"))
+        nlp.equal_elements("initial", cm.initial,
+                           [X(Q[0]), X(S[0]), X(B[0]), P(nlp.parameter_index("p0")), X(NU[0]), hh])
+        if L > 1:
+            i = np.arange(1, L)
+            nlp.equal_elements("node", cm.node, [X(S[i - 1]), X(B[i - 1]), X(Q[i]), X(S[i]), X(B[i]), X(NU[i]), hh])
+        nlp.equal_elements("sub", cm.sub, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), hh])
+        nlp.inequality_elements("node_gap", cm.gap_row, [X(Q[1:])], lb=0.0)
+        nlp.inequality_elements("sub_gap", cm.gap_row, [X(S)], lb=0.0)
+        law_scale = self.scales_law
+        nlp.equal_elements("impact_law", cm.law_slack(law_scale),
+                           [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), X(SP[k]), X(SM[k]), hh])
+        # exact (l1) penalties: complementarity products and the impact-law slacks
+        nlp.minimize_elements("node_penalty", cm.product_penalty(ell * pref / h), [X(Q[k]), X(NU[k]), rho])
+        nlp.minimize_elements("sub_penalty", cm.product_penalty(ell * pref), [X(S[k]), X(MU[k]), rho])
+        nlp.minimize_elements("law_penalty", cm.slack_penalty, [X(SP[k]), X(SM[k]), rho])
+        nlp.minimize_elements("split", cm.split, [X(B[k])])
+        nlp.minimize_elements("least_force", cm.force_weight(pref / h), [X(NU[L - 1])])
+        self.idx = dict(q=Q, qs=S, beta=B, mu=MU, nu=NU)
+
+    def solve(self, q0, p0, guess: Dict[str, np.ndarray], penalties=None, options=None, verbose=False):
+        """Solve from ``guess``, raising the penalty until complementarity holds.
+
+        Returns ``(Result, steps)``; ``Result.build_time_s`` is 0 unless this call (re)built the solver.
+        """
+        n, c = self.cm.n, self.cm.c
+        before = self.nlp._solver
+        self.nlp.set_parameter("p0", p0)
+        qlo = np.full((self.L + 1, n), -np.inf)
+        qhi = np.full((self.L + 1, n), np.inf)
+        qlo[0] = qhi[0] = q0
+        opts = dict(CONTACT_IPOPT)
+        opts.update(options or {})
+        init = {k: np.asarray(v, float).reshape(-1).copy() for k, v in guess.items()}
+        init["q"][:n] = q0
+        if "s_plus" not in init:
+            init["s_plus"] = np.zeros(self.L * c)
+            init["s_minus"] = np.zeros(self.L * c)
+        steps: List[HomotopyStep] = []
+        res, build = None, 0.0
+        for rho in (penalties or PENALTY):
+            self.nlp.set_parameter("rho", rho)
+            res = self.nlp.solve(init=init if res is None else None, warm=res, options=opts, verbose=verbose,
+                                 bounds={"q": (qlo.reshape(-1), qhi.reshape(-1))})
+            if self.nlp._solver is not before and build == 0.0:
+                build = res.build_time_s
+            resid = self.residual(res.values)
+            steps.append(HomotopyStep(rho, res.status, res.iterations, res.solve_time_s, resid))
+            if not res.success or resid <= COMPLEMENTARITY_TOL:
+                break
+        res.build_time_s = build
+        res.iterations = sum(st.iterations for st in steps)
+        res.solve_time_s = sum(st.solve_time_s for st in steps)
+        res.complementarity_residual = steps[-1].complementarity_residual
+        res.homotopy = steps
+        if res.success and steps[-1].complementarity_residual > COMPLEMENTARITY_TOL:
+            res.success = False
+            res.status = "Complementarity_Not_Reached"
+            res.message = (f"Ipopt converged but the complementarity residual "
+                           f"{steps[-1].complementarity_residual:.2e} exceeds {COMPLEMENTARITY_TOL:g}")
+        return res
+
+    def residual(self, values) -> float:
+        """Largest complementarity violation: |φ ν h|, |φ μ| and |μ r| (scaled as in the penalties)."""
+        cm, L, h = self.cm, self.L, self.h
+        n, c = cm.n, cm.c
+        Q = values["q"].reshape(L + 1, n)
+        S = values["qs"].reshape(L, n)
+        MU = values["mu"].reshape(L, c)
+        NU = values["nu"].reshape(L, c)
+        B = values["beta"].reshape(L)
+        gq = np.asarray(cm.gap_row.map(L)(Q[:-1].T)).reshape(c, L).T
+        gs = np.asarray(cm.gap_row.map(L)(S.T)).reshape(c, L).T
+        law = np.asarray(cm.impact_law.map(L)(Q[:-1].T, S.T, Q[1:].T, B, MU.T, h)).reshape(c, L).T
+        return float(max(np.max(np.abs(gq * NU * h)) / self.scales_p, np.max(np.abs(gs * MU)) / self.scales_p,
+                         np.max(np.abs(law)) / self.scales_law))
+
+
+# ----------------------------------------------------------------------------- event-located guess
+def _bisect_crossing(cm: ContactMechanics, q, v, tau_hi, active):
+    """Earliest time in (0, tau_hi] at which an active gap reaches zero (bisection on the RK4 flow)."""
+    lo, hi = 0.0, tau_hi
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        _, _, ph = cm.flow(q, v, mid)
+        if np.min(np.asarray(ph).reshape(-1)[active]) < 0.0:
+            hi = mid
+        else:
+            lo = mid
+        if hi - lo < 1e-14 * max(tau_hi, 1.0):
+            break
+    return hi
+
+
+def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h: float,
+                length: float) -> Dict[str, np.ndarray]:
+    """Guess for ``L`` steps from ``(q0, v0)``: RK4 flight with located impacts (see module docstring)."""
+    n, c, e = cm.n, cm.c, cm.e
+    p0 = np.asarray(cm.system.mass_matrix(q0)) @ np.asarray(v0, float)
+    Mf, gapf = cm.system.mass_matrix, cm.system.gap
+    Q = np.zeros((L + 1, n))
+    S = np.zeros((L, n))
+    B = np.zeros(L)
+    MU = np.zeros((L, c))
+    event = np.zeros(L, dtype=bool)
+    q, v = np.asarray(q0, float).copy(), np.asarray(v0, float).copy()
+    Q[0] = q
+    resting = False
+    tol = TOUCH_TOL * length
+    for k in range(L):
+        if resting:
+            Q[k + 1] = q
+            continue
+        phi0, J0 = (np.asarray(x) for x in gapf(q))
+        phi0 = phi0.reshape(-1)
+        touching = phi0 <= tol
+        if np.any(touching):
+            vn0 = J0[touching] @ v
+            an0 = np.asarray(cm.acc_normal(q, v)).reshape(-1)[touching]
+            if np.all(vn0 <= tol / h) and np.any(an0 < 0):
+                # in contact, not separating and pressed on: the guess rests here
+                resting = True
+                Q[k + 1] = q
+                continue
+        qn, vn, ph = (np.asarray(x).reshape(-1) for x in cm.flow(q, v, h))
+        # contacts that start touching and separate are not crossings
+        active = ~((phi0 <= tol) & (ph >= -tol))
+        if np.any(ph[active] < -tol):
+            tc = _bisect_crossing(cm, q, v, h, active)
+            qc, vc, phc = (np.asarray(x).reshape(-1) for x in cm.flow(q, v, tc))
+            j = int(np.argmin(np.where(active, phc, np.inf)))
+            Jc = np.asarray(gapf(qc)[1])[j]
+            imp = resolve_impact(np.asarray(Mf(qc)), Jc, vc, e)
+            vn_after = float(Jc @ imp.v_after)
+            an = float(np.asarray(cm.acc_normal(qc, imp.v_after)).reshape(-1)[j])
+            event[k] = True
+            B[k] = min(max(tc / h, ALPHA_MIN), 1 - ALPHA_MIN) - 0.5
+            S[k] = qc
+            MU[k, j] = imp.mu
+            if an < 0 and (tc + 2 * vn_after / -an) < 2 * h:
+                # Zeno accumulation: the next landing would come within the next step.  The
+                # body is caught: it stays in contact at node k+1 (the impact law is waived for
+                # an impact after which the contact persists) and the guess rests from there on.
+                MU[k, j] = resolve_impact(np.asarray(Mf(qc)), Jc, vc, 0.0).mu
+                resting = True
+                q, v = qc, np.zeros(n)
+                Q[k + 1] = q
+                continue
+            qn, vn, _ = (np.asarray(x).reshape(-1) for x in cm.flow(qc, imp.v_after, h - tc))
+        q, v = qn, vn
+        Q[k + 1] = q
+    # free sub-nodes (α = ½) from the nodes: a few Newton steps, all steps at once
+    free = ~event
+    if np.any(free):
+        kk = np.where(free)[0]
+        F = cm.free_sub.map(kk.size)
+        Z = 0.5 * (Q[kk] + Q[kk + 1])
+        for _ in range(4):
+            r, Jr = F(Q[kk].T, Z.T, Q[kk + 1].T, h)
+            r = np.asarray(r).T
+            Jr = np.asarray(Jr).reshape(n, kk.size, n).transpose(1, 0, 2)
+            Z = Z - np.linalg.solve(Jr, r[..., None])[..., 0]
+        S[kk] = Z
+    # node forces where the guess touches: least squares on the node equations, clipped at 0
+    NU = np.zeros((L, c))
+    gq = np.asarray(gapf.map(L)(Q[:L].T)[0]).reshape(c, L).T
+    touching = np.where(np.min(gq, axis=1) <= tol)[0]
+    for k in touching:
+        if k == 0:
+            r = np.asarray(cm.initial(Q[0], S[0], B[0], p0, np.zeros(c), h)).reshape(-1)
+        else:
+            r = np.asarray(cm.node(S[k - 1], B[k - 1], Q[k], S[k], B[k], np.zeros(c), h)).reshape(-1)
+        J = np.asarray(gapf(Q[k])[1])
+        act = gq[k] <= tol
+        sol = np.linalg.lstsq(J[act].T, -r, rcond=None)[0]
+        NU[k, act] = np.maximum(sol, 0.0)
+    return {"q": Q.reshape(-1), "qs": S.reshape(-1), "beta": B, "mu": MU.reshape(-1), "nu": NU.reshape(-1)}
+
+
+# ----------------------------------------------------------------------------- driver
+def _length_scale(system: LagrangianSystem, q0) -> float:
+    """A length for gap tolerances: the largest |∂φ/∂q| column-weighted extent, at least 1e-3."""
+    return max(1.0, float(np.max(np.abs(q0))) if np.size(q0) else 1.0)
+
+
+def _scales(system: LagrangianSystem, q0, qd0, length: float):
+    """(length, momentum, velocity) scales of the scene for the penalty terms."""
+    acc = float(np.max(np.abs(np.asarray(system.acceleration(q0, qd0))))) if system.nq else 0.0
+    vref = max(float(np.max(np.abs(qd0))), math.sqrt(acc * length), 1e-8)
+    mref = float(np.max(np.diag(np.asarray(system.mass_matrix(q0)))))
+    return length, mref * vref, vref
+
+
+def solve_contact(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str = "midpoint",
+                  options: Optional[dict] = None, verbose: bool = False,
+                  penalties: Optional[List[float]] = None) -> ContactTrajectory:
+    """Initial-value contact trajectory over ``[0, T]`` on ``N`` steps (strategy in the module docstring)."""
+    cm = ContactMechanics(system, scheme)
+    q0, qd0 = np.asarray(q0, float), np.asarray(qd0, float)
+    phi0 = np.asarray(system.gap(q0)[0]).reshape(-1)
+    length = _length_scale(system, q0)
+    if np.any(phi0 < -TOUCH_TOL * length):
+        j = int(np.argmin(phi0))
+        raise InputError(f"the body starts inside the ground: gap of {system.contact.names[j]} is {phi0[j]:.3g}")
+    h = T / N
+    p0 = np.asarray(system.momentum(q0, qd0)).reshape(-1)
+    scales = _scales(system, q0, qd0, length)
+    attempts: List[dict] = []
+    whole = ContactNLP(cm, N, h, scales)
+    t_guess = time.perf_counter()
+    guess = event_guess(cm, q0, qd0, N, h, length)
+    guess_time = time.perf_counter() - t_guess
+    res = whole.solve(q0, p0, guess, penalties, options, verbose)
+    attempts.append(_attempt("whole", res))
+    if not res.success:
+        cur = _windows(cm, q0, p0, N, h, length, scales, penalties, options, verbose, attempts)
+        if cur is not None:
+            res = whole.solve(q0, p0, cur, penalties, options, verbose)
+            attempts.append(_attempt("whole-after-windows", res))
+    return _finish(cm, whole, res, N, h, attempts, guess_time)
+
+
+def _attempt(stage: str, res: Result) -> dict:
+    return {"stage": stage, "status": res.status, "iterations": res.iterations,
+            "build_time_s": res.build_time_s, "solve_time_s": res.solve_time_s,
+            "complementarity_residual": res.complementarity_residual,
+            "penalty_steps": len(res.homotopy)}
+
+
+#: Shortest horizon window tried before giving up.
+MIN_WINDOW = 4
+
+
+def _windows(cm, q0, p0, N, h, length, scales, penalties, options, verbose, attempts):
+    """Horizon windows: contact NLPs of L steps marched over the horizon, each from its own event guess."""
+    n, c = cm.n, cm.c
+    Mf = cm.system.mass_matrix
+    out = {"q": np.zeros((N + 1, n)), "qs": np.zeros((N, n)), "beta": np.zeros(N),
+           "mu": np.zeros((N, c)), "nu": np.zeros((N, c)), "s_plus": np.zeros((N, c)), "s_minus": np.zeros((N, c))}
+    out["q"][0] = q0
+    cache: Dict[int, ContactNLP] = {}
+    K, L = 0, 1 << max(3, int(math.log2(max(8, N // 8))))
+    qK, pK = np.asarray(q0, float), np.asarray(p0, float)
+    while K < N:
+        L = min(L, N - K)
+        if L not in cache:
+            cache[L] = ContactNLP(cm, L, h, scales)
+        w = cache[L]
+        vK = np.linalg.solve(np.asarray(Mf(qK)), pK)
+        r = w.solve(qK, pK, event_guess(cm, qK, vK, L, h, length), penalties, options, verbose)
+        attempts.append(_attempt(f"window {K}:{K + L}", r))
+        if r.success:
+            for key, arr in out.items():
+                if key == "q":
+                    arr[K + 1:K + L + 1] = r.values["q"].reshape(L + 1, n)[1:]
+                else:
+                    arr[K:K + L] = r.values[key].reshape(arr[K:K + L].shape)
+            qK = out["q"][K + L]
+            pK = np.asarray(cm.p_node_minus(out["qs"][K + L - 1], out["beta"][K + L - 1], qK, h)).reshape(-1)
+            K, L = K + L, 2 * L
+        else:
+            if L <= MIN_WINDOW:
+                return None
+            L //= 2
+    return {k: v.reshape(-1) for k, v in out.items()}
+
+
+def _finish(cm: ContactMechanics, tn: ContactNLP, res: Result, N: int, h: float, attempts,
+            guess_time: float) -> ContactTrajectory:
+    n, c, sysm = cm.n, cm.c, cm.system
+    q = res.values["q"].reshape(N + 1, n)
+    S = res.values["qs"].reshape(N, n)
+    B = res.values["beta"].reshape(N)
+    MU = res.values["mu"].reshape(N, c)
+    NUf = res.values["nu"].reshape(N, c)
+    hv = np.array([h])
+    pp = np.asarray(cm.p_node_plus.map(N)(q[:-1].T, S.T, B, hv)).T
+    pN = np.asarray(cm.p_node_minus(S[-1], B[-1], q[-1], h)).reshape(1, -1)
+    p = np.vstack([pp, pN])
+    M = np.asarray(sysm.mass_matrix.map(N + 1)(q.T)).reshape(n, N + 1, n).transpose(1, 0, 2)
+    v = np.linalg.solve(M, p[..., None])[..., 0]
+    energy = sysm.energies(q, v)
+    gap = np.asarray(sysm.gap.map(N + 1)(q.T)[0]).reshape(c, N + 1).T
+    gap_sub = np.asarray(sysm.gap.map(N)(S.T)[0]).reshape(c, N).T
+    t = np.linspace(0.0, N * h, N + 1)
+    t_sub = t[:-1] + (0.5 + B) * h
+    # Impacts: sub-node impulses of a contact that approaches faster than a step's worth of its
+    # normal acceleration (slower "impacts" are the discrete form of persistent contact).
+    impacts = []
+    for k, j in zip(*np.where(MU > 0.0)):
+        pm = np.asarray(cm.p_minus(q[k], S[k], B[k], h)).reshape(-1)
+        pl = np.asarray(cm.p_plus(S[k], q[k + 1], B[k], h)).reshape(-1)
+        Ms = np.asarray(sysm.mass_matrix(S[k]))
+        vb, va = np.linalg.solve(Ms, pm), np.linalg.solve(Ms, pl)
+        Jj = np.asarray(sysm.gap(S[k])[1])[j]
+        an = abs(float(np.asarray(cm.acc_normal(S[k], vb)).reshape(-1)[j]))
+        if -float(Jj @ vb) > IMPACT_SPEED_STEPS * an * h and MU[k, j] > IMPULSE_TOL * tn.scales_p / tn.scales_ell:
+            impacts.append(Impact(int(k), float(t_sub[k]), int(j), float(MU[k, j]), S[k].copy(), vb, va))
+    nu = np.vstack([NUf * h, np.zeros((1, c))])
+    total_iter = sum(a["iterations"] for a in attempts)
+    return ContactTrajectory(
+        t=t, q=q, p=p, v=v, energy=energy, t_sub=t_sub, q_sub=S, mu=MU, nu=nu, gap=gap, gap_sub=gap_sub,
+        impacts=impacts, complementarity_residual=float(res.complementarity_residual),
+        status=res.status, success=res.success, message=res.message, iterations=int(total_iter),
+        build_time_s=float(sum(a["build_time_s"] for a in attempts)),
+        solve_time_s=float(guess_time + sum(a["solve_time_s"] for a in attempts)),
+        scheme=cm.dm.scheme.name, homotopy=list(res.homotopy), attempts=attempts)
