@@ -39,6 +39,9 @@ SCENES = {
     "stiff_spring_pendulum": "castrajectory.problems.stiff_spring_pendulum",
     "thrown_ball": "castrajectory.problems.thrown_ball",
     "collision_impulse": "castrajectory.problems.collision_impulse",
+    "bouncing_ball": "castrajectory.problems.bouncing_ball",
+    "rectangle_drop": "castrajectory.problems.rectangle_drop",
+    "bowl": "castrajectory.problems.bowl",
 }
 
 
@@ -123,6 +126,38 @@ def trajectory_outcome(title: str, system, run, extra: Optional[dict] = None,
         plotting.animate_points(system.positions(run.q), run.t, path, links=links, title=title)
 
     return Outcome(run.success, data, lines, run.message, writers={"plot": plot, "animate": animate})
+
+
+def contact_outcome(title: str, system, tr, data: dict, lines: List[str], ground=None,
+                    series: Optional[dict] = None, ylabel: str = "height") -> "Outcome":
+    """Outcome of a contact scene: summary lines, JSON data, a contact plot and an animation.
+
+    ``series`` (label -> values per node) defaults to the smallest gap per node;
+    ``ground`` is the polyline drawn under the animation.
+    """
+    from . import plotting
+    status = "ok" if tr.success else tr.status
+    lines = list(lines) + [
+        f"lowest gap {min(tr.gap.min(), tr.gap_sub.min()):.2e}; complementarity residual "
+        f"{tr.complementarity_residual:.1e}; energy {tr.energy[0]:.8g} -> {tr.energy[-1]:.8g}",
+        f"relaxation (penalty) steps: {len(tr.homotopy)}; attempts: {len(tr.attempts)}",
+        status_line(status, tr)]
+    data = {"status": status, "iterations": tr.iterations, "build_time_s": tr.build_time_s,
+            "solve_time_s": tr.solve_time_s, **data,
+            "complementarity_residual": tr.complementarity_residual,
+            "homotopy": [vars(s) for s in tr.homotopy], "attempts": tr.attempts}
+
+    def plot(path):
+        ser = series if series is not None else {"smallest gap": tr.gap.min(axis=1)}
+        fig = plotting.contact_plot(tr.t, ser, tr.t_sub, (tr.mu + tr.nu[:-1]).sum(axis=1), ylabel=ylabel,
+                                    title=title)
+        fig.savefig(path)
+
+    def animate(path):
+        plotting.animate_points(system.positions(tr.q), tr.t, path, links=True, pivot=None, trail=False,
+                                ground=ground, title=title)
+
+    return Outcome(tr.success, data, lines, tr.message, writers={"plot": plot, "animate": animate})
 
 
 @dataclass

@@ -80,7 +80,7 @@ from .result import HomotopyStep, Result
 from .validation import InputError
 
 #: The sub-node's time fraction stays in [ALPHA_MIN, 1 − ALPHA_MIN].
-ALPHA_MIN = 1e-3
+ALPHA_MIN = 1e-6
 #: Gap tolerance (relative to the body's length scale) below which a guess counts as touching.
 TOUCH_TOL = 1e-9
 #: Ipopt options of contact solves: bound_relax_factor 0 (the NLP core sets it for
@@ -104,6 +104,9 @@ FIRST_ATTEMPT_MAX_ITER = 60
 IMPACT_SPEED_STEPS = 2.0
 #: ... and its impulse exceeds this fraction of the momentum scale (interior-point noise is far below).
 IMPULSE_TOL = 1e-6
+#: The guess lets a touching body rest when its whole velocity is below this many steps' worth
+#: of its normal acceleration (a ball at the accumulation point of Zeno bouncing, or at rest).
+REST_SPEED_STEPS = 2.0
 #: RK4 substeps per step in the event-located guess.
 GUESS_SUBSTEPS = 4
 
@@ -415,7 +418,8 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
         if np.any(touching):
             vn0 = J0[touching] @ v
             an0 = np.asarray(cm.acc_normal(q, v)).reshape(-1)[touching]
-            if np.all(vn0 <= tol / h) and np.any(an0 < 0):
+            if np.all(vn0 <= tol / h) and np.any(an0 < 0) and \
+                    np.linalg.norm(v) <= REST_SPEED_STEPS * float(np.max(-an0)) * h:
                 # in contact, not separating and pressed on: the guess rests here
                 resting = True
                 Q[k + 1] = q
@@ -424,7 +428,8 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
         # contacts that start touching and separate are not crossings
         active = ~((phi0 <= tol) & (ph >= -tol))
         if np.any(ph[active] < -tol):
-            tc = _bisect_crossing(cm, q, v, h, active)
+            # the sub-node's time fraction is bounded: an earlier or later crossing is placed at the bound
+            tc = min(max(_bisect_crossing(cm, q, v, h, active), ALPHA_MIN * h), (1 - ALPHA_MIN) * h)
             qc, vc, phc = (np.asarray(x).reshape(-1) for x in cm.flow(q, v, tc))
             j = int(np.argmin(np.where(active, phc, np.inf)))
             Jc = np.asarray(gapf(qc)[1])[j]
@@ -432,13 +437,14 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
             vn_after = float(Jc @ imp.v_after)
             an = float(np.asarray(cm.acc_normal(qc, imp.v_after)).reshape(-1)[j])
             event[k] = True
-            B[k] = min(max(tc / h, ALPHA_MIN), 1 - ALPHA_MIN) - 0.5
+            B[k] = tc / h - 0.5
             S[k] = qc
             MU[k, j] = imp.mu
-            if an < 0 and (tc + 2 * vn_after / -an) < 2 * h:
-                # Zeno accumulation: the next landing would come within the next step.  The
-                # body is caught: it stays in contact at node k+1 (the impact law is waived for
-                # an impact after which the contact persists) and the guess rests from there on.
+            if an < 0 and np.linalg.norm(imp.v_after) <= REST_SPEED_STEPS * -an * h:
+                # Zeno accumulation: the body leaves with less speed than its normal acceleration
+                # gives in two steps, so the next landing comes within about a step.  It is
+                # caught: in contact again at node k+1 (the impact law is waived for an impact
+                # after which the contact persists) and the guess rests from there on.
                 MU[k, j] = resolve_impact(np.asarray(Mf(qc)), Jc, vc, 0.0).mu
                 resting = True
                 q, v = qc, np.zeros(n)
