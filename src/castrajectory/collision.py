@@ -306,19 +306,28 @@ def corners(width: float, height: float) -> np.ndarray:
     return np.array([[-w, -h], [w, -h], [w, h], [-w, h]])
 
 
-def bouncing_ball(mass: float = 1.0, g: float = 9.81, restitution_coefficient: float = 1.0) -> LagrangianSystem:
+def bouncing_ball(mass: float = 1.0, g: float = 9.81, restitution_coefficient: float = 1.0,
+                  stiffness: float = 0.0, anchor: float = 1.0) -> LagrangianSystem:
     """Point mass at height ``y`` above the ground ``y = 0``: ``L = ½ m ẏ² − m g y``, gap ``φ = y``.
 
-    Gravity is omitted when ``g = 0``; the :class:`~castrajectory.mechanics.Contact`
+    Gravity is omitted when ``g = 0``; with ``stiffness = k > 0`` a linear spring
+    ``½ k (y − anchor)²`` pulls the ball towards the height ``anchor`` (then the
+    free flight is harmonic, which the midpoint rule does not integrate exactly:
+    the scene for convergence orders).  The :class:`~castrajectory.mechanics.Contact`
     term is the only contact machinery.
     """
-    from .mechanics import Contact, Gravity
+    from .mechanics import Contact, Gravity, Potential
     m = positive("mass", mass)
     g = finite("g", g)
     e = restitution(restitution_coefficient)
+    k = finite("stiffness", stiffness)
+    if k < 0:
+        raise InputError(f"stiffness must be >= 0 (got {stiffness})")
     y = ca.SX.sym("y", 1)
     point = ca.vertcat(0, y[0])
     terms = [Gravity(g)] if g != 0.0 else []
+    if k > 0:
+        terms.append(Potential(0.5 * k * (y[0] - finite("anchor", anchor)) ** 2, "spring"))
     return LagrangianSystem(y, Atoms([point], [m]), terms, names=["y"],
                             contact=Contact([y[0]], e, ["ball"]))
 
@@ -342,6 +351,40 @@ def ball_oracle(height: float, velocity: float, g: float, e: float, T: float):
         t += 2 * e ** (k + 1) * V / g
         k += 1
     return np.array(times), np.array(apexes), np.array(speeds)
+
+
+def spring_ball_oracle(height: float, velocity: float, g: float, stiffness: float, mass: float, anchor: float,
+                       e: float, T: float):
+    """Analytic impacts of the ball on a spring (see :func:`bouncing_ball`): times and impact speeds before ``T``.
+
+    Between impacts ``y(τ) = y_eq + (y₀ − y_eq) cos ωτ + (v₀/ω) sin ωτ`` with
+    ``ω = √(k/m)`` and ``y_eq = anchor − m g/k``; the next impact is the first
+    ``τ > 0`` with ``y(τ) = 0``, where ``v → −e v``.
+    """
+    w = math.sqrt(stiffness / mass)
+    yeq = anchor - mass * g / stiffness
+    t, y0, v0 = 0.0, float(height), float(velocity)
+    times, speeds = [], []
+    while t < T and len(times) < 10000:
+        A, B = y0 - yeq, v0 / w
+        R = math.hypot(A, B)
+        if R <= abs(yeq) or R == 0.0:
+            break  # oscillates without reaching the ground
+        phase = math.atan2(B, A)
+        c = math.acos(-yeq / R)
+        cands = [(phase + s * c + 2 * math.pi * n) / w for s in (1, -1) for n in range(-1, 3)]
+        cands = [x for x in cands if x > 1e-12 / w]
+        tau = min(cands)
+        v_hit = -A * w * math.sin(w * tau) + B * w * math.cos(w * tau)
+        t += tau
+        if t >= T:
+            break
+        times.append(t)
+        speeds.append(-v_hit)
+        y0, v0 = 0.0, -e * v_hit
+        if v0 <= 1e-12 * abs(v_hit):
+            break
+    return np.array(times), np.array(speeds)
 
 
 def ball_height(height: float, velocity: float, g: float, e: float, t) -> np.ndarray:

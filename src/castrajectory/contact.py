@@ -434,7 +434,6 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
             j = int(np.argmin(np.where(active, phc, np.inf)))
             Jc = np.asarray(gapf(qc)[1])[j]
             imp = resolve_impact(np.asarray(Mf(qc)), Jc, vc, e)
-            vn_after = float(Jc @ imp.v_after)
             an = float(np.asarray(cm.acc_normal(qc, imp.v_after)).reshape(-1)[j])
             event[k] = True
             B[k] = tc / h - 0.5

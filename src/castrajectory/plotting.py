@@ -211,7 +211,8 @@ def long_horizon_plot(t, energy_errors: Dict[str, np.ndarray], period: Optional[
 _WP_X = {"time": "wall time, build + solve (s)", "solve_time_s": "solve time (s)",
          "build_time_s": "build time (s)", "n": "N (steps)"}
 _WP_Y_ALIAS = {"error": "error_final", "energy": "energy_error_max"}
-_WP_Y_LABEL = {"error_final": "final-state error", "energy_error_max": "max |E − E₀|"}
+_WP_Y_LABEL = {"error_final": "final-state error", "energy_error_max": "max |E − E₀|",
+               "impact_time_error": "max |t_impact − exact| (s)"}
 _WP_MARKERS = "os^vD<>pPX*h"
 
 
@@ -284,6 +285,19 @@ def work_precision_panels(rows: List[dict], x: str = "time",
     _work_precision_axes(ax_en, rows, x, "energy_error_max", group)
     ax_err.set_title("final-state error", fontsize=10)
     ax_en.set_title("max energy error", fontsize=10)
+    if title:
+        fig.suptitle(title, fontsize=11)
+    return fig
+
+
+def contact_work_precision(rows: List[dict], title: Optional[str] = None) -> Figure:
+    """Impact-time error of contact runs against wall time and against N (rows of ``study.contact_run``)."""
+    fig = Figure(figsize=(11.0, 4.6), layout="constrained")
+    ax_t, ax_n = fig.subplots(1, 2)
+    _work_precision_axes(ax_t, rows, "time", "impact_time_error", ("case", "method"))
+    _work_precision_axes(ax_n, rows, "n", "impact_time_error", ("case", "method"))
+    ax_t.set_title("impact-time error against wall time", fontsize=10)
+    ax_n.set_title("impact-time error against N", fontsize=10)
     if title:
         fig.suptitle(title, fontsize=11)
     return fig

@@ -14,7 +14,7 @@ from typing import Callable, Iterable, List, Optional, Sequence
 
 import numpy as np
 
-from . import droplet
+from . import collision, droplet, stepping, trajectory
 
 DROPLET_ERRORS = ("shape", "contact_angle", "span", "energy", "pressure")
 
@@ -351,3 +351,58 @@ def long_horizon_run(system, q0, qd0, T: float, n: int, method: str, scheme: Opt
         row["success"] = False
         row.update({k: math.nan for k in keys})
     return row, run
+
+
+# ----------------------------------------------------------------------------- contact: work-precision
+#: Contact work-precision cases: bouncing ball under gravity (flight exact in the midpoint rule)
+#: and the ball on a spring (harmonic flight: the discretisation error is visible).
+CONTACT_CASES = {
+    "ball": dict(height=1.0, velocity=0.0, g=9.81, e=1.0, stiffness=0.0, anchor=0.0, T=2.5, impacts=3),
+    "spring_ball": dict(height=1.0, velocity=0.0, g=9.81, e=0.9, stiffness=50.0, anchor=0.3, T=2.5, impacts=5),
+}
+
+
+def _contact_oracle(c: dict):
+    if c["stiffness"] > 0:
+        return collision.spring_ball_oracle(c["height"], c["velocity"], c["g"], c["stiffness"], 1.0,
+                                            c["anchor"], c["e"], c["T"])
+    times, _, speeds = collision.ball_oracle(c["height"], c["velocity"], c["g"], c["e"], c["T"])
+    return times, speeds
+
+
+def contact_run(case: str, n: int, method: str) -> dict:
+    """One contact run: impact times and speeds against the analytic ones, and wall time.
+
+    ``method`` is ``"whole"`` (the contact NLP) or ``"moreau-jean"`` (the baseline,
+    whose impacts happen within a step: their time is taken as the step's midpoint).
+    """
+    c = CONTACT_CASES[case]
+    system = collision.bouncing_ball(1.0, c["g"], c["e"], c["stiffness"], c["anchor"])
+    t_ex, v_ex = _contact_oracle(c)
+    K = min(c["impacts"], len(t_ex))
+    if method == "whole":
+        tr = trajectory.solve_initial_value(system, [c["height"]], [c["velocity"]], c["T"], n)
+        ok, status, iters = tr.success, tr.status, tr.iterations
+        ti = np.array([i.t for i in tr.impacts])
+        vi = np.array([-float(i.v_before[0]) for i in tr.impacts])
+        build, solve = tr.build_time_s, tr.solve_time_s
+    else:
+        st = stepping.moreau_jean(system, [c["height"]], [c["velocity"]], c["T"], n)
+        ok, status, iters = st.success, "ok" if st.success else "failed", 0
+        v = st.qd[:, 0]
+        jump = np.where((v[:-1] < 0) & (v[1:] > 0))[0]
+        ti = st.t[jump] + 0.5 * st.h
+        vi = -v[jump]
+        build, solve = st.build_time_s, st.solve_time_s
+    k = min(K, len(ti))
+    t_err = float(np.max(np.abs(ti[:k] - t_ex[:k]))) if k == K else float("nan")
+    v_err = float(np.max(np.abs(vi[:k] - v_ex[:k]) / v_ex[:k])) if k == K else float("nan")
+    return {"case": case, "method": method, "n": n, "status": "ok" if ok else status, "iterations": iters,
+            "build_time_s": build, "solve_time_s": solve, "impact_time_error": t_err,
+            "impact_speed_error": v_err, "impacts": int(len(ti))}
+
+
+def contact_work_precision(ns: Sequence[int], cases: Iterable[str] = tuple(CONTACT_CASES),
+                           methods: Iterable[str] = ("whole", "moreau-jean")) -> List[dict]:
+    """Rows of :func:`contact_run` for every case × method × N."""
+    return [contact_run(c, n, m) for c in cases for m in methods for n in ns]
