@@ -259,8 +259,10 @@ class LagrangianSystem:
         """Contact gaps ``φ(q)`` and their Jacobian ``∂φ/∂q`` (only with a :class:`Contact` term)."""
         if self.contact is None:
             raise ValueError("this system has no contact term")
-        phi = ca.vertcat(*self.contact.gaps)
-        return self._get("gap", lambda: ca.Function("gap", [self.q], [phi, ca.densify(ca.jacobian(phi, self.q))]))
+        def build():
+            phi = ca.vertcat(*self.contact.gaps)
+            return ca.Function("gap", [self.q], [phi, ca.densify(ca.jacobian(phi, self.q))])
+        return self._get("gap", build)
 
     @property
     def acceleration(self) -> ca.Function:

@@ -1,0 +1,100 @@
+#!/usr/bin/env python
+"""Benchmark of the contact trajectories (issue 4's goals), measured in one run.
+
+This is a benchmark, not a test: it measures and reports, and exits with
+status 0 (2 for bad flags).  PASS/MISS lines say whether a goal was met in
+*this* run on *this* machine.
+
+Goals:
+(a) the bouncing ball (H = 1 m, e = 1, T = 2.5 s: 3 bounces) at N = 3000
+    solves in under 1 s (build + solve, best of --repeats);
+(b) the rectangle drop (problems/rectangle_drop.py defaults: 2 × 1, θ₀ = 0.3,
+    T = 3 s, N = 1000) solves in under 5 s;
+(c) the relaxation homotopy needs at most 8 steps (here: penalty steps of the
+    final whole solve, over every benchmarked scene).
+
+Also reported: the bowl and the Zeno ball (e = 0.3), and the Moreau–Jean
+baseline's time at the same N with its bounce-time error, as a ratio from this
+run.  One untimed warm-up per scene compiles the element functions
+(castrajectory.jit's disk cache makes later runs load them).
+
+    python scripts/bench_contact.py
+    python scripts/bench_contact.py --repeats 1
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import numpy as np  # noqa: E402
+
+from castrajectory import collision, stepping, trajectory  # noqa: E402
+
+SCENES = {
+    "ball (e = 1, N = 3000)": (lambda: collision.bouncing_ball(1.0, 9.81, 1.0), [1.0], [0.0], 2.5, 3000),
+    "rectangle drop (N = 1000)": (lambda: collision.rectangle_drop(1.0, 2.0, 1.0, 9.81, 1.0),
+                                  [0.0, 2.0, 0.3], [0.5, 0.0, 1.0], 3.0, 1000),
+    "Zeno ball (e = 0.3, N = 1500)": (lambda: collision.bouncing_ball(1.0, 9.81, 0.3), [1.0], [0.0], 3.0, 1500),
+    "bowl (N = 1500)": (lambda: collision.bowl(), [0.5, 0.6, 0.2], [0.0, 0.0, 0.0], 3.0, 1500),
+}
+GOALS = {"ball (e = 1, N = 3000)": 1.0, "rectangle drop (N = 1000)": 5.0}
+
+
+def run(name, repeats):
+    make, q0, qd0, T, N = SCENES[name]
+    system = make()
+    trajectory.solve_initial_value(system, q0, qd0, T, N)  # warm-up (compiles, loads Ipopt)
+    best = None
+    for _ in range(repeats):
+        system = make()
+        t0 = time.perf_counter()
+        tr = trajectory.solve_initial_value(system, q0, qd0, T, N)
+        wall = time.perf_counter() - t0
+        if best is None or wall < best[0]:
+            best = (wall, tr)
+    return best
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--repeats", type=int, default=3)
+    args = p.parse_args(argv)
+    if args.repeats < 1:
+        print("bench_contact.py: error: --repeats must be >= 1", file=sys.stderr)
+        return 2
+    worst_steps = 0
+    print(f"{'scene':32s} {'wall s':>7s} {'build':>7s} {'solve':>7s} {'iter':>5s} {'steps':>5s} "
+          f"{'impacts':>7s} {'comp':>8s} status")
+    for name in SCENES:
+        wall, tr = run(name, args.repeats)
+        worst_steps = max(worst_steps, len(tr.homotopy))
+        print(f"{name:32s} {wall:7.3f} {tr.build_time_s:7.3f} {tr.solve_time_s:7.3f} {tr.iterations:5d} "
+              f"{len(tr.homotopy):5d} {len(tr.impacts):7d} {tr.complementarity_residual:8.1e} {tr.status}")
+        if name in GOALS:
+            ok = tr.success and wall < GOALS[name]
+            print(f"  {'PASS' if ok else 'MISS'}: {name} in {wall:.3f} s (goal < {GOALS[name]:g} s)")
+    print(f"  {'PASS' if worst_steps <= 8 else 'MISS'}: at most {worst_steps} relaxation steps (goal <= 8)")
+    # the time-stepping baseline at the same N, for the record
+    system = collision.bouncing_ball(1.0, 9.81, 1.0)
+    t0 = time.perf_counter()
+    st = stepping.moreau_jean(system, [1.0], [0.0], 2.5, 3000)
+    mj = time.perf_counter() - t0
+    v = st.qd[:, 0]
+    jump = np.where((v[:-1] < 0) & (v[1:] > 0))[0]
+    t_ex, _, _ = collision.ball_oracle(1.0, 0.0, 9.81, 1.0, 2.5)
+    k = min(len(jump), len(t_ex))
+    err = np.max(np.abs(st.t[jump][:k] + 0.5 * st.h - t_ex[:k])) if k else float("nan")
+    wall, tr = run("ball (e = 1, N = 3000)", 1)
+    err_w = np.max(np.abs(np.array([i.t for i in tr.impacts])[:len(t_ex)] - t_ex))
+    print(f"ball N = 3000: whole {wall:.3f} s (bounce-time error {err_w:.1e} s) vs Moreau-Jean {mj:.3f} s "
+          f"(error {err:.1e} s): time ratio {wall / mj:.1f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
