@@ -12,8 +12,11 @@ What is measured
    (``gamma_gl = 1, gamma_sl = 0.5, gamma_sg = 1, A = 1``: Young's angle 60°)
    is solved with ``droplet.solve(drop, N, formulation)`` ``--repeats`` times,
    each time from scratch (a fresh NLP, so a fresh CasADi graph and Ipopt
-   solver).  Reported per ``N``: the best build time (``Result.build_time_s``:
-   graph construction plus ``nlpsol``), the best Ipopt solve time
+   solver; from ``droplet.PRESOLVE_MIN_N`` segments on, ``solve`` first solves the
+   drop on ``droplet.PRESOLVE_N`` segments to start from, and that coarse solve's
+   build and solve times and iterations are included).  Reported per ``N``: the
+   best build time (``Result.build_time_s``: graph construction plus ``nlpsol``),
+   the best Ipopt solve time
    (``Result.solve_time_s``), the best per-run sum build + solve, the best wall
    time of the whole ``solve()`` call (which also post-processes the result),
    Ipopt's iteration count, the status and the shape error (largest distance of

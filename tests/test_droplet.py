@@ -122,6 +122,36 @@ def test_pinned_balloon_converges_through_the_coarse_ladder():
     assert sol2.success and 3.0 < sol.errors["shape"] / sol2.errors["shape"] < 5.0
 
 
+def test_large_n_starts_from_a_coarse_solve(monkeypatch):
+    """From PRESOLVE_MIN_N segments on, the curve solve starts from a coarse solve (PRESOLVE_N
+    segments, resampled); its iterations are part of the reported count."""
+    built = []
+    make_nlp = dl.make_nlp
+
+    def spy(drop, n, formulation="curve", guess=None):
+        built.append((n, guess is not None))
+        return make_nlp(drop, n, formulation, guess)
+
+    monkeypatch.setattr(dl, "make_nlp", spy)
+    drop = free_drop(60)
+    sol = dl.solve(drop, dl.PRESOLVE_MIN_N)
+    assert built == [(dl.PRESOLVE_N, False), (dl.PRESOLVE_MIN_N, True)]
+    assert sol.success and sol.result.iterations <= 15
+    assert droplet_errors(sol, oracle(drop))["shape"] < 1.0 / dl.PRESOLVE_MIN_N ** 2
+    built.clear()
+    dl.solve(drop, dl.PRESOLVE_MIN_N - 1)
+    assert built == [(dl.PRESOLVE_MIN_N - 1, False)]
+
+
+def test_pinned_balloon_at_large_n():
+    """The pinned balloon of the ladder test at N = 2000: from the coarse solve it converges in
+    about a second (from the half-ellipse guess, the direct attempt and the ladder gave no result
+    within 300 s when measured)."""
+    drop = Droplet(gamma_gl=1.3, gamma_sl=0.2, gamma_sg=0.5, area=2.0, span=0.6)
+    sol = dl.solve(drop, 2000, "curve")
+    assert sol.success and droplet_errors(sol, oracle(drop))["shape"] < 4e-6
+
+
 def test_fixed_span_curve_sweep_converges():
     bad = []
     for span, area in [(4.0, 0.5), (3.0, 0.5), (2.5, 0.5), (1.0, 2.0)]:
