@@ -45,9 +45,10 @@ from typing import Dict, Optional
 
 import casadi as ca
 
-#: Compiler flags.  ``-O2`` keeps the IEEE semantics of the virtual machine (no fast-math, and no
-#: ``-march=native``, so a shared cache stays valid on other machines of the same architecture).
-FLAGS = ("-O2", "-fPIC", "-shared")
+#: Compiler flags.  ``-O2`` without fast-math and with ``-ffp-contract=off`` (no fused multiply-add)
+#: keeps the operation-by-operation IEEE arithmetic of the virtual machine; no ``-march=native``, so
+#: a shared cache stays valid on other machines of the same architecture.
+FLAGS = ("-O2", "-ffp-contract=off", "-fPIC", "-shared")
 #: Seconds before a compilation is abandoned (the function is then evaluated by the VM).
 COMPILE_TIMEOUT_S = 60.0
 
