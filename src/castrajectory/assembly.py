@@ -62,15 +62,22 @@ def assemble(contribs: Sequence[Contribution], shape: Tuple[int, int], triu: boo
         keep = rows <= cols
         rows, cols, ent = rows[keep], cols[keep], ent[keep]
     key = cols * nrow + rows
-    uniq, inv = np.unique(key, return_inverse=True)
+    # Column-major (CSC) order of the entries; one stable sort serves both cases below.
+    perm = np.argsort(key, kind="stable")
+    skey = key[perm]
+    new = np.empty(skey.size, dtype=bool)
+    new[:1] = True
+    np.not_equal(skey[1:], skey[:-1], out=new[1:])
+    uniq = skey[new]
     sp = _csc(nrow, ncol, (uniq // nrow), (uniq % nrow))
     nent = vals.size1()
     if uniq.size == ent.size:
         # No two entries share a position: the scatter is a permutation (a gather).
-        order = np.empty(uniq.size, dtype=np.int64)
-        order[inv] = ent
+        order = ent[perm]
         nz = vals if np.array_equal(order, np.arange(nent)) else vals[order.tolist()]
     else:
+        inv = np.empty(key.size, dtype=np.int64)
+        inv[perm] = np.cumsum(new) - 1
         # Scatter matrix S (nnz x n_entries), one 1 per kept entry: nz = S @ vals (sums duplicates).
         counts = np.zeros(nent, dtype=np.int64)
         counts[ent] = 1

@@ -95,6 +95,7 @@ class _Mapped:
         self.compile_ = compile_
         self.el = self.chunk = None  # compiled versions, once available
         self.looked_up = False  # the disk cache was searched (for the element and the chunk)
+        self.maps: Dict[tuple, ca.Function] = {}
 
     def _compiled(self, E: int) -> None:
         build = E >= JIT_MIN_ELEMENTS
@@ -107,9 +108,16 @@ class _Mapped:
             self.chunk = c if c is not m else None
         self.looked_up = self.looked_up or E >= CHUNK_MIN_ELEMENTS
 
-    @staticmethod
-    def _map(f, E):
-        return f.map(E, MAP_PARALLELIZATION, MAP_THREADS) if E > 1 else f
+    def _map(self, f, E):
+        if E <= 1:
+            return f
+        key = (id(f), E, MAP_PARALLELIZATION, MAP_THREADS)
+        m = self.maps.get(key)
+        if m is None:  # creating a map costs O(E); the same sizes recur (levels, windows, repeats)
+            if len(self.maps) > 64:
+                self.maps.clear()
+            m = self.maps[key] = f.map(E, MAP_PARALLELIZATION, MAP_THREADS)
+        return m
 
     def __call__(self, E: int, args: list):
         """``fn`` for every element; ``args`` have E columns (one per element) or one (shared)."""
@@ -132,6 +140,7 @@ class _Kernels:
     """Value, Jacobian and Hessian functions of one element type (see :func:`_kernels`)."""
 
     fn: ca.Function  # kept alive: the cache key holds its id
+    keep: list  # the arguments with at least one entry (empty ones are left out of the kernels)
     value: _Mapped
     jac: _Mapped
     jac_rc: tuple
@@ -156,6 +165,10 @@ def _kernels(fn: ca.Function, kinds: tuple, hessian: bool, compile_: bool) -> _K
         return hit
     syms = [ca.SX.sym(f"a{i}", fn.size1_in(i) * fn.size2_in(i)) for i in range(fn.n_in())]
     out = ca.vec(fn(*[ca.reshape(s, fn.size1_in(i), fn.size2_in(i)) for i, s in enumerate(syms)]))
+    # Empty arguments (e.g. no stage variables) are dropped: every kernel argument costs O(E) when
+    # the mapped kernel is called symbolically.
+    keep = [i for i, s in enumerate(syms) if s.numel()]
+    args = [syms[i] for i in keep]
     z = ca.vertcat(*[s for s, k in zip(syms, kinds) if k == "x"]) if "x" in kinds else ca.SX(0, 1)
     J = ca.jacobian(out, z)
     rc = lambda M: tuple(np.asarray(v, dtype=np.int64) for v in M.sparsity().get_triplet())  # noqa: E731
@@ -163,9 +176,9 @@ def _kernels(fn: ca.Function, kinds: tuple, hessian: bool, compile_: bool) -> _K
     if hessian:
         w = ca.SX.sym("w", out.numel())
         H = ca.hessian(ca.dot(w, out), z)[0]
-        hess, hess_rc = _Mapped(ca.Function("el_hess", syms + [w], [_nz(H)]), compile_), rc(H)
-    kern = _Kernels(fn, _Mapped(ca.Function("el", syms, [out]), compile_),
-                    _Mapped(ca.Function("el_jac", syms, [_nz(J)]), compile_), rc(J), hess, hess_rc)
+        hess, hess_rc = _Mapped(ca.Function("el_hess", args + [w], [_nz(H)]), compile_), rc(H)
+    kern = _Kernels(fn, keep, _Mapped(ca.Function("el", args, [out]), compile_),
+                    _Mapped(ca.Function("el_jac", args, [_nz(J)]), compile_), rc(J), hess, hess_rc)
     if len(_KERNELS) >= _KERNELS_MAX:
         _KERNELS.clear()
     _KERNELS[key] = kern
@@ -686,6 +699,7 @@ class NLP:
         # Global position of each local unknown, per element: (E, nz).
         zidx = np.hstack([np.broadcast_to(idx.reshape(-1, idx.shape[-1]), (E, idx.shape[-1])) for idx in var_idx]) \
             if var_idx else np.zeros((E, 0), dtype=np.int64)
+        call_args = [call_args[i] for i in kern.keep]
         values = ca.vec(kern.value(E, call_args))
         jv = ca.vec(kern.jac(E, call_args))
         jr, jc = kern.jac_rc
