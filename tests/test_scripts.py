@@ -253,3 +253,81 @@ def test_n_link_pendulum_runs():
     assert p.returncode == 0, p.stderr
     d = json.loads(p.stdout)
     assert d["links"] == 3 and len(d["q"][0]) == 3 and d["status"] == "ok"
+
+
+# ----------------------------------------------------------------------------- contact scenes
+def test_bouncing_ball_json_keys_and_oracle():
+    p = run([script("bouncing_ball"), "--n", "600", "--json"])
+    assert p.returncode == 0, p.stderr
+    d = json.loads(p.stdout)
+    for key in ("status", "t", "q", "mu", "apex_heights", "energy", "complementarity_residual"):
+        assert key in d
+    assert d["status"] == "ok" and len(d["t"]) == len(d["q"]) == len(d["mu"]) == 601
+    assert isinstance(d["q"][0], float)  # heights, not rows
+    # e = 1: every apex is H, every impact time the analytic one
+    assert max(abs(a - 1.0) for a in d["apex_heights"]) < 1e-6
+    assert max(abs(a - b) for a, b in zip(d["impact_times"], d["impact_times_exact"])) < 1e-6
+
+
+def test_rectangle_drop_json_impacts_match_the_corner_law(tmp_path):
+    gif, png = tmp_path / "r.gif", tmp_path / "r.png"
+    p = run([script("rectangle_drop"), "--T", "1.2", "--n", "400", "--json", "--plot", str(png),
+             "--animate", str(gif)])
+    assert p.returncode == 0, p.stderr
+    d = json.loads(p.stdout)
+    for key in ("status", "t", "q", "mu", "mass", "width", "height", "restitution", "impacts"):
+        assert key in d
+    assert len(d["q"][0]) == 3 and len(d["mu"][0]) == 4
+    assert d["impacts"], "the default drop hits the ground within 1.2 s"
+    for imp in d["impacts"]:
+        assert set(("t", "corner", "angle", "v_before", "v_after", "mu")) <= set(imp)
+        assert max(abs(a - b) for a, b in zip(imp["v_after"], imp["v_after_exact"])) < 1e-7
+    assert gif.read_bytes()[:4] == b"GIF8" and png.stat().st_size > 10_000
+
+
+def test_bowl_json_keys():
+    p = run([script("bowl"), "--T", "1", "--n", "400", "--json"])
+    assert p.returncode == 0, p.stderr
+    d = json.loads(p.stdout)
+    for key in ("status", "t", "q", "gap", "mu", "energy"):
+        assert key in d
+    assert min(d["gap"]) > -1e-9
+    assert max(abs(e - d["energy"][0]) for e in d["energy"]) < 1e-5 * abs(d["energy"][0])
+
+
+CONTACT_BAD = [
+    ("bouncing_ball", ["--height", "-1"], "inside the ground"),
+    ("bouncing_ball", ["--restitution", "1.5"], "restitution must be between 0 and 1"),
+    ("bouncing_ball", ["--restitution", "nan"], "restitution must be finite"),
+    ("bouncing_ball", ["--mass", "0"], "mass must be positive"),
+    ("bouncing_ball", ["--T", "0"], "T must be positive"),
+    ("bouncing_ball", ["--n", "1"], "n must be an integer >= 2"),
+    ("bouncing_ball", ["--g", "-1"], "g must be >= 0"),
+    ("rectangle_drop", ["--y", "0.1"], "inside the ground"),
+    ("rectangle_drop", ["--width", "0"], "width must be positive"),
+    ("rectangle_drop", ["--restitution", "-0.1"], "restitution must be between 0 and 1"),
+    ("rectangle_drop", ["--mass", "-2"], "mass must be positive"),
+    ("bowl", ["--radius", "0"], "radius must be positive"),
+    ("bowl", ["--y", "-1"], "inside the ground"),
+]
+
+
+@pytest.mark.parametrize("name,args,needle", CONTACT_BAD)
+def test_contact_scripts_refuse_bad_input(tmp_path, name, args, needle):
+    out = tmp_path / "keep.png"
+    out.write_bytes(b"earlier output")
+    p = run([script(name), *args, "--json", "--plot", str(out)])
+    assert p.returncode == 2, p.stderr
+    assert p.stdout == ""
+    lines = p.stderr.strip().splitlines()
+    assert len(lines) == 1 and needle in lines[0] and "Traceback" not in p.stderr
+    assert out.read_bytes() == b"earlier output"
+
+
+def test_contact_failure_exits_1_and_writes_nothing(tmp_path):
+    out = tmp_path / "keep.png"
+    out.write_bytes(b"earlier output")
+    p = run([script("rectangle_drop"), "--T", "1", "--n", "300", "--max-iter", "2", "--json", "--plot", str(out)])
+    assert p.returncode == 1
+    assert json.loads(p.stdout)["status"] != "ok"
+    assert out.read_bytes() == b"earlier output"

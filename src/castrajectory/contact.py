@@ -9,8 +9,10 @@ Transcription (initial value, two-point schemes; derivation in
 ``docs/derivations.md``, "Contact trajectories")
 -----------------------------------------------------------------------------
 Every step ``k`` of the grid ``t_k = k h`` holds a *collision sub-node* ``q̃_k``
-at ``t_k + α_k h`` with ``α_k = ½ + β_k ∈ [ε, 1 − ε]`` (Fetecau, Marsden, Ortiz
-and West 2003: the impact time is an unknown, not a grid node).  The discrete
+at ``t_k + α_k h`` with ``α_k = ½ + β_k ∈ [ε, 1 − ε]`` (as in Fetecau, Marsden,
+Ortiz and West 2003, the impact time is an unknown, not a grid node; unlike
+their integrator, ``α_k`` is fixed by the gap and Newton's law below, not by
+varying the action in the collision time).  The discrete
 action is ``S_d = Σ_k L_d(q_k, q̃_k; α_k h) + L_d(q̃_k, q_{k+1}; (1 − α_k) h)``.
 Its stationarity under the unilateral constraints gives, with ``D₁, D₂`` the
 slot derivatives of ``L_d``:
@@ -26,8 +28,14 @@ slot derivatives of ``L_d``:
   where ``h ν_k = m g h``;
 * impact law (Newton restitution on the contact's normal velocity, evaluated
   with the exact discrete momenta at the sub-node):
-  ``μ_{jk} · ∇φ_j(q̃_k) M(q̃_k)⁻¹ (p̃⁺ + e p̃⁻) = 0``.  With ``e = 1`` the kinetic
-  energy ``½ p̃ᵀM⁻¹p̃`` is the same on both sides of the impact, exactly;
+  ``μ_{jk} · r_{jk} · φ_j(q_{k+1})/ℓ = 0`` with
+  ``r = ∇φ_j(q̃_k) M(q̃_k)⁻¹ (p̃⁺ + e p̃⁻)``: the law holds for every impact after
+  which the body leaves, and is waived when the contact is closed again at the
+  next node (the body is caught: the accumulation point of Zeno bouncing, or a
+  body at rest).  With ``e = 1`` the kinetic energy ``½ p̃ᵀM⁻¹p̃`` is the same on
+  both sides of the impact, exactly.  Because the weight ``φ_j(q_{k+1})/ℓ`` is
+  small for an impact late in its step, the unweighted ``|μ r|`` of every
+  impact whose next node is open is checked separately (:data:`LAW_TOL`);
 * centred splits and the least force at the last node: a tiny objective
   ``w_β Σ β_k² + w_ν h ν_{N−1}``.  A body on the ground at the last node with
   a force is otherwise free to "launch itself" into ``q_N``, which no later
@@ -38,12 +46,12 @@ Complementarity is imposed by exact (ℓ1) penalties rather than by relaxed
 product constraints: the objective gains ``ρ (Σ φ(q_k)·h ν_k + Σ φ(q̃_k)·μ_k)``
 (both factors are bounded below by 0, so each product is ≥ 0) and
 ``ρ Σ (s⁺ + s⁻)`` for the impact law written as ``μ r − s⁺ + s⁻ = 0``,
-``s± ≥ 0``; ``bound_relax_factor = 0``.  Every constraint then has a gradient
+``s± ≥ 0``; ``bound_relax_factor = 0``.  (The steps are recorded as
+:class:`~castrajectory.result.HomotopyStep`, whose ``sigma`` field holds ``ρ``.)  Every constraint then has a gradient
 that never vanishes, whereas the relaxed products ``|μ r| ≤ σ`` are degenerate
 wherever ``μ = r = 0`` (every sub-node of a resting body), where Ipopt's
 multipliers diverged in our trials.  ``ρ`` rises (10, 100, ...) with warm
-starts until the scaled residual is at most :data:`COMPLEMENTARITY_TOL`; each
-step is recorded.
+starts until the scaled residual is at most :data:`COMPLEMENTARITY_TOL`.
 
 Solution strategy (chosen by the library)
 -----------------------------------------
@@ -51,14 +59,16 @@ Solution strategy (chosen by the library)
    (RK4) from the start; every gap crossing is located by bisection, the
    impact law of :func:`castrajectory.collision.resolve_impact` is applied
    there and the flight continues.  The sub-node of that step is placed at the
-   crossing with the impact's ``μ``.  When an impact leaves too little normal
-   velocity for a flight longer than ``2h`` (the accumulation point of Zeno
-   bouncing), the guess rests on the ground from there on.
-2. **Whole solve** of all ``N`` steps from that guess, first at ``σ = 0``; then a
-   short homotopy ``σ = σ₀ (1, 10⁻², 0)`` on the problem's own scale
-   (gap × impulse of one step); then **horizon windows** (small contact NLPs
-   marched over the horizon, each with its own event-located guess) whose
-   assembled solution starts a final whole solve at ``σ = 0``.
+   crossing with the impact's ``μ``.  A slow arrival (normal speed below
+   ``v_z = max(2, 1/e) a h``, ``a`` the scene's acceleration scale) of a slow
+   body is caught instead (the accumulation point of Zeno bouncing) and the
+   guess rests there from then on.  (The speed test uses the Euclidean norm of
+   the generalised velocity, which mixes units for a rigid body; it is only a
+   guess.)
+2. **Whole solve** of all ``N`` steps from that guess with the penalty ladder;
+   if it fails, **horizon windows** (small contact NLPs marched over the
+   horizon, each with its own event-located guess and iteration budget) whose
+   assembled solution starts a final whole solve.
 
 The reported status is that of the last whole-trajectory solve.
 """
@@ -98,10 +108,8 @@ COMPLEMENTARITY_TOL = 1e-8
 LAW_TOL = 1e-6
 #: Weight of Σβ² (the split of impact-free steps), far below the penalties.
 SPLIT_WEIGHT = 1e-6
-#: Weight of the least-force selection Σ h ν_k / p_ref among exact solutions (see module docstring).
+#: Weight of the least-force selection h ν_{N−1} / p_ref at the last node (see module docstring).
 FORCE_WEIGHT = 1e-4
-#: Iteration budget of the first whole attempt from the event-located guess.
-FIRST_ATTEMPT_MAX_ITER = 60
 #: A sub-node impulse counts as an impact when the contact approaches faster than this many
 #: steps' worth of its normal acceleration (resting contact approaches at about ½ step's worth).
 IMPACT_SPEED_STEPS = 2.0
@@ -538,7 +546,7 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
 
 # ----------------------------------------------------------------------------- driver
 def _length_scale(system: LagrangianSystem, q0) -> float:
-    """A length for gap tolerances: the largest |∂φ/∂q| column-weighted extent, at least 1e-3."""
+    """A length for gap tolerances and penalty scales: ``max(1, max |q0|)``."""
     return max(1.0, float(np.max(np.abs(q0))) if np.size(q0) else 1.0)
 
 
