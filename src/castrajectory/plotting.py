@@ -490,6 +490,8 @@ def contact_plot(t, series: Dict[str, np.ndarray], t_impulse, impulses, referenc
     ax.set_title(title or "Contact trajectory", fontsize=10)
     ti = np.asarray(t_impulse, float).reshape(-1)
     mu = np.asarray(impulses, float).reshape(-1)
+    keep = mu > 1e-9 * max(float(np.max(np.abs(mu))) if mu.size else 0.0, 1e-300)  # interior-point zeros
+    ti, mu = ti[keep], mu[keep]
     if ti.size:
         bx.vlines(ti, 0.0, mu, color="C3", lw=1.2)
         bx.plot(ti, mu, "o", color="C3", ms=3)
