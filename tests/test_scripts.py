@@ -290,6 +290,20 @@ def test_rectangle_drop_json_impacts_match_the_corner_law(tmp_path):
     assert gif.read_bytes()[:4] == b"GIF8" and png.stat().st_size > 10_000
 
 
+def test_flat_landing_is_one_simultaneous_impact():
+    """θ₀ = 0: both lower corners hit at once; e = 1 sends the body back up with v_y = V, ω = 0."""
+    p = run([script("rectangle_drop"), "--angle", "0", "--vx", "0", "--omega", "0", "--y", "1.5",
+             "--T", "0.6", "--n", "400", "--json"])
+    assert p.returncode == 0, p.stderr
+    d = json.loads(p.stdout)
+    first = [i for i in d["impacts"] if i["simultaneous"]]
+    assert len(first) == 2 and {tuple(i["corner"]) for i in first} == {(-1.0, -0.5), (1.0, -0.5)}
+    V = math.sqrt(2 * 9.81 * 1.0)  # centroid falls 1.5 - 0.5 = 1 m
+    for imp in first:
+        assert abs(imp["v_after"][1] - V) < 1e-6 and abs(imp["v_after"][2]) < 1e-8
+        assert imp["law_error"] < 1e-7 and abs(imp["mu"] - imp["mu_exact"]) < 1e-6
+
+
 def test_bowl_json_keys():
     p = run([script("bowl"), "--T", "1", "--n", "400", "--json"])
     assert p.returncode == 0, p.stderr

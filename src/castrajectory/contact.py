@@ -122,6 +122,9 @@ REST_SPEED_STEPS = 2.0
 #: of a h² (a: the scene's acceleration scale; a h²/8 is the hop of a resting body between two
 #: nodes): the body is caught there.  Only slow arrivals (below v_z) can be waived at all.
 CLOSING_FRACTION = 0.125
+#: Contacts whose gaps close within this (times the length scale) of each other at a located
+#: crossing take one simultaneous impact in the guess (a flat landing).
+SIMULTANEOUS_TOL = 1e-9
 #: Steps of free flight integrated per call in the event-located guess.
 GUESS_CHUNK = 64
 #: RK4 substeps per step in the event-located guess.
@@ -445,6 +448,19 @@ def _bisect_crossing(cm: ContactMechanics, q, v, tau_hi, active):
     return hi
 
 
+def simultaneous_impact(M, J, v, e, sweeps: int = 200):
+    """Newton's law at several contacts at once: ``J v⁺ + e J v⁻ ≥ 0 ⟂ μ ≥ 0``, ``v⁺ = v⁻ + M⁻¹Jᵀμ`` (PGS)."""
+    MiJt = np.linalg.solve(M, J.T)
+    W = J @ MiJt
+    target = -e * (J @ v)
+    mu = np.zeros(J.shape[0])
+    for _ in range(sweeps):
+        for i in range(mu.size):
+            r = J[i] @ (v + MiJt @ mu) - target[i]
+            mu[i] = max(0.0, mu[i] - r / W[i, i])
+    return mu, v + MiJt @ mu
+
+
 def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h: float,
                 length: float, v_zeno: float) -> Dict[str, np.ndarray]:
     """Guess for ``L`` steps from ``(q0, v0)``: RK4 flight with located impacts (see module docstring)."""
@@ -495,13 +511,20 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
             tc = min(max(_bisect_crossing(cm, q, v, h, active), ALPHA_MIN * h), (1 - ALPHA_MIN) * h)
             qc, vc, phc = (np.asarray(x).reshape(-1) for x in cm.flow(q, v, tc))
             j = int(np.argmin(np.where(active, phc, np.inf)))
-            Jc = np.asarray(gapf(qc)[1])[j]
+            Jall = np.asarray(gapf(qc)[1])
+            Jc = Jall[j]
             imp = resolve_impact(np.asarray(Mf(qc)), Jc, vc, e)
             an = float(np.asarray(cm.acc_normal(qc, imp.v_after)).reshape(-1)[j])
             event[k] = True
             B[k] = tc / h - 0.5
             S[k] = qc
             MU[k, j] = imp.mu
+            together = np.where(active & (phc <= phc[j] + SIMULTANEOUS_TOL * length))[0]
+            if together.size > 1:
+                # contacts that close together (a flat landing): one simultaneous impact
+                mus, v_after = simultaneous_impact(np.asarray(Mf(qc)), Jall[together], vc, e)
+                MU[k, together] = mus
+                imp.v_after = v_after
             if an < 0 and -float(Jc @ vc) <= v_zeno and np.linalg.norm(vc) <= 2 * v_zeno:
                 # Zeno accumulation: a slow arrival (below v_zeno, where the NLP may waive the
                 # impact law, see ContactNLP) of a slow body.  It is caught: in contact again at
