@@ -279,8 +279,10 @@ def _levels(N: int, coarsest: int) -> List[int]:
 #: Iteration budget of a whole-trajectory attempt from an interpolated guess before the
 #: horizon continuation takes over (a good guess converges in 0-6 Newton iterations).
 FIRST_ATTEMPT_MAX_ITER = 10
-#: A level that converged in at most this many iterations lets the next level be 4x finer.
+#: A level that converged in at most this many iterations lets the next level be
+#: 2^EASY_LEVEL_JUMP times finer.
 EASY_LEVEL_ITERATIONS = 2
+EASY_LEVEL_JUMP = 3
 #: Iteration budget of one window of the horizon continuation.
 WINDOW_MAX_ITER = 10
 
@@ -425,9 +427,10 @@ def solve_initial_value(system: LagrangianSystem, q0, qd0, T: float, N: int, sch
         if res.success:
             prev, values = tn, res.values
             # Converged from the interpolated guess in a couple of Newton steps: the guess is
-            # in the asymptotic regime, so a 4x finer grid will converge from it too.
+            # in the asymptotic regime, so an 8x finer grid converges from it too (measured:
+            # double pendulum N = 32000, 4000 -> 32000 directly).
             if len(log) == n_log + 1 and res.iterations <= EASY_LEVEL_ITERATIONS:
-                step = 2
+                step = EASY_LEVEL_JUMP
         # A coarse level that fails is too coarse to resolve the motion: drop it and go finer.
         i = min(i + step, len(levels) - 1) if i < len(levels) - 1 else i + 1
     return _finish(tn, res, log, "initial_value")
