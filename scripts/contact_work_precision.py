@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Work–precision of contact trajectories: impact times and speeds against the analytic ones.
+"""Work–precision of contact trajectories: impact times, speeds and apex heights against the analytic ones.
 
 Cases (``study.CONTACT_CASES``): the bouncing ball under gravity (e = 1,
 three bounces; the midpoint rule is exact on parabolas, so only the solver
@@ -36,10 +36,11 @@ def main(argv=None) -> int:
     study.write_csv(rows, os.path.join(args.out, "contact_work_precision.csv"))
     fig = plotting.contact_work_precision(rows, title="Contact trajectories: bounce times against the analytic ones")
     fig.savefig(os.path.join(args.out, "contact_work_precision.png"))
-    print(f"{'case':12s} {'method':12s} {'N':>6s} {'time s':>8s} {'|Δt| max':>10s} {'|Δv|/v max':>11s} status")
+    print(f"{'case':12s} {'method':12s} {'N':>6s} {'time s':>8s} {'|Δt| max':>10s} {'|Δv|/v max':>11s} "
+          f"{'|Δapex| max':>11s} status")
     for r in rows:
         print(f"{r['case']:12s} {r['method']:12s} {r['n']:6d} {r['build_time_s'] + r['solve_time_s']:8.3f} "
-              f"{r['impact_time_error']:10.2e} {r['impact_speed_error']:11.2e} {r['status']}")
+              f"{r['impact_time_error']:10.2e} {r['impact_speed_error']:11.2e} {r['apex_error']:11.2e} {r['status']}")
     for case in study.CONTACT_CASES:
         for method in ("whole", "moreau-jean"):
             sel = [r for r in rows if r["case"] == case and r["method"] == method and r["status"] == "ok"

@@ -444,3 +444,20 @@ def test_script_refuses_bad_input(args, needle):
     lines = p.stderr.strip().splitlines()
     assert len(lines) == 1 and needle in lines[0] and "Traceback" not in p.stderr
     assert p.stdout == ""
+
+
+# ----------------------------------------------------------------------------- work-precision study
+def test_spring_ball_bounce_times_converge_at_second_order_and_beat_moreau_jean():
+    """Ball on a spring (harmonic flight, e = 0.9): the sub-node locates every bounce of the
+    midpoint flight, so the bounce-time error is the flight's O(h²); Moreau–Jean impacts at steps, O(h)."""
+    from castrajectory import study
+    ns = [250, 500, 1000]
+    rows = study.contact_work_precision(ns, cases=["spring_ball"])
+    whole = [r for r in rows if r["method"] == "whole"]
+    mj = [r for r in rows if r["method"] == "moreau-jean"]
+    assert all(r["status"] == "ok" for r in rows)
+    order = -study.loglog_slope(ns, [r["impact_time_error"] for r in whole])
+    assert 1.8 < order < 2.2, order
+    for w, b in zip(whole, mj):
+        assert w["impact_time_error"] < 0.05 * b["impact_time_error"]
+        assert w["apex_error"] < 1e-6 < b["apex_error"]

@@ -212,7 +212,7 @@ _WP_X = {"time": "wall time, build + solve (s)", "solve_time_s": "solve time (s)
          "build_time_s": "build time (s)", "n": "N (steps)"}
 _WP_Y_ALIAS = {"error": "error_final", "energy": "energy_error_max"}
 _WP_Y_LABEL = {"error_final": "final-state error", "energy_error_max": "max |E − E₀|",
-               "impact_time_error": "max |t_impact − exact| (s)"}
+               "impact_time_error": "max |t_impact − exact| (s)", "apex_error": "max |apex − exact| (m)"}
 _WP_MARKERS = "os^vD<>pPX*h"
 
 
@@ -291,13 +291,17 @@ def work_precision_panels(rows: List[dict], x: str = "time",
 
 
 def contact_work_precision(rows: List[dict], title: Optional[str] = None) -> Figure:
-    """Impact-time error of contact runs against wall time and against N (rows of ``study.contact_run``)."""
-    fig = Figure(figsize=(11.0, 4.6), layout="constrained")
-    ax_t, ax_n = fig.subplots(1, 2)
+    """Impact-time and apex-height errors of contact runs against wall time and N (``study.contact_run`` rows)."""
+    fig = Figure(figsize=(11.0, 8.4), layout="constrained")
+    (ax_t, ax_n), (bx_t, bx_n) = fig.subplots(2, 2)
     _work_precision_axes(ax_t, rows, "time", "impact_time_error", ("case", "method"))
     _work_precision_axes(ax_n, rows, "n", "impact_time_error", ("case", "method"))
+    _work_precision_axes(bx_t, rows, "time", "apex_error", ("case", "method"))
+    _work_precision_axes(bx_n, rows, "n", "apex_error", ("case", "method"))
     ax_t.set_title("impact-time error against wall time", fontsize=10)
     ax_n.set_title("impact-time error against N", fontsize=10)
+    bx_t.set_title("apex-height error against wall time", fontsize=10)
+    bx_n.set_title("apex-height error against N", fontsize=10)
     if title:
         fig.suptitle(title, fontsize=11)
     return fig
