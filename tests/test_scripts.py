@@ -343,3 +343,12 @@ def test_contact_failure_exits_1_and_writes_nothing(tmp_path):
     assert p.returncode == 1
     assert json.loads(p.stdout)["status"] != "ok"
     assert out.read_bytes() == b"earlier output"
+
+
+def test_resting_ball_reports_m_g_h_per_step():
+    """Resting contact: the nodes stay on the ground and every settled step carries m g h."""
+    p = run([script("bouncing_ball"), "--height", "0", "--T", "1", "--n", "200", "--json"])
+    assert p.returncode == 0, p.stderr
+    d = json.loads(p.stdout)
+    assert d["resting_steps"] >= 190
+    assert d["resting_impulse_error"] < 1e-6 and d["max_height_at_rest"] < 1e-9

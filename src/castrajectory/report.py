@@ -96,7 +96,7 @@ def _contact_stability(out: str):
              "Each case runs its problem script; a failure is recorded here (status column) and counted "
              "below, not hidden.", "",
              "| case | command | status | iterations | time (s) | impacts | lowest gap | complementarity "
-             "| energy E(0) → E(T) | checked |", "|---|---|---|---|---|---|---|---|---|---|"]
+             "| energy E(0) → E(T) | measured | checked |", "|---|---|---|---|---|---|---|---|---|---|---|"]
     solved = 0
     for title, scene, argv, what in CONTACT_EXTREMES:
         mod = importlib.import_module(SCENES[scene])
@@ -110,9 +110,14 @@ def _contact_stability(out: str):
         n_imp = len(d["impacts"]) if "impacts" in d and isinstance(d["impacts"], list) else \
             len(d.get("impact_times", []))
         E = np.asarray(d["energy"], float)
+        keys = [("impact_law_error", "v⁺ off the impact law by"),
+                ("resting_impulse_error", "impulse per step at rest off m g h by (relative)")]
+        if n_imp:
+            keys = [("impact_time_error", "bounce times off by (s)"), ("apex_error", "apexes off by (m)")] + keys
+        figures = [f"{label} {d[key]:.1e}" for key, label in keys if d.get(key) is not None]
         lines.append(f"| {title} | `{scene}.py {' '.join(argv)}` | {d['status']} | {d['iterations']} | {wall:.2f} | "
                      f"{n_imp} | {gap:.1e} | {d['complementarity_residual']:.1e} | {E[0]:.6g} → {E[-1]:.6g} "
-                     f"| {what} |")
+                     f"| {'; '.join(figures) or '-'} | {what} |")
     lines += ["", f"{solved} of {len(CONTACT_EXTREMES)} extreme cases solved.", ""]
     return True, lines
 
