@@ -90,7 +90,7 @@ def check_kkt(tr, gap_tol: float = KKT_TOL):
     assert 1 <= len(tr.homotopy) <= MAX_PENALTY_STEPS
     for step in tr.homotopy:
         assert step.iterations > 0 and isinstance(step.status, str) and step.status
-        assert step.sigma > 0 and step.solve_time_s >= 0
+        assert step.sigma > 0 and step.solve_time_s >= 0 and step.parameter == "rho"
     # the reported residual is the last step's; the iteration count covers every attempt
     assert tr.homotopy[-1].complementarity_residual == pytest.approx(tr.complementarity_residual, rel=1e-12)
     assert tr.iterations >= sum(s.iterations for s in tr.homotopy)

@@ -47,7 +47,7 @@ product constraints: the objective gains ``ρ (Σ φ(q_k)·h ν_k + Σ φ(q̃_k)
 (both factors are bounded below by 0, so each product is ≥ 0) and
 ``ρ Σ (s⁺ + s⁻)`` for the impact law written as ``μ r − s⁺ + s⁻ = 0``,
 ``s± ≥ 0``; ``bound_relax_factor = 0``.  (The steps are recorded as
-:class:`~castrajectory.result.HomotopyStep`, whose ``sigma`` field holds ``ρ``.)  Every constraint then has a gradient
+:class:`~castrajectory.result.HomotopyStep` with ``parameter = "rho"``.)  Every constraint then has a gradient
 that never vanishes, whereas the relaxed products ``|μ r| ≤ σ`` are degenerate
 wherever ``μ = r = 0`` (every sub-node of a resting body), where Ipopt's
 multipliers diverged in our trials.  ``ρ`` rises (10, 100, ...) with warm
@@ -394,7 +394,7 @@ class ContactNLP:
             if self.nlp._solver is not before and build == 0.0:
                 build = res.build_time_s
             resid = self.residual(res.values)
-            steps.append(HomotopyStep(rho, res.status, res.iterations, res.solve_time_s, resid))
+            steps.append(HomotopyStep(rho, res.status, res.iterations, res.solve_time_s, resid, parameter="rho"))
             if not res.success or resid <= COMPLEMENTARITY_TOL:
                 break
         res.build_time_s = build

@@ -62,13 +62,20 @@ class SolveError(RuntimeError):
 
 @dataclass
 class HomotopyStep:
-    """One relaxation step of a complementarity homotopy."""
+    """One step of a complementarity homotopy.
+
+    ``sigma`` is the value of the homotopy parameter named by ``parameter``:
+    ``"sigma"`` for the Scholtes relaxation of :meth:`castrajectory.nlp.NLP.solve`
+    (``a_i b_i ≤ σ``, σ → 0), ``"rho"`` for the exact-penalty weight of
+    :mod:`castrajectory.contact` (ρ rising until complementarity holds).
+    """
 
     sigma: float
     status: str
     iterations: int
     solve_time_s: float
     complementarity_residual: float
+    parameter: str = "sigma"
 
 
 @dataclass
