@@ -93,8 +93,8 @@ from .validation import InputError
 ALPHA_MIN = 1e-6
 #: Gap tolerance (relative to the body's length scale) below which a guess counts as touching.
 TOUCH_TOL = 1e-9
-#: Ipopt options of contact solves: bound_relax_factor 0 (the NLP core sets it for
-#: complementarity), tiny bound push so guesses on the ground are not pushed away.
+#: Ipopt options of contact solves: bound_relax_factor 0 (impulses, forces and gaps stay exactly
+#: non-negative), tiny bound and slack pushes so guesses on the ground are not pushed away.
 CONTACT_IPOPT = {"tol": 1e-10, "max_iter": 200, "bound_relax_factor": 0.0,
                  "bound_push": 1e-8, "bound_frac": 1e-8, "slack_bound_push": 1e-8, "slack_bound_frac": 1e-8,
                  "mu_init": 1e-8, "constr_mult_init_max": 0}
@@ -116,11 +116,10 @@ IMPACT_SPEED_STEPS = 2.0
 #: ... and its impulse exceeds this fraction of the momentum scale (interior-point noise is far below).
 IMPULSE_TOL = 1e-6
 #: The guess lets a touching body rest when its whole velocity is below this many steps' worth
-#: of its normal acceleration (a ball at the accumulation point of Zeno bouncing, or at rest).
+#: of its normal acceleration, and catches a slow arrival below v_z = max(this, 1/e) a h.
 REST_SPEED_STEPS = 2.0
-#: The impact law may be waived only when the next node is closer to contact than this fraction
-#: of a h² (a: the scene's acceleration scale; a h²/8 is the hop of a resting body between two
-#: nodes): the body is caught there.  Only slow arrivals (below v_z) can be waived at all.
+#: An impact "leaves" (its unweighted Newton law is checked, LAW_TOL) when the next node is open by
+#: more than this fraction of a h² (a h²/8 is the hop of a resting body between two nodes).
 CLOSING_FRACTION = 0.125
 #: Contacts whose gaps close within this (times the length scale) of each other at a located
 #: crossing take one simultaneous impact in the guess (a flat landing).
@@ -365,7 +364,6 @@ class ContactNLP:
         nlp.minimize_elements("law_penalty", cm.slack_penalty, [X(SP[k]), X(SM[k]), rho])
         nlp.minimize_elements("split", cm.split, [X(B[k])])
         nlp.minimize_elements("least_force", cm.force_weight(pref / h), [X(NU[L - 1])])
-        self.idx = dict(q=Q, qs=S, beta=B, mu=MU, nu=NU)
 
     def solve(self, q0, p0, guess: Dict[str, np.ndarray], penalties=None, options=None, verbose=False):
         """Solve from ``guess``, raising the penalty until complementarity holds.
