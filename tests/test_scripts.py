@@ -223,10 +223,14 @@ def assert_refused(tmp_path, name, args, needle):
     assert out.read_bytes() == b"earlier output"
 
 
-def test_double_pendulum_failure_exits_1(tmp_path):
+@pytest.mark.parametrize("name,args", [
+    ("double_pendulum", ["--T", "5", "--n", "400", "--max-iter", "1"]),
+    ("rectangle_drop", ["--T", "1", "--n", "300", "--max-iter", "2"]),
+])
+def test_mechanics_solver_failure_exits_1_and_writes_nothing(tmp_path, name, args):
     out = tmp_path / "keep.png"
     out.write_bytes(b"earlier output")
-    p = run([script("double_pendulum"), "--T", "5", "--n", "400", "--max-iter", "1", "--json", "--plot", str(out)])
+    p = run([script(name), *args, "--json", "--plot", str(out)])
     assert p.returncode == 1
     assert json.loads(p.stdout)["status"] != "ok"
     assert out.read_bytes() == b"earlier output"
@@ -334,15 +338,6 @@ CONTACT_BAD = [
 @pytest.mark.parametrize("name,args,needle", CONTACT_BAD)
 def test_contact_scripts_refuse_bad_input(tmp_path, name, args, needle):
     assert_refused(tmp_path, name, args, needle)
-
-
-def test_contact_failure_exits_1_and_writes_nothing(tmp_path):
-    out = tmp_path / "keep.png"
-    out.write_bytes(b"earlier output")
-    p = run([script("rectangle_drop"), "--T", "1", "--n", "300", "--max-iter", "2", "--json", "--plot", str(out)])
-    assert p.returncode == 1
-    assert json.loads(p.stdout)["status"] != "ok"
-    assert out.read_bytes() == b"earlier output"
 
 
 def test_resting_ball_reports_m_g_h_per_step():

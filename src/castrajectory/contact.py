@@ -248,6 +248,7 @@ class ContactMechanics:
         self.split = ca.Function("c_split", [b], [SPLIT_WEIGHT * b * b])
         self._law_parts = (qk, qs, qk1, b, mu, h, ell, law)
         self._rho = sym("rho")
+        self._objective_and_law_functions()
         self.p_minus = ca.Function("p_minus_sub", [qk, qs, b, h], [pm])
         self.p_plus = ca.Function("p_plus_sub", [qs, qk1, b, h], [pp])
         self.p_node_plus = ca.Function("p_node_plus", [qk, qs, b, h], [-D1(qk, qs, a * h)])
@@ -281,26 +282,26 @@ class ContactMechanics:
             self._flights[K] = ca.Function(f"flights{K}", [q, v, h], [Qs, Vs, Ps])
         return self._flights[K]
 
-    def law_slack(self, scale: float) -> ca.Function:
-        """``law/scale − s⁺ + s⁻`` (the impact law with its l1 slacks)."""
+    def _objective_and_law_functions(self):
+        """Impact law with its l1 slacks and the objective terms, built once per system.
+
+        Scales enter as element arguments, so every ContactNLP (the whole trajectory and every
+        horizon window) shares the same functions, and their derivatives are formed once.
+        """
         qk, qs, qk1, b, mu, h, ell, law = self._law_parts
-        sp, sm = ca.SX.sym("sp", self.c), ca.SX.sym("sm", self.c)
-        return ca.Function("c_law_slack", [qk, qs, qk1, b, mu, sp, sm, h, ell], [law / scale - sp + sm])
-
-    def product_penalty(self, scale: float) -> ca.Function:
-        """``ρ Σ_j φ_j(q) λ_j / scale`` for a gap and its impulse (or force)."""
-        q, lam = ca.SX.sym("q", self.n), ca.SX.sym("lam", self.c)
-        phi = self.system.gap(q)[0]
-        return ca.Function("c_pen", [q, lam, self._rho], [self._rho * ca.dot(phi, lam) / scale])
-
-    def force_weight(self, scale: float) -> ca.Function:
-        nu = ca.SX.sym("nu", self.c)
-        return ca.Function("c_force", [nu], [FORCE_WEIGHT * ca.sum1(nu) / scale])
-
-    @property
-    def slack_penalty(self) -> ca.Function:
-        sp, sm = ca.SX.sym("sp", self.c), ca.SX.sym("sm", self.c)
-        return ca.Function("c_slack_pen", [sp, sm, self._rho], [self._rho * ca.sum1(sp + sm)])
+        sym, c, rho = ca.SX.sym, self.c, self._rho
+        sp, sm, scale = sym("sp", c), sym("sm", c), sym("scale")
+        #: ``law/scale − s⁺ + s⁻``
+        self.law_slack = ca.Function("c_law_slack", [qk, qs, qk1, b, mu, sp, sm, h, ell, scale],
+                                     [law / scale - sp + sm])
+        q, lam = sym("q", self.n), sym("lam", c)
+        #: ``ρ Σ_j φ_j(q) λ_j / scale`` for a gap and its impulse (or force)
+        self.product_penalty = ca.Function("c_pen", [q, lam, rho, scale],
+                                           [rho * ca.dot(self.system.gap(q)[0], lam) / scale])
+        #: ``w_ν Σ_j ν_j / scale``
+        self.force_weight = ca.Function("c_force", [lam, scale], [FORCE_WEIGHT * ca.sum1(lam) / scale])
+        #: ``ρ Σ (s⁺ + s⁻)``
+        self.slack_penalty = ca.Function("c_slack_pen", [sp, sm, rho], [rho * ca.sum1(sp + sm)])
 
 
 # ----------------------------------------------------------------------------- the NLP
@@ -354,16 +355,15 @@ class ContactNLP:
         nlp.equal_elements("sub", cm.sub, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), hh])
         nlp.inequality_elements("node_gap", cm.gap_row, [X(Q[1:])], lb=0.0)
         nlp.inequality_elements("sub_gap", cm.gap_row, [X(S)], lb=0.0)
-        law_scale = self.scales_law
-        nlp.equal_elements("impact_law", cm.law_slack(law_scale),
+        nlp.equal_elements("impact_law", cm.law_slack,
                            [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), X(SP[k]), X(SM[k]), hh,
-                            np.array([self.delta])])
+                            np.array([self.delta]), np.array([self.scales_law])])
         # exact (l1) penalties: complementarity products and the impact-law slacks
-        nlp.minimize_elements("node_penalty", cm.product_penalty(ell * pref / h), [X(Q[k]), X(NU[k]), rho])
-        nlp.minimize_elements("sub_penalty", cm.product_penalty(ell * pref), [X(S[k]), X(MU[k]), rho])
+        nlp.minimize_elements("node_penalty", cm.product_penalty, [X(Q[k]), X(NU[k]), rho, np.array([ell * pref / h])])
+        nlp.minimize_elements("sub_penalty", cm.product_penalty, [X(S[k]), X(MU[k]), rho, np.array([ell * pref])])
         nlp.minimize_elements("law_penalty", cm.slack_penalty, [X(SP[k]), X(SM[k]), rho])
         nlp.minimize_elements("split", cm.split, [X(B[k])])
-        nlp.minimize_elements("least_force", cm.force_weight(pref / h), [X(NU[L - 1])])
+        nlp.minimize_elements("least_force", cm.force_weight, [X(NU[L - 1]), np.array([pref / h])])
 
     def solve(self, q0, p0, guess: Dict[str, np.ndarray], penalties=None, options=None, verbose=False):
         """Solve from ``guess``, raising the penalty until complementarity holds.
