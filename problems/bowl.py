@@ -36,9 +36,7 @@ def run(args):
              f"{len(tr.impacts)} impacts; energy drift max |E - E0| = {np.max(np.abs(tr.energy - tr.energy[0])):.2e}"]
     for imp in tr.impacts[:6]:
         lines.append(f"  t = {imp.t:.5f} s  {system.contact.names[imp.contact]:11s} μ = {imp.mu:.6g}")
-    impulse_node = tr.nu.copy()
-    impulse_node[:-1] += tr.mu
-    data = {"t": tr.t, "q": tr.q, "gap": tr.gap.min(axis=1), "mu": impulse_node, "mu_sub": tr.mu,
+    data = {"t": tr.t, "q": tr.q, "gap": tr.gap.min(axis=1), "mu": tr.node_impulse, "mu_sub": tr.mu,
             "t_sub": tr.t_sub, "energy": tr.energy, "radius": R,
             "impacts": [{"t": i.t, "corner": system.contact.names[i.contact], "mu": i.mu,
                          "v_before": i.v_before, "v_after": i.v_after} for i in tr.impacts]}

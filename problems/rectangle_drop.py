@@ -92,9 +92,7 @@ def run(args):
     for r in rows[:8]:
         lines.append(f"  t = {r['t']:.5f} s  {r['corner_name']:11s} θ = {r['angle']:+.4f}  μ = {r['mu']:.6g} "
                      f"(law {r['mu_exact']:.6g})  v⁺ = {np.round(r['v_after'], 5).tolist()}")
-    impulse_node = tr.nu.copy()
-    impulse_node[:-1] += tr.mu
-    data = {"t": tr.t, "q": tr.q, "mu": impulse_node, "mu_sub": tr.mu, "t_sub": tr.t_sub, "nu": tr.nu,
+    data = {"t": tr.t, "q": tr.q, "mu": tr.node_impulse, "mu_sub": tr.mu, "t_sub": tr.t_sub, "nu": tr.nu,
             "mass": args.mass, "width": args.width, "height": args.height, "restitution": e,
             "impacts": rows, "impact_law_error": worst, "energy": tr.energy, "gap": tr.gap.min(axis=1)}
     return cli.contact_outcome("rectangle drop", system, tr, data, lines,

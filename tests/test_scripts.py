@@ -345,5 +345,5 @@ def test_resting_ball_reports_m_g_h_per_step():
     p = run([script("bouncing_ball"), "--height", "0", "--T", "1", "--n", "200", "--json"])
     assert p.returncode == 0, p.stderr
     d = json.loads(p.stdout)
-    assert d["resting_steps"] >= 190
+    assert d["resting_nodes"] >= 190
     assert d["resting_impulse_error"] < 1e-6 and d["max_height_at_rest"] < 1e-9

@@ -36,11 +36,16 @@ slot derivatives of ``L_d``:
   both sides of the impact, exactly.  Because the weight ``φ_j(q_{k+1})/ℓ`` is
   small for an impact late in its step, the unweighted ``|μ r|`` of every
   impact whose next node is open is checked separately (:data:`LAW_TOL`);
-* centred splits and the least force at the last node: a tiny objective
-  ``w_β Σ β_k² + w_ν h ν_{N−1}``.  A body on the ground at the last node with
-  a force is otherwise free to "launch itself" into ``q_N``, which no later
-  equation forbids (interior nodes are pinned by the next node's
-  complementarity); the least force makes that last contact plastic.
+* centred splits: a tiny objective ``w_β Σ β_k²`` picks ``α_k = ½`` in steps without impact;
+* look-ahead step: the NLP has ``N + LOOKAHEAD`` steps and only the first ``N`` are reported, and
+  the last node force is complementary to the end gap too (``ρ φ(q_L)·h ν_{L−1}``).  The end node
+  of an NLP has no successor, so a force there could otherwise "launch" the body into it; with
+  the look-ahead every reported node keeps its row, force and successor.
+
+Reported per node: ``Λ_k = h ν_k + (1 − α_k) μ_k + α_{k−1} μ_{k−1}`` (sub-node impulses shared
+between their two nodes by the hat-function weights of their time), which for a ball is exactly
+the lumped momentum balance ``m g h + m (q_{k+1} − 2 q_k + q_{k−1})/h`` whatever the sub-nodes do,
+and node momenta that are the mean of the one-sided ones at a closed contact.
 
 Complementarity is imposed by exact (ℓ1) penalties rather than by relaxed
 product constraints: the objective gains ``ρ (Σ φ(q_k)·h ν_k + Σ φ(q̃_k)·μ_k)``
@@ -108,8 +113,6 @@ COMPLEMENTARITY_TOL = 1e-8
 LAW_TOL = 1e-6
 #: Weight of Σβ² (the split of impact-free steps), far below the penalties.
 SPLIT_WEIGHT = 1e-6
-#: Weight of the least-force selection h ν_{N−1} / p_ref at the last node (see module docstring).
-FORCE_WEIGHT = 1e-4
 #: A sub-node impulse counts as an impact when the contact approaches faster than this many
 #: steps' worth of its normal acceleration (resting contact approaches at about ½ step's worth).
 IMPACT_SPEED_STEPS = 2.0
@@ -124,6 +127,8 @@ CLOSING_FRACTION = 0.125
 #: Contacts whose gaps close within this (times the length scale) of each other at a located
 #: crossing take one simultaneous impact in the guess (a flat landing).
 SIMULTANEOUS_TOL = 1e-9
+#: Steps solved beyond the reported horizon (see module docstring, "Look-ahead step").
+LOOKAHEAD = 1
 #: Steps of free flight integrated per call in the event-located guess.
 GUESS_CHUNK = 64
 #: RK4 substeps per step in the event-located guess.
@@ -153,13 +158,14 @@ class ContactTrajectory:
 
     t: np.ndarray
     q: np.ndarray
-    p: np.ndarray               # node momenta p_k⁺ (p_N⁻ at the end)
+    p: np.ndarray               # node momenta: mean of p_k⁻ and p_k⁺ (see _finish); p_0 as given
     v: np.ndarray
     energy: np.ndarray
     t_sub: np.ndarray           # sub-node times t_k + α_k h, one per step
     q_sub: np.ndarray
     mu: np.ndarray              # (N, contacts) sub-node impulses
-    nu: np.ndarray              # (N + 1, contacts) node impulses h ν_k (last row: 0, no node force at T)
+    nu: np.ndarray              # (N + 1, contacts) node impulses h ν_k (last row: the look-ahead's node force at T)
+    node_impulse: np.ndarray    # (N + 1, contacts) Λ_k: impulse per node (sub-node impulses lumped, see _finish)
     gap: np.ndarray             # (N + 1, contacts) gaps at the nodes
     gap_sub: np.ndarray         # (N, contacts) gaps at the sub-nodes
     impacts: List[Impact]
@@ -180,16 +186,12 @@ class ContactTrajectory:
     def time_s(self) -> float:
         return self.build_time_s + self.solve_time_s
 
-    @property
-    def impulse(self) -> np.ndarray:
-        """Total impulse per contact and step: sub-node impulse plus the node impulse at the step's start."""
-        return self.mu + self.nu[:-1]
-
     def as_dict(self) -> dict:
         return {"status": "ok" if self.success else self.status, "iterations": self.iterations,
                 "build_time_s": self.build_time_s, "solve_time_s": self.solve_time_s,
                 "scheme": self.scheme, "method": self.method, "t": self.t, "q": self.q,
                 "energy": self.energy, "t_sub": self.t_sub, "mu": self.mu, "nu": self.nu,
+                "node_impulse": self.node_impulse,
                 "gap": self.gap, "complementarity_residual": self.complementarity_residual,
                 "impacts": [i.as_dict() for i in self.impacts],
                 "homotopy": [vars(s) for s in self.homotopy], "attempts": self.attempts}
@@ -298,8 +300,6 @@ class ContactMechanics:
         #: ``ρ Σ_j φ_j(q) λ_j / scale`` for a gap and its impulse (or force)
         self.product_penalty = ca.Function("c_pen", [q, lam, rho, scale],
                                            [rho * ca.dot(self.system.gap(q)[0], lam) / scale])
-        #: ``w_ν Σ_j ν_j / scale``
-        self.force_weight = ca.Function("c_force", [lam, scale], [FORCE_WEIGHT * ca.sum1(lam) / scale])
         #: ``ρ Σ (s⁺ + s⁻)``
         self.slack_penalty = ca.Function("c_slack_pen", [sp, sm, rho], [rho * ca.sum1(sp + sm)])
 
@@ -363,7 +363,9 @@ class ContactNLP:
         nlp.minimize_elements("sub_penalty", cm.product_penalty, [X(S[k]), X(MU[k]), rho, np.array([ell * pref])])
         nlp.minimize_elements("law_penalty", cm.slack_penalty, [X(SP[k]), X(SM[k]), rho])
         nlp.minimize_elements("split", cm.split, [X(B[k])])
-        nlp.minimize_elements("least_force", cm.force_weight, [X(NU[L - 1]), np.array([pref / h])])
+        # terminal condition: the last node force may not launch the body (its gap at the end node
+        # q_L would otherwise be free; see the module docstring, "Look-ahead step")
+        nlp.minimize_elements("end_penalty", cm.product_penalty, [X(Q[L]), X(NU[L - 1]), rho, np.array([ell * pref / h])])
 
     def solve(self, q0, p0, guess: Dict[str, np.ndarray], penalties=None, options=None, verbose=False):
         """Solve from ``guess``, raising the penalty until complementarity holds.
@@ -425,7 +427,9 @@ class ContactNLP:
         raw, nxt = (np.asarray(v).reshape(c, L).T for v in cm.law_check.map(L)(Q[:-1].T, S.T, Q[1:].T, B, MU.T, h))
         leaves = nxt > self.open_gap
         raw_max = float(np.max(np.abs(raw[leaves]))) if np.any(leaves) else 0.0
+        g_end = np.asarray(cm.gap_row(Q[L])).reshape(-1)
         return float(max(np.max(np.abs(gq * NU * h)) / self.scales_p, np.max(np.abs(gs * MU)) / self.scales_p,
+                         float(np.max(np.abs(g_end * NU[L - 1] * h))) / self.scales_p,
                          np.max(np.abs(law)) / self.scales_law,
                          raw_max / self.scales_law * COMPLEMENTARITY_TOL / LAW_TOL))
 
@@ -549,9 +553,21 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
             Jr = np.asarray(Jr).reshape(n, kk.size, n).transpose(1, 0, 2)
             Z = Z - np.linalg.solve(Jr, r[..., None])[..., 0]
         S[kk] = Z
+    gq = np.asarray(gapf.map(L + 1)(Q.T)[0]).reshape(c, L + 1).T
+    # steps that start and end on the ground (a resting body): the sub-node rests too, carrying its
+    # share of the weight (least squares on the sub-node equation, clipped at 0), rather than
+    # hopping to the apex of a free midpoint flight: both are exact discrete solutions, and this
+    # one has no motion at all between the nodes (docs/derivations.md, "Resting contact")
+    for k in np.where(~event & (np.min(gq[:-1], axis=1) <= tol) & (np.min(gq[1:], axis=1) <= tol))[0]:
+        S[k] = 0.5 * (Q[k] + Q[k + 1])
+        r = np.asarray(cm.sub(Q[k], S[k], Q[k + 1], B[k], np.zeros(c), h)).reshape(-1) * h
+        Js = np.asarray(gapf(S[k])[1])
+        act = np.asarray(gapf(S[k])[0]).reshape(-1) <= tol
+        if np.any(act):
+            MU[k, act] = np.maximum(np.linalg.lstsq(Js[act].T, -r, rcond=None)[0], 0.0)
     # node forces where the guess touches: least squares on the node equations, clipped at 0
     NU = np.zeros((L, c))
-    gq = np.asarray(gapf.map(L)(Q[:L].T)[0]).reshape(c, L).T
+    gq = gq[:L]
     touching = np.where(np.min(gq, axis=1) <= tol)[0]
     for k in touching:
         if k == 0:
@@ -594,9 +610,9 @@ def solve_contact(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: s
     p0 = np.asarray(system.momentum(q0, qd0)).reshape(-1)
     scales = _scales(system, q0, qd0, length)
     attempts: List[dict] = []
-    whole = ContactNLP(cm, N, h, scales)
+    whole = ContactNLP(cm, N + LOOKAHEAD, h, scales)
     t_guess = time.perf_counter()
-    guess = event_guess(cm, q0, qd0, N, h, length, whole.v_zeno)
+    guess = event_guess(cm, q0, qd0, N + LOOKAHEAD, h, length, whole.v_zeno)
     guess_time = time.perf_counter() - t_guess
     res = whole.solve(q0, p0, guess, penalties, options, verbose)
     attempts.append(_attempt("whole", res))
@@ -605,7 +621,7 @@ def solve_contact(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: s
         if cur is not None:
             res = whole.solve(q0, p0, cur, penalties, options, verbose)
             attempts.append(_attempt("whole-after-windows", res))
-    return _finish(cm, whole, res, N, h, attempts, guess_time)
+    return _finish(cm, whole, res, N, h, attempts, guess_time, p0)
 
 
 def _attempt(stage: str, res: Result) -> dict:
@@ -626,8 +642,11 @@ def _windows(cm, q0, p0, N, h, length, scales, penalties, options, verbose, atte
     """Horizon windows: contact NLPs of L steps marched over the horizon, each from its own event guess."""
     n, c = cm.n, cm.c
     Mf = cm.system.mass_matrix
-    out = {"q": np.zeros((N + 1, n)), "qs": np.zeros((N, n)), "beta": np.zeros(N),
-           "mu": np.zeros((N, c)), "nu": np.zeros((N, c)), "s_plus": np.zeros((N, c)), "s_minus": np.zeros((N, c))}
+    # windows of L reported steps, each solved with its look-ahead; the last window's look-ahead is kept
+    # (the whole solve after the windows has N + LOOKAHEAD steps)
+    NL = N + LOOKAHEAD
+    out = {"q": np.zeros((NL + 1, n)), "qs": np.zeros((NL, n)), "beta": np.zeros(NL),
+           "mu": np.zeros((NL, c)), "nu": np.zeros((NL, c)), "s_plus": np.zeros((NL, c)), "s_minus": np.zeros((NL, c))}
     out["q"][0] = q0
     cache: Dict[int, ContactNLP] = {}
     K, L = 0, 1 << max(3, int(math.log2(max(8, N // 8))))
@@ -635,21 +654,22 @@ def _windows(cm, q0, p0, N, h, length, scales, penalties, options, verbose, atte
     while K < N:
         L = min(L, N - K)
         if L not in cache:
-            cache[L] = ContactNLP(cm, L, h, scales)
+            cache[L] = ContactNLP(cm, L + LOOKAHEAD, h, scales)
         w = cache[L]
         vK = np.linalg.solve(np.asarray(Mf(qK)), pK)
-        r = w.solve(qK, pK, event_guess(cm, qK, vK, L, h, length, w.v_zeno), penalties,
+        r = w.solve(qK, pK, event_guess(cm, qK, vK, L + LOOKAHEAD, h, length, w.v_zeno), penalties,
                     dict(options or {}, max_iter=min(WINDOW_MAX_ITER, int((options or {}).get(
                         "max_iter", WINDOW_MAX_ITER)))), verbose)
         attempts.append(_attempt(f"window {K}:{K + L}", r))
         if sum(a["iterations"] for a in attempts if a["stage"].startswith("window")) > WINDOWS_MAX_ITER_TOTAL:
             return None
         if r.success:
+            keep = L + LOOKAHEAD if K + L == N else L
             for key, arr in out.items():
                 if key == "q":
-                    arr[K + 1:K + L + 1] = r.values["q"].reshape(L + 1, n)[1:]
+                    arr[K + 1:K + keep + 1] = r.values["q"].reshape(L + LOOKAHEAD + 1, n)[1:keep + 1]
                 else:
-                    arr[K:K + L] = r.values[key].reshape(arr[K:K + L].shape)
+                    arr[K:K + keep] = r.values[key].reshape((L + LOOKAHEAD,) + arr.shape[1:])[:keep]
             qK = out["q"][K + L]
             pK = np.asarray(cm.p_node_minus(out["qs"][K + L - 1], out["beta"][K + L - 1], qK, h)).reshape(-1)
             K, L = K + L, 2 * L
@@ -661,17 +681,31 @@ def _windows(cm, q0, p0, N, h, length, scales, penalties, options, verbose, atte
 
 
 def _finish(cm: ContactMechanics, tn: ContactNLP, res: Result, N: int, h: float, attempts,
-            guess_time: float) -> ContactTrajectory:
+            guess_time: float, p0: np.ndarray) -> ContactTrajectory:
     n, c, sysm = cm.n, cm.c, cm.system
-    q = res.values["q"].reshape(N + 1, n)
-    S = res.values["qs"].reshape(N, n)
-    B = res.values["beta"].reshape(N)
-    MU = res.values["mu"].reshape(N, c)
-    NUf = res.values["nu"].reshape(N, c)
+    # the reported horizon: the first N steps (the look-ahead steps are not part of the answer)
+    q = res.values["q"][:(N + 1) * n].reshape(N + 1, n)
+    S = res.values["qs"][:N * n].reshape(N, n)
+    B = res.values["beta"][:N].reshape(N)
+    MU = res.values["mu"][:N * c].reshape(N, c)
+    NUf = res.values["nu"][:N * c].reshape(N, c)
     hv = np.array([h])
+    # Node momenta: a node force h ν_k makes the one-sided momenta differ, p_k⁺ = p_k⁻ + h ∇φ(q_k)ᵀ ν_k;
+    # the node's momentum is their mean where the contact is closed (for a body resting on the ground p_k⁻ = −p_k⁺, so it is 0,
+    # not ±m g h/2).  Without a node force p_k⁻ = p_k⁺ (DEL).  At t = 0 the given p_0; at T the
+    # look-ahead step supplies ν_N.
+    NL = N + LOOKAHEAD
+    nu_full = h * res.values["nu"][:NL * c].reshape(NL, c)
+    Jn = np.asarray(sysm.gap.map(N + 1)(q.T)[1])                    # (c, (N + 1) n)
+    Jn = Jn.reshape(c, N + 1, n).transpose(1, 0, 2)                  # (N + 1, c, n)
+    # only closed contacts (gap within TOUCH_TOL): on an open one ν is interior-point noise below the
+    # complementarity tolerance, left on p⁺ as before
+    closed = np.asarray(sysm.gap.map(N + 1)(q.T)[0]).reshape(c, N + 1).T <= TOUCH_TOL * tn.scales_ell
+    half = 0.5 * np.einsum("kcn,kc->kn", Jn, np.where(closed, nu_full[:N + 1], 0.0))
     pp = np.asarray(cm.p_node_plus.map(N)(q[:-1].T, S.T, B, hv)).T
     pN = np.asarray(cm.p_node_minus(S[-1], B[-1], q[-1], h)).reshape(1, -1)
-    p = np.vstack([pp, pN])
+    p = np.vstack([pp - half[:N], pN + half[N:]])
+    p[0] = p0
     M = np.asarray(sysm.mass_matrix.map(N + 1)(q.T)).reshape(n, N + 1, n).transpose(1, 0, 2)
     v = np.linalg.solve(M, p[..., None])[..., 0]
     energy = sysm.energies(q, v)
@@ -691,11 +725,20 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: Result, N: int, h: float,
         an = abs(float(np.asarray(cm.acc_normal(S[k], vb)).reshape(-1)[j]))
         if -float(Jj @ vb) > IMPACT_SPEED_STEPS * an * h:
             impacts.append(Impact(int(k), float(t_sub[k]), int(j), float(MU[k, j]), S[k].copy(), vb, va))
-    nu = np.vstack([NUf * h, np.zeros((1, c))])
+    # Impulse per node: Λ_k = h ν_k + (1 − α_k) μ_k + α_{k−1} μ_{k−1}, each sub-node impulse shared
+    # between its two nodes by linear (hat-function) interpolation of its time; node N takes the
+    # look-ahead step's node force and sub-node share (its dual cell reaches past T).  For a body
+    # resting on the ground Λ_k = m g h exactly whatever the sub-nodes do (derivation, "Resting
+    # contact"); Λ_0 covers the half cell [0, h/2].
+    alpha_full = 0.5 + res.values["beta"][:NL]
+    mu_full = res.values["mu"][:NL * c].reshape(NL, c)
+    lam = nu_full[:N + 1] + (1.0 - alpha_full[:N + 1, None]) * mu_full[:N + 1]
+    lam[1:] += alpha_full[:N, None] * mu_full[:N]
+    nu = nu_full[:N + 1].copy()
     total_iter = sum(a["iterations"] for a in attempts)
     return ContactTrajectory(
         t=t, q=q, p=p, v=v, energy=energy, t_sub=t_sub, q_sub=S, mu=MU, nu=nu, gap=gap, gap_sub=gap_sub,
-        impacts=impacts, complementarity_residual=float(res.complementarity_residual),
+        node_impulse=lam, impacts=impacts, complementarity_residual=float(res.complementarity_residual),
         status=res.status, success=res.success, message=res.message, iterations=int(total_iter),
         build_time_s=float(sum(a["build_time_s"] for a in attempts)),
         solve_time_s=float(guess_time + sum(a["solve_time_s"] for a in attempts)),

@@ -111,7 +111,7 @@ def _contact_stability(out: str):
             len(d.get("impact_times", []))
         E = np.asarray(d["energy"], float)
         keys = [("impact_law_error", "v⁺ off the impact law by"),
-                ("resting_impulse_error", "impulse per step at rest off m g h by (relative)")]
+                ("resting_impulse_error", "impulse per node at rest off m g h by (relative)")]
         if n_imp:
             keys = [("impact_time_error", "bounce times off by (s)"), ("apex_error", "apexes off by (m)")] + keys
         figures = [f"{label} {d[key]:.1e}" for key, label in keys if d.get(key) is not None]
