@@ -70,24 +70,80 @@ def goal_line(text: str, ok, detail: str) -> str:
 
 
 def best_run(method: str, scheme: str, n: int, repeats: int) -> dict:
-    """``repeats`` fresh runs (fresh system each); best build+solve kept, readings of the last."""
-    sums, builds, solves, walls, run = [], [], [], [], None
+    """``repeats`` fresh runs (fresh system each); the readings of the best build+solve."""
+    runs, walls = [], []
     for _ in range(repeats):
         system = pendulum.double_pendulum()
         t = time.perf_counter()
-        run = simulate(system, Q0, QD0, T, n, scheme, method)
+        runs.append(simulate(system, Q0, QD0, T, n, scheme, method))
         walls.append(time.perf_counter() - t)
-        builds.append(run.build_time_s)
-        solves.append(run.solve_time_s)
-        sums.append(run.build_time_s + run.solve_time_s)
-    k = int(np.argmin(sums))
+    k = int(np.argmin([r.build_time_s + r.solve_time_s for r in runs]))
+    run = runs[k]
     levels = list(getattr(run.detail, "levels", None) or [])
-    return {"method": method, "scheme": scheme, "n": n, "status": run.status, "success": bool(run.success),
-            "iterations": int(run.iterations), "build_s": builds[k], "solve_s": solves[k],
-            "build_plus_solve_s": sums[k], "wall_s": walls[k], "sub_solves": len(levels),
-            "grids": sorted({lv.n for lv in levels}),
-            "windows": sum(1 for lv in levels if lv.horizon < lv.n),
-            "message": run.message}
+    out = {"method": method, "scheme": scheme, "n": n, "status": run.status, "success": bool(run.success),
+           "iterations": int(run.iterations), "build_s": run.build_time_s, "solve_s": run.solve_time_s,
+           "build_plus_solve_s": run.build_time_s + run.solve_time_s, "wall_s": walls[k],
+           "sub_solves": len(levels), "grids": sorted({lv.n for lv in levels}),
+           "windows": sum(1 for lv in levels if lv.horizon < lv.n), "message": run.message}
+    if levels:  # anatomy: the last whole solve at N against everything before it
+        last, before = levels[-1], levels[:-1]
+        out["final_level"] = {"n": last.n, "iterations": last.iterations, "build_s": last.build_time_s,
+                              "solve_s": last.solve_time_s, "function_s": last.function_time_s,
+                              "ipopt_s": last.solve_time_s - last.function_time_s}
+        out["before_final_s"] = float(sum(lv.build_time_s + lv.solve_time_s for lv in before))
+        out["_q"], out["_stages"] = run.detail.q, run.detail.stages  # not written to JSON
+    return out
+
+
+def newton_lu_seconds(scheme: str, n: int, q, stages, repeats: int):
+    """Best time of one sparse LU (scipy ``splu``) + solve of the square DEL Jacobian at a solution.
+
+    The Newton matrix a dedicated solver would factorise; Ipopt factorises the twice
+    larger symmetric KKT matrix ``[0 Jᵀ; J 0]`` instead.  None without scipy.
+    """
+    try:
+        import scipy.sparse as sps
+        from scipy.sparse.linalg import splu
+    except ImportError:
+        return None, None
+    from castrajectory.discrete import DiscreteMechanics
+    from castrajectory.trajectory import TrajectoryNLP
+    system = pendulum.double_pendulum()
+    dm = DiscreteMechanics(system, scheme)
+    p0 = np.asarray(system.momentum(Q0, QD0)).reshape(-1)
+    tn = TrajectoryNLP(dm, n, T, "initial_value", Q0, p0)
+    x = np.concatenate([np.asarray(q).reshape(-1), np.asarray(stages).reshape(-1)])
+    _, J = tn.nlp.functions()["jac_g"](x, p0)
+    J = sps.csc_matrix(J.tocsc())[:, dm.n:]  # q_0 is fixed
+    best = math.inf
+    for _ in range(repeats):
+        t = time.perf_counter()
+        splu(J).solve(np.ones(J.shape[0]))
+        best = min(best, time.perf_counter() - t)
+    return best, J.shape[0]
+
+
+def _public(r: dict) -> dict:
+    return {k: v for k, v in r.items() if not k.startswith("_")}
+
+
+def anatomy(scheme: str, w: dict, m: dict, repeats: int) -> str:
+    """Where the whole run's time goes, against the march (same run): the evidence behind (b)."""
+    f, march = w["final_level"], m["build_plus_solve_s"]
+    final = f["build_s"] + f["solve_s"]
+    nvar = w["_q"].size - w["_q"].shape[1] + w["_stages"].size  # unknowns at N (q_0 fixed)
+    lines = [f"        anatomy: levels before N {w['before_final_s']:.3f} s ({w['sub_solves'] - 1} sub-solves); "
+             f"last level N = {f['n']}: build {f['build_s']:.3f} s + solve {f['solve_s']:.3f} s "
+             f"({f['iterations']} Newton iteration{'s' if f['iterations'] != 1 else ''}: "
+             f"Ipopt/MUMPS {f['ipopt_s']:.3f} s on the {2 * nvar} x {2 * nvar} KKT matrix, "
+             f"functions {f['function_s']:.3f} s)",
+             f"        floor: the last level alone (at least one Newton iteration) = {final:.3f} s = "
+             f"{final / march:.2f} x march; everything before it = {w['before_final_s'] / march:.2f} x march"]
+    lu, size = newton_lu_seconds(scheme, f["n"], w["_q"], w["_stages"], repeats)
+    if lu is not None:
+        lines.append(f"        for scale: one sparse LU + solve of the {size} x {size} DEL Jacobian (scipy splu, "
+                     f"no KKT doubling) {lu:.3f} s = {lu / march:.2f} x march")
+    return "\n".join(lines)
 
 
 def _ints(s: str) -> int:
@@ -189,6 +245,8 @@ def main(argv=None) -> int:
                                         f"ratio whole/march {ratio:.2f}")
         goals.append((f"(b) whole {scheme} build+solve <= march {scheme} at N = {args.n_compare}", ok, detail))
         print(goal_line(*goals[-1]))
+        if "final_level" in w:
+            print(anatomy(scheme, w, m, args.repeats))
 
     # ------------------------------------------------------------------ (c)
     print()
@@ -233,8 +291,8 @@ def main(argv=None) -> int:
     print(f"benchmark wall time {time.perf_counter() - t_bench:.1f} s; load average {os.getloadavg()[0]:.2f} at end")
 
     if args.json:
-        out = {"environment": env, "convergence": conv,
-               "compare": [dict(v) for v in compare.values()],
+        out = {"environment": env, "convergence": [_public(r) for r in conv],
+               "compare": [_public(v) for v in compare.values()],
                "accuracy": rows, "time_to_target": reach, "ratios": ratios,
                "goals": [{"goal": t, "result": "SKIP" if ok is None else ("PASS" if ok else "MISS"), "detail": d}
                          for t, ok, d in goals]}
