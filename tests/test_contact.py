@@ -288,6 +288,26 @@ def test_node_impulse_is_the_momentum_balance(H, e):
     assert abs(total - (m * G * T + tr.p[-1, 0])) <= 1e-9 * scale * N
 
 
+@pytest.mark.parametrize("e", [1.0, 0.5])
+def test_rectangle_resting_on_its_edge_slides_without_friction(e):
+    # Both lower corners on the ground, moving sideways at 1 m/s: frictionless contact gives the
+    # exact motion x = t, y = h/2, θ = 0, each lower corner carrying half the weight per node.
+    m, w, hgt, T, N = 1.0, 2.0, 1.0, 1.0, 200
+    h = T / N
+    tr = trajectory.solve_initial_value(col.rectangle_drop(m, w, hgt, G, e), [0.0, hgt / 2, 0.0], [1.0, 0.0, 0.0], T, N)
+    check_kkt(tr)
+    assert tr.impacts == []
+    np.testing.assert_allclose(tr.q[:, 0], tr.t, rtol=0, atol=1e-12)
+    assert np.max(np.abs(tr.q[:, 1] - hgt / 2)) <= 1e-9 and np.max(np.abs(tr.q[:, 2])) <= 1e-9
+    assert np.max(np.abs(tr.q_sub[:, 1] - hgt / 2)) <= 1e-9      # no hop between the nodes
+    lam = tr.node_impulse / (m * G * h)
+    np.testing.assert_allclose(lam[0, :2], 0.25, rtol=0, atol=1e-5)       # node 0: half a cell
+    np.testing.assert_allclose(lam[1:, :2], 0.5, rtol=0, atol=1e-5)
+    assert np.max(np.abs(lam[:, 2:])) <= 1e-8                            # upper corners: no force
+    E0 = 0.5 * m * 1.0 + m * G * hgt / 2
+    np.testing.assert_allclose(tr.energy, E0, rtol=1e-9)
+
+
 # ----------------------------------------------------------------------------- 5. admissible velocity jump
 @pytest.mark.parametrize("e", [1.0, 0.5])
 def test_rectangle_velocity_jump_is_admissible(e):

@@ -65,11 +65,11 @@ Solution strategy (chosen by the library)
    impact law of :func:`castrajectory.collision.resolve_impact` is applied
    there and the flight continues.  The sub-node of that step is placed at the
    crossing with the impact's ``μ``.  A slow arrival (normal speed below
-   ``v_z = max(2, 1/e) a h``, ``a`` the scene's acceleration scale) of a slow
-   body is caught instead (the accumulation point of Zeno bouncing) and the
-   guess rests there from then on.  (The speed test uses the Euclidean norm of
-   the generalised velocity, which mixes units for a rigid body; it is only a
-   guess.)
+   ``v_z = max(2, 1/e) a h``, ``a`` the scene's acceleration scale) while every
+   contact of the body moves slowly along the normal is caught instead (the
+   accumulation point of Zeno bouncing): a plastic impact, after which the
+   caught contacts are *held* (each RK4 step projected back onto ``φ_j = 0``,
+   ``J_j v = 0``: the body rests or slides) until the free flight would lift one off.
 2. **Whole solve** of all ``N`` steps from that guess with the penalty ladder;
    if it fails, **horizon windows** (small contact NLPs marched over the
    horizon, each with its own event-located guess and iteration budget) whose
@@ -450,6 +450,20 @@ def _bisect_crossing(cm: ContactMechanics, q, v, tau_hi, active):
     return hi
 
 
+def _hold(cm: ContactMechanics, q, v, active, iterations: int = 4):
+    """Project ``(q, v)`` onto the held contacts: ``φ_j(q) = 0`` (Newton, M-metric) and ``J_j v = 0``."""
+    M = np.asarray(cm.system.mass_matrix(q))
+    for _ in range(iterations):
+        phi, J = (np.asarray(x) for x in cm.system.gap(q))
+        phi, J = phi.reshape(-1)[active], J[active]
+        MiJt = np.linalg.solve(M, J.T)
+        q = q - MiJt @ np.linalg.lstsq(J @ MiJt, phi, rcond=None)[0]
+    J = np.asarray(cm.system.gap(q)[1])[active]
+    MiJt = np.linalg.solve(M, J.T)
+    v = v - MiJt @ np.linalg.lstsq(J @ MiJt, J @ v, rcond=None)[0]
+    return q, v
+
+
 def simultaneous_impact(M, J, v, e, sweeps: int = 200):
     """Newton's law at several contacts at once: ``J v⁺ + e J v⁻ ≥ 0 ⟂ μ ≥ 0``, ``v⁺ = v⁻ + M⁻¹Jᵀμ`` (PGS)."""
     MiJt = np.linalg.solve(M, J.T)
@@ -476,13 +490,31 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
     event = np.zeros(L, dtype=bool)
     q, v = np.asarray(q0, float).copy(), np.asarray(v0, float).copy()
     Q[0] = q
-    resting = False
+    # contacts held closed (caught, or resting from the start): the guess then flies constrained
+    # to φ_j = 0 for them (plastic), sliding freely along the ground, until the free flight would
+    # lift one off
+    active = np.zeros(c, dtype=bool)
     tol = TOUCH_TOL * length
     k = 0
     while k < L:
-        if resting:
-            Q[k + 1:] = q
-            break
+        if np.any(active):
+            qn, vn, ph = (np.asarray(x).reshape(-1) for x in cm.flow(q, v, h))
+            active &= ~(ph > tol)                        # the free flight lifts it off: released
+            closing = ~active & (ph < -tol)              # crossings while held: caught too (a guess)
+            if np.any(closing):
+                active |= closing
+                S[k] = 0.5 * (q + qn)
+                B[k] = 0.0
+                event[k] = True
+                Jc = np.asarray(gapf(S[k])[1])[closing]
+                vc = 0.5 * (v + vn)
+                MU[k, closing] = simultaneous_impact(np.asarray(Mf(S[k])), Jc, vc, 0.0)[0]
+            if np.any(active):
+                qn, vn = _hold(cm, qn, vn, active)
+            q, v = qn, vn
+            Q[k + 1] = q
+            k += 1
+            continue
         phi0, J0 = (np.asarray(x) for x in gapf(q))
         phi0 = phi0.reshape(-1)
         touching = phi0 <= tol
@@ -497,46 +529,54 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
                 q, v = Qc[:, i - 1].copy(), Vc[:, i - 1].copy()
                 k += i
                 continue
-        elif np.any(touching):
+        else:
             vn0 = J0[touching] @ v
             an0 = np.asarray(cm.acc_normal(q, v)).reshape(-1)[touching]
             if np.all(vn0 <= tol / h) and np.any(an0 < 0) and \
-                    np.linalg.norm(v) <= REST_SPEED_STEPS * float(np.max(-an0)) * h:
-                # in contact, not separating and pressed on: the guess rests here
-                resting = True
+                    np.max(np.abs(J0 @ v)) <= REST_SPEED_STEPS * float(np.max(-an0)) * h:
+                # in contact, not separating, pressed on and no fast normal motion anywhere
+                # on the body: the guess holds the touching contacts from here
+                active = touching.copy()
+                q, v = _hold(cm, q, v, active)
                 continue
         qn, vn, ph = (np.asarray(x).reshape(-1) for x in cm.flow(q, v, h))
         # contacts that start touching and separate are not crossings
-        active = ~((phi0 <= tol) & (ph >= -tol))
-        if np.any(ph[active] < -tol):
+        crossing = ~((phi0 <= tol) & (ph >= -tol))
+        if np.any(ph[crossing] < -tol):
             # the sub-node's time fraction is bounded: an earlier or later crossing is placed at the bound
-            tc = min(max(_bisect_crossing(cm, q, v, h, active), ALPHA_MIN * h), (1 - ALPHA_MIN) * h)
+            tc = min(max(_bisect_crossing(cm, q, v, h, crossing), ALPHA_MIN * h), (1 - ALPHA_MIN) * h)
             qc, vc, phc = (np.asarray(x).reshape(-1) for x in cm.flow(q, v, tc))
-            j = int(np.argmin(np.where(active, phc, np.inf)))
+            j = int(np.argmin(np.where(crossing, phc, np.inf)))
             Jall = np.asarray(gapf(qc)[1])
             Jc = Jall[j]
-            imp = resolve_impact(np.asarray(Mf(qc)), Jc, vc, e)
-            an = float(np.asarray(cm.acc_normal(qc, imp.v_after)).reshape(-1)[j])
+            Mc = np.asarray(Mf(qc))
             event[k] = True
             B[k] = tc / h - 0.5
             S[k] = qc
-            MU[k, j] = imp.mu
-            together = np.where(active & (phc <= phc[j] + SIMULTANEOUS_TOL * length))[0]
-            if together.size > 1:
-                # contacts that close together (a flat landing): one simultaneous impact
-                mus, v_after = simultaneous_impact(np.asarray(Mf(qc)), Jall[together], vc, e)
-                MU[k, together] = mus
-                imp.v_after = v_after
-            if an < 0 and -float(Jc @ vc) <= v_zeno and np.linalg.norm(vc) <= 2 * v_zeno:
+            an = float(np.asarray(cm.acc_normal(qc, vc)).reshape(-1)[j])
+            if an < 0 and -float(Jc @ vc) <= v_zeno and np.max(np.abs(Jall @ vc)) <= 2 * v_zeno:
                 # Zeno accumulation: a slow arrival (below v_zeno, where the NLP may waive the
-                # impact law, see ContactNLP) of a slow body.  It is caught: in contact again at
-                # node k+1, and the guess rests from there on.
-                MU[k, j] = resolve_impact(np.asarray(Mf(qc)), Jc, vc, 0.0).mu
-                resting = True
-                q, v = qc, np.zeros(n)
+                # impact law, see ContactNLP) while every contact of the body moves slowly along
+                # the normal (sliding along the ground does not count).  It is caught, together
+                # with every contact within a slow step's travel: held closed from here on.
+                near = crossing & (phc <= phc[j] + v_zeno * h)
+                mus, v_after = simultaneous_impact(Mc, Jall[near], vc, 0.0)
+                MU[k, near] = mus
+                active = near.copy()
+                qn, vn, _ = (np.asarray(x).reshape(-1) for x in cm.flow(qc, v_after, h - tc))
+                qn, vn = _hold(cm, qn, vn, active)
+                q, v = qn, vn
                 Q[k + 1] = q
                 k += 1
                 continue
+            imp = resolve_impact(Mc, Jc, vc, e)
+            MU[k, j] = imp.mu
+            together = np.where(crossing & (phc <= phc[j] + SIMULTANEOUS_TOL * length))[0]
+            if together.size > 1:
+                # contacts that close together (a flat landing): one simultaneous impact
+                mus, v_after = simultaneous_impact(Mc, Jall[together], vc, e)
+                MU[k, together] = mus
+                imp.v_after = v_after
             qn, vn, _ = (np.asarray(x).reshape(-1) for x in cm.flow(qc, imp.v_after, h - tc))
         q, v = qn, vn
         Q[k + 1] = q
@@ -688,11 +728,10 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: Result, N: int, h: float,
     S = res.values["qs"][:N * n].reshape(N, n)
     B = res.values["beta"][:N].reshape(N)
     MU = res.values["mu"][:N * c].reshape(N, c)
-    NUf = res.values["nu"][:N * c].reshape(N, c)
     hv = np.array([h])
     # Node momenta: a node force h ν_k makes the one-sided momenta differ, p_k⁺ = p_k⁻ + h ∇φ(q_k)ᵀ ν_k;
-    # the node's momentum is their mean where the contact is closed (for a body resting on the ground p_k⁻ = −p_k⁺, so it is 0,
-    # not ±m g h/2).  Without a node force p_k⁻ = p_k⁺ (DEL).  At t = 0 the given p_0; at T the
+    # the node's momentum is their mean where the contact is closed (for a body resting on the
+    # ground p_k⁻ = −p_k⁺, so it is 0, not ±m g h/4).  Without a node force p_k⁻ = p_k⁺ (DEL).  At t = 0 the given p_0; at T the
     # look-ahead step supplies ν_N.
     NL = N + LOOKAHEAD
     nu_full = h * res.values["nu"][:NL * c].reshape(NL, c)
