@@ -17,7 +17,13 @@ Scene: double pendulum (unit masses and lengths, g = 9.81) from rest at
 (b) At ``--n-compare`` (default 32 000): build + solve of the whole
     trajectory against ``stepping.march`` (the same variational integrator
     marched step by step), for midpoint and galerkin4; best of ``--repeats``.
-    Goal: whole ≤ march (ratio whole / march ≤ 1).
+    Goal: whole ≤ march (ratio whole / march ≤ 1).  Below each goal line, the
+    anatomy of that best whole run: the levels before N, then the last level's
+    build and solve, split into Ipopt itself (chiefly MUMPS on the KKT matrix)
+    and function evaluations; the last level alone as a multiple of the march
+    (at least one Newton iteration is unavoidable, so a multiple ≥ 1 puts the
+    goal out of reach); and, for scale, one scipy ``splu`` of the square DEL
+    Jacobian (what a Newton step costs without Ipopt's KKT doubling; needs scipy).
 (c) Time to reach a final-state error of 1e-8 (against CVODES at rtol = 1e-14)
     for whole × galerkin4 and for RK4, each from a sweep
     (``study.work_precision_sweep``) over ``--accuracy-sizes``, interpolated in
