@@ -5,7 +5,9 @@ restitution e.  The whole trajectory is one NLP (castrajectory.contact): every
 step has a collision sub-node whose time is an unknown, the gap and the
 impulse are complementary, and the impact law acts on the exact discrete
 momenta.  Compared with the analytic bounce times t_k, apex heights e^(2k) H
-and impact speeds.
+and impact speeds.  JSON ``mu``: the impulse per node Λ_k (each sub-node impulse
+shared between its two nodes by the hat-function weights of its time; m g h per
+node for a body at rest, docs/derivations.md, "Contact trajectories" §2).
 
     python problems/bouncing_ball.py --restitution 0.7 --T 3
     python problems/bouncing_ball.py --height 0 --T 1          # resting contact
