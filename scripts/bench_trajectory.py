@@ -143,7 +143,8 @@ def anatomy(scheme: str, w: dict, m: dict, repeats: int) -> str:
              f"({f['iterations']} Newton iteration{'s' if f['iterations'] != 1 else ''}: "
              f"Ipopt/MUMPS {f['ipopt_s']:.3f} s on the {2 * nvar} x {2 * nvar} KKT matrix, "
              f"functions {f['function_s']:.3f} s)",
-             f"        floor: the last level alone (at least one Newton iteration) = {final:.3f} s = "
+             f"        floor: the last level alone ({f['iterations']} Newton iteration"
+             f"{'s' if f['iterations'] != 1 else ''}; at least one is unavoidable) = {final:.3f} s = "
              f"{final / march:.2f} x march; everything before it = {w['before_final_s'] / march:.2f} x march"]
     lu, size = newton_lu_seconds(scheme, f["n"], w["_q"], w["_stages"], repeats)
     if lu is not None:
