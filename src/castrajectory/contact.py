@@ -28,14 +28,15 @@ slot derivatives of ``L_d``:
   where ``h ν_k = m g h``;
 * impact law (Newton restitution on the contact's normal velocity, evaluated
   with the exact discrete momenta at the sub-node):
-  ``μ_{jk} · r_{jk} · φ_j(q_{k+1})/ℓ = 0`` with
+  ``μ_{jk} · r_{jk} · φ_j(q_{k+1})/δ_{jk} = 0`` with
   ``r = ∇φ_j(q̃_k) M(q̃_k)⁻¹ (p̃⁺ + e p̃⁻)``: the law holds for every impact after
   which the body leaves, and is waived when the contact is closed again at the
   next node (the body is caught: the accumulation point of Zeno bouncing, or a
   body at rest).  With ``e = 1`` the kinetic energy ``½ p̃ᵀM⁻¹p̃`` is the same on
-  both sides of the impact, exactly.  Because the weight ``φ_j(q_{k+1})/ℓ`` is
-  small for an impact late in its step, the unweighted ``|μ r|`` of every
-  impact whose next node is open is checked separately (:data:`LAW_TOL`);
+  both sides of the impact, exactly.  ``δ_{jk} = ℓ``, except at a bounce of
+  the event-located guess, where it is the guess's next-node gap (so the weight
+  is about 1 also for an impact late in its step); the unweighted ``|μ r|`` of
+  every impact whose next node is open is checked separately (:data:`LAW_TOL`);
 * centred splits: a tiny objective ``w_β Σ β_k²`` picks ``α_k = ½`` in steps without impact;
 * look-ahead step: the NLP has ``N + LOOKAHEAD`` steps and only the first ``N`` are reported, and
   the last node force is complementary to the end gap too (``ρ φ(q_L)·h ν_{L−1}``).  The end node
@@ -234,13 +235,15 @@ class ContactMechanics:
         Js = J(qs)
         Minv = lambda p: ca.solve(Mf(qs), p)  # noqa: E731
         r = ca.mtimes(Js, Minv(pp + e * pm))
-        # Newton's law on the normal velocity at the sub-node, weighted by W = φ(q_{k+1})/δ
-        # (δ = ℓ): the law holds unless the contact is closed again at the next node, where the
-        # body is caught (the accumulation point of Zeno bouncing, where no step-resolved flight
-        # is left, or a body at rest).  Larger weights (δ = ℓ/100, or a saturating W with
-        # δ = a h²/8) made Ipopt fail on the bowl and on a grazing corner in our trials; the
-        # unweighted law of every real impact is checked separately (ContactNLP.residual).
-        ell = sym("delta")
+        # Newton's law on the normal velocity at the sub-node, weighted by W = φ(q_{k+1})/δ: the law
+        # holds unless the contact is closed again at the next node, where the body is caught (the
+        # accumulation point of Zeno bouncing, where no step-resolved flight is left, or a body at
+        # rest).  δ is a parameter per step and contact (ContactNLP.law_lengths): ℓ, or for a bounce
+        # of the guess its next-node gap, so that W ≈ 1 also for a bounce late in its step.  A global
+        # small δ (ℓ/100, or a saturating W with δ = a h²/8) made Ipopt fail on the bowl and on a
+        # grazing corner in our trials; the unweighted law of every real impact is checked
+        # separately (ContactNLP.residual).
+        ell = sym("delta", c)
         law = mu * r * phi(qk1) / ell
         self.impact_law = ca.Function("c_law", [qk, qs, qk1, b, mu, h, ell], [law])
         # the unweighted law and the next node's gaps, for the residual of real (not caught) impacts
@@ -323,8 +326,8 @@ class ContactNLP:
         # next node; for e = 0 every arrival is caught (plastic).
         factor = max(REST_SPEED_STEPS, 1.0 / cm.e) if cm.e > 0 else 1e12
         self.v_zeno = max(factor * aref * h, 1e-12 * vref)
-        # weight length of the law: W = φ(q_{k+1})/δ (δ = ℓ; smaller δ, i.e. larger weights, made
-        # Ipopt fail on the bowl and the grazing corner in our trials)
+        # weight length of the law where the guess has no bounce: W = φ(q_{k+1})/δ with δ = ℓ
+        # (law_lengths sets a shorter δ at the guess's bounces)
         self.delta = ell
         self.open_gap = max(CLOSING_FRACTION * aref * h * h, 1e-12 * ell)
         self.nlp = nlp = NLP(hessian="exact")
@@ -337,6 +340,8 @@ class ContactNLP:
         nlp.variable("s_minus", L * c, lb=0.0)
         nlp.parameter("p0", n)
         nlp.parameter("rho", 1, value=PENALTY[0])
+        # weight length of Newton's law per step and contact (law_lengths)
+        nlp.parameter("law_length", L * c, value=self.delta)
         Q = nlp.index("q").reshape(L + 1, n)
         S = nlp.index("qs").reshape(L, n)
         B = nlp.index("beta").reshape(L, 1)
@@ -357,7 +362,7 @@ class ContactNLP:
         nlp.inequality_elements("sub_gap", cm.gap_row, [X(S)], lb=0.0)
         nlp.equal_elements("impact_law", cm.law_slack,
                            [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), X(SP[k]), X(SM[k]), hh,
-                            np.array([self.delta]), np.array([self.scales_law])])
+                            P(nlp.parameter_index("law_length").reshape(L, c)), np.array([self.scales_law])])
         # exact (l1) penalties: complementarity products and the impact-law slacks
         nlp.minimize_elements("node_penalty", cm.product_penalty, [X(Q[k]), X(NU[k]), rho, np.array([ell * pref / h])])
         nlp.minimize_elements("sub_penalty", cm.product_penalty, [X(S[k]), X(MU[k]), rho, np.array([ell * pref])])
@@ -380,6 +385,8 @@ class ContactNLP:
         qlo[0] = qhi[0] = q0
         opts = dict(CONTACT_IPOPT)
         opts.update(options or {})
+        self._law_length = self.law_lengths(guess)
+        self.nlp.set_parameter("law_length", self._law_length.reshape(-1))
         init = {k: np.asarray(v, float).reshape(-1).copy() for k, v in guess.items()}
         init["q"][:n] = q0
         if "s_plus" not in init:
@@ -409,6 +416,25 @@ class ContactNLP:
                            f"{steps[-1].complementarity_residual:.2e} exceeds {COMPLEMENTARITY_TOL:g}")
         return res
 
+    def law_lengths(self, guess) -> np.ndarray:
+        """Weight length δ_kj of Newton's law, ``W = φ_j(q_{k+1})/δ_kj``, per step and contact.
+
+        δ = ℓ, except for a bounce of contact j in step k of the guess (impulse, next node open),
+        where δ is that next-node gap of the guess (at least a h²/8): W is then about 1 at the
+        guess, also for a bounce late in its step, and still vanishes if the solution catches the
+        body at the next node instead.
+        """
+        n, c, L = self.cm.n, self.cm.c, self.L
+        out = np.full((L, c), self.delta)
+        if "q" not in guess or "mu" not in guess:
+            return out
+        Q = np.asarray(guess["q"], float).reshape(L + 1, n)
+        MU = np.asarray(guess["mu"], float).reshape(L, c)
+        gnext = np.asarray(self.cm.gap_row.map(L)(Q[1:].T)).reshape(c, L).T
+        bounce = (MU > 0.0) & (gnext > TOUCH_TOL * self.scales_ell)
+        out[bounce] = np.clip(gnext[bounce], self.open_gap, self.delta)
+        return out
+
     def residual(self, values) -> float:
         """Largest complementarity violation: |φ ν h|, |φ μ| and |μ r| (scaled as in the penalties)."""
         cm, L, h = self.cm, self.L, self.h
@@ -420,7 +446,8 @@ class ContactNLP:
         B = values["beta"].reshape(L)
         gq = np.asarray(cm.gap_row.map(L)(Q[:-1].T)).reshape(c, L).T
         gs = np.asarray(cm.gap_row.map(L)(S.T)).reshape(c, L).T
-        law = np.asarray(cm.impact_law.map(L)(Q[:-1].T, S.T, Q[1:].T, B, MU.T, h, self.delta)).reshape(c, L).T
+        law = np.asarray(cm.impact_law.map(L)(Q[:-1].T, S.T, Q[1:].T, B, MU.T, h,
+                                              self._law_length.T)).reshape(c, L).T
         # Newton's law of every impact after which the body leaves (next node open by more than
         # the hop of a resting body, a h²/8): unweighted, so an impact late in its step (small
         # next-node gap, small weight) is held to the same tolerance
