@@ -39,7 +39,7 @@ def run(args):
     data = {"t": tr.t, "q": tr.q, "gap": tr.gap.min(axis=1), "mu": tr.node_impulse, "mu_sub": tr.mu,
             "t_sub": tr.t_sub, "energy": tr.energy, "radius": R,
             "impacts": [{"t": i.t, "corner": system.contact.names[i.contact], "mu": i.mu,
-                         "v_before": i.v_before, "v_after": i.v_after} for i in tr.impacts]}
+                         "v_before": i.v_before, "v_after": i.v_after, "caught": i.caught} for i in tr.impacts]}
     xs = np.linspace(-3 * R, 3 * R, 601)
     return cli.contact_outcome("body in a bowl", system, tr, data, lines,
                                ground=np.stack([xs, xs ** 2 / (2 * R)], axis=1))

@@ -308,6 +308,42 @@ def test_rectangle_resting_on_its_edge_slides_without_friction(e):
     np.testing.assert_allclose(tr.energy, E0, rtol=1e-9)
 
 
+@functools.lru_cache(maxsize=None)
+def rocking_block():
+    # the default rectangle drop with e = 0.5: bounces, then rocking on the long edge with corner
+    # impacts in successive steps (caught by the guess's look-ahead), then sliding flat
+    system = col.rectangle_drop(1.0, 2.0, 1.0, G, 0.5)
+    return system, trajectory.solve_initial_value(system, [0.0, 2.0, 0.3], [0.5, 0.0, 1.0], 3.0, 1000)
+
+
+def test_rocking_block_settles_flat_and_slides():
+    m, w, hgt, e = 1.0, 2.0, 1.0, 0.5
+    system, tr = rocking_block()
+    check_kkt(tr)
+    # frictionless flat ground: no horizontal impulse ever, so x(t) = x0 + vx0 t at every node
+    np.testing.assert_allclose(tr.q[:, 0], 0.5 * tr.t, rtol=0, atol=1e-10)
+    # every bounce obeys the closed-form corner law; a caught impact ends the rocking (plastic)
+    bounces = [i for i in tr.impacts if not i.caught]
+    assert len(bounces) >= 10 and len(tr.impacts) - len(bounces) >= 1
+    cs = col.corners(w, hgt)
+    for imp in bounces:
+        if sum(1 for i in bounces if i.step == imp.step) == 1:
+            law = col.rectangle_impact(m, w, hgt, imp.q[2], imp.v_before, e, cs[imp.contact])
+            np.testing.assert_allclose(imp.v_after, law.v_after, rtol=0, atol=1e-6)
+    # flat and at rest vertically after the last impact, to the interior point's last barrier
+    # (gap x force ~ its final mu: 1.1e-9 m measured)
+    after = tr.t > max(i.t for i in tr.impacts) + 0.05
+    assert np.sum(after) > 300
+    assert np.max(np.abs(tr.q[after, 1] - hgt / 2)) <= 1e-8 and np.max(np.abs(tr.q[after, 2])) <= 1e-8
+    # energy: never gained (impacts with e < 1 only lose), and at the end exactly the sliding rest state
+    assert np.all(np.diff(tr.energy) <= 1e-7 * tr.energy[0])
+    lift = np.max(np.abs(tr.q[after, 1] - hgt / 2))
+    assert abs(tr.energy[-1] - (0.5 * m * 0.5 ** 2 + m * G * hgt / 2)) <= m * G * lift + 1e-10
+    # resting on the edge, each lower corner carries half the weight per node
+    lam = tr.node_impulse[after] / (m * G * (tr.t[1] - tr.t[0]))
+    np.testing.assert_allclose(lam[:, :2], 0.5, rtol=0, atol=1e-5)
+
+
 # ----------------------------------------------------------------------------- 5. admissible velocity jump
 @pytest.mark.parametrize("e", [1.0, 0.5])
 def test_rectangle_velocity_jump_is_admissible(e):

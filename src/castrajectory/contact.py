@@ -130,6 +130,8 @@ CLOSING_FRACTION = 0.125
 SIMULTANEOUS_TOL = 1e-9
 #: Steps solved beyond the reported horizon (see module docstring, "Look-ahead step").
 LOOKAHEAD = 1
+#: Steps looked ahead after a bounce for the rocking-accumulation catch of the guess.
+LOOKAHEAD_CATCH = 3
 #: Steps of free flight integrated per call in the event-located guess.
 GUESS_CHUNK = 64
 #: RK4 substeps per step in the event-located guess.
@@ -147,10 +149,13 @@ class Impact:
     q: np.ndarray
     v_before: np.ndarray
     v_after: np.ndarray
+    #: the contact is closed again at the next node: the body is caught (plastic, Newton's law
+    #: waived; the accumulation of Zeno bouncing or rocking), not a bounce
+    caught: bool = False
 
     def as_dict(self) -> dict:
         return {"step": self.step, "t": self.t, "contact": self.contact, "mu": self.mu,
-                "q": self.q, "v_before": self.v_before, "v_after": self.v_after}
+                "q": self.q, "v_before": self.v_before, "v_after": self.v_after, "caught": self.caught}
 
 
 @dataclass
@@ -448,11 +453,12 @@ class ContactNLP:
         gs = np.asarray(cm.gap_row.map(L)(S.T)).reshape(c, L).T
         law = np.asarray(cm.impact_law.map(L)(Q[:-1].T, S.T, Q[1:].T, B, MU.T, h,
                                               self._law_length.T)).reshape(c, L).T
-        # Newton's law of every impact after which the body leaves (next node open by more than
-        # the hop of a resting body, a h²/8): unweighted, so an impact late in its step (small
-        # next-node gap, small weight) is held to the same tolerance
+        # Newton's law of every impact after which the body leaves (one of the next two nodes open
+        # by more than the hop of a resting body, a h²/8): unweighted, so an impact late in its
+        # step (small next-node gap, small weight) is held to the same tolerance
         raw, nxt = (np.asarray(v).reshape(c, L).T for v in cm.law_check.map(L)(Q[:-1].T, S.T, Q[1:].T, B, MU.T, h))
-        leaves = nxt > self.open_gap
+        nxt2 = np.vstack([nxt[1:], nxt[-1:]])
+        leaves = (nxt > self.open_gap) | (nxt2 > self.open_gap)
         raw_max = float(np.max(np.abs(raw[leaves]))) if np.any(leaves) else 0.0
         g_end = np.asarray(cm.gap_row(Q[L])).reshape(-1)
         return float(max(np.max(np.abs(gq * NU * h)) / self.scales_p, np.max(np.abs(gs * MU)) / self.scales_p,
@@ -581,7 +587,15 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
             B[k] = tc / h - 0.5
             S[k] = qc
             an = float(np.asarray(cm.acc_normal(qc, vc)).reshape(-1)[j])
-            if an < 0 and -float(Jc @ vc) <= v_zeno and np.max(np.abs(Jall @ vc)) <= 2 * v_zeno:
+            slow = an < 0 and -float(Jc @ vc) <= v_zeno and np.max(np.abs(Jall @ vc)) <= 2 * v_zeno
+            if not slow and e < 1.0:
+                # a rocking accumulation: the bounce would barely lift the contact (below v_z h) before
+                # another contact closes within LOOKAHEAD_CATCH steps
+                bounce = resolve_impact(Mc, Jc, vc, e)
+                _, _, Pf = (np.asarray(x) for x in cm.flights(LOOKAHEAD_CATCH)(qc, bounce.v_after, h))
+                others = np.arange(c) != j
+                slow = bool(np.any(Pf[others] < -tol)) and float(np.max(Pf[j])) <= v_zeno * h
+            if slow:
                 # Zeno accumulation: a slow arrival (below v_zeno, where the NLP may waive the
                 # impact law, see ContactNLP) while every contact of the body moves slowly along
                 # the normal (sliding along the ground does not count).  It is caught, together
@@ -781,6 +795,9 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: Result, N: int, h: float,
     t_sub = t[:-1] + (0.5 + B) * h
     # Impacts: sub-node impulses of a contact that approaches faster than a step's worth of its
     # normal acceleration (slower "impacts" are the discrete form of persistent contact).
+    # caught: closed again at the next two nodes (the look-ahead step supplies node N + 1)
+    q_full = res.values["q"].reshape(-1, n)[:N + 2]
+    gap_full = np.asarray(sysm.gap.map(N + 2)(q_full.T)[0]).reshape(c, N + 2).T
     impacts = []
     for k, j in zip(*np.where(MU > IMPULSE_TOL * tn.scales_p / tn.scales_ell)):
         pm = np.asarray(cm.p_minus(q[k], S[k], B[k], h)).reshape(-1)
@@ -790,7 +807,8 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: Result, N: int, h: float,
         Jj = np.asarray(sysm.gap(S[k])[1])[j]
         an = abs(float(np.asarray(cm.acc_normal(S[k], vb)).reshape(-1)[j]))
         if -float(Jj @ vb) > IMPACT_SPEED_STEPS * an * h:
-            impacts.append(Impact(int(k), float(t_sub[k]), int(j), float(MU[k, j]), S[k].copy(), vb, va))
+            impacts.append(Impact(int(k), float(t_sub[k]), int(j), float(MU[k, j]), S[k].copy(), vb, va,
+                                  caught=bool(max(gap_full[k + 1, j], gap_full[k + 2, j]) <= tn.open_gap)))
     # Impulse per node: Λ_k = h ν_k + (1 − α_k) μ_k + α_{k−1} μ_{k−1}, each sub-node impulse shared
     # between its two nodes by linear (hat-function) interpolation of its time; node N takes the
     # look-ahead step's node force and sub-node share (its dual cell reaches past T).  For a body
