@@ -13,7 +13,7 @@ Goals:
 (c) the relaxation homotopy needs at most 8 steps (here: penalty steps of the
     final whole solve, over every benchmarked scene).
 
-Also reported: the bowl and the Zeno ball (e = 0.3), and the Moreau–Jean
+Also reported: the bowl, the Zeno ball (e = 0.3), the rocking block (e = 0.5), and the Moreau–Jean
 baseline's time at the same N with its bounce-time error, as a ratio from this
 run.  One untimed warm-up per scene compiles the element functions
 (castrajectory.jit's disk cache makes later runs load them).
@@ -41,6 +41,8 @@ SCENES = {
                                   [0.0, 2.0, 0.3], [0.5, 0.0, 1.0], 3.0, 1000),
     "Zeno ball (e = 0.3, N = 1500)": (lambda: collision.bouncing_ball(1.0, 9.81, 0.3), [1.0], [0.0], 3.0, 1500),
     "bowl (N = 1500)": (lambda: collision.bowl(), [0.5, 0.6, 0.2], [0.0, 0.0, 0.0], 3.0, 1500),
+    "rocking block (e = 0.5, N = 1000)": (lambda: collision.rectangle_drop(1.0, 2.0, 1.0, 9.81, 0.5),
+                                          [0.0, 2.0, 0.3], [0.5, 0.0, 1.0], 3.0, 1000),
 }
 GOALS = {"ball (e = 1, N = 3000)": 1.0, "rectangle drop (N = 1000)": 5.0}
 
