@@ -392,7 +392,8 @@ class ContactNLP:
         opts.update(options or {})
         self._law_length = self.law_lengths(guess)
         self.nlp.set_parameter("law_length", self._law_length.reshape(-1))
-        init = {k: np.asarray(v, float).reshape(-1).copy() for k, v in guess.items()}
+        init = {k: np.asarray(v, float).reshape(-1).copy() for k, v in guess.items()
+                if k in self.nlp.variable_names}
         init["q"][:n] = q0
         if "s_plus" not in init:
             init["s_plus"] = np.zeros(self.L * c)
@@ -424,10 +425,12 @@ class ContactNLP:
     def law_lengths(self, guess) -> np.ndarray:
         """Weight length δ_kj of Newton's law, ``W = φ_j(q_{k+1})/δ_kj``, per step and contact.
 
-        δ = ℓ, except for a bounce of contact j in step k of the guess (impulse, next node open),
-        where δ is that next-node gap of the guess (at least a h²/8): W is then about 1 at the
-        guess, also for a bounce late in its step, and still vanishes if the solution catches the
-        body at the next node instead.
+        δ = ℓ, except for a bounce of contact j in step k of the guess, where δ is that next-node
+        gap of the guess (at least a h²/8): W is then about 1 at the guess, also for a bounce late
+        in its step, and still vanishes if the solution catches the body at the next node
+        instead.  Bounces are the impacts :func:`event_guess` resolved with restitution (not the
+        catches, nor the impulses of resting sub-nodes); for an assembled solution (horizon
+        windows), an impulse of a contact open at nodes k and k + 1.
         """
         n, c, L = self.cm.n, self.cm.c, self.L
         out = np.full((L, c), self.delta)
@@ -436,7 +439,12 @@ class ContactNLP:
         Q = np.asarray(guess["q"], float).reshape(L + 1, n)
         MU = np.asarray(guess["mu"], float).reshape(L, c)
         gnext = np.asarray(self.cm.gap_row.map(L)(Q[1:].T)).reshape(c, L).T
-        bounce = (MU > 0.0) & (gnext > TOUCH_TOL * self.scales_ell)
+        if "bounced" in guess:       # the event-located guess says which impulses are bounces
+            bounce = np.asarray(guess["bounced"], bool).reshape(L, c) & (gnext > TOUCH_TOL * self.scales_ell)
+        else:                        # an assembled solution: an impulse arriving from flight, leaving
+            gnow = np.asarray(self.cm.gap_row.map(L)(Q[:-1].T)).reshape(c, L).T
+            tol = TOUCH_TOL * self.scales_ell
+            bounce = (MU > 0.0) & (gnext > tol) & (gnow > tol)
         out[bounce] = np.clip(gnext[bounce], self.open_gap, self.delta)
         return out
 
@@ -521,6 +529,7 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
     B = np.zeros(L)
     MU = np.zeros((L, c))
     event = np.zeros(L, dtype=bool)
+    BOUNCED = np.zeros((L, c), dtype=bool)      # impacts resolved with restitution (not caught, not resting)
     q, v = np.asarray(q0, float).copy(), np.asarray(v0, float).copy()
     Q[0] = q
     # contacts held closed (caught, or resting from the start): the guess then flies constrained
@@ -612,11 +621,13 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
                 continue
             imp = resolve_impact(Mc, Jc, vc, e)
             MU[k, j] = imp.mu
+            BOUNCED[k, j] = True
             together = np.where(crossing & (phc <= phc[j] + SIMULTANEOUS_TOL * length))[0]
             if together.size > 1:
                 # contacts that close together (a flat landing): one simultaneous impact
                 mus, v_after = simultaneous_impact(Mc, Jall[together], vc, e)
                 MU[k, together] = mus
+                BOUNCED[k, together] = mus > 0
                 imp.v_after = v_after
             qn, vn, _ = (np.asarray(x).reshape(-1) for x in cm.flow(qc, imp.v_after, h - tc))
         q, v = qn, vn
@@ -659,7 +670,8 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
         act = gq[k] <= tol
         sol = np.linalg.lstsq(J[act].T, -r, rcond=None)[0]
         NU[k, act] = np.maximum(sol, 0.0)
-    return {"q": Q.reshape(-1), "qs": S.reshape(-1), "beta": B, "mu": MU.reshape(-1), "nu": NU.reshape(-1)}
+    return {"q": Q.reshape(-1), "qs": S.reshape(-1), "beta": B, "mu": MU.reshape(-1), "nu": NU.reshape(-1),
+            "bounced": BOUNCED}
 
 
 # ----------------------------------------------------------------------------- driver
