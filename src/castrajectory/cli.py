@@ -149,8 +149,8 @@ def contact_outcome(title: str, system, tr, data: dict, lines: List[str], ground
 
     def plot(path):
         ser = series if series is not None else {"smallest gap": tr.gap.min(axis=1)}
-        fig = plotting.contact_plot(tr.t, ser, tr.t_sub, (tr.mu + tr.nu[:-1]).sum(axis=1), ylabel=ylabel,
-                                    title=title)
+        # impulses per node (Λ_k, all contacts summed) at the node times
+        fig = plotting.contact_plot(tr.t, ser, tr.t, tr.node_impulse.sum(axis=1), ylabel=ylabel, title=title)
         fig.savefig(path)
 
     def animate(path):

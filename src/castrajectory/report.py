@@ -320,7 +320,7 @@ def write_report(out: str, quick: bool = False) -> int:
         out, "## Contact trajectories (complementarity-constrained discrete action)",
         "One whole-trajectory NLP per scene: collision sub-nodes with unknown impact times, gap ⟂ impulse "
         "by exact penalties, Newton restitution on the discrete momenta (docs/derivations.md). The plot shows "
-        "heights/gaps over the impulses per step.", CONTACT_SCENES, plot_name="contact")
+        "heights/gaps over the impulses per node.", CONTACT_SCENES, plot_name="contact")
     ok &= good
     lines += con_lines
     for part in (_contact_stability(out), _contact_work_precision(out, quick)):
