@@ -53,7 +53,7 @@ def initial_state(args):
 def impact_table(tr, args, e):
     """Impacts with the closed-form corner law's post-impact velocity (rectangle on flat ground).
 
-    Corners hitting in the same step (a flat landing) are compared with the simultaneous law
+    Corners hitting at the same sub-node (a flat landing) are compared with the simultaneous law
     ``J v⁺ + e J v⁻ ≥ 0 ⟂ μ ≥ 0`` instead.  A caught impact (the corner closed again at the
     next node: the end of a rocking or bouncing accumulation, plastic) waives the law and is
     listed without a comparison.
@@ -68,7 +68,7 @@ def impact_table(tr, args, e):
                          "mu": imp.mu, "mu_exact": None, "v_after_exact": None, "law_error": None,
                          "simultaneous": False, "caught": True})
             continue
-        same = [i for i in tr.impacts if i.step == imp.step and not i.caught]
+        same = [i for i in tr.impacts if i.step == imp.step and i.sub == imp.sub and not i.caught]
         if len(same) == 1:
             exact = collision.rectangle_impact(args.mass, args.width, args.height, imp.q[2], imp.v_before, e,
                                                cs[imp.contact])

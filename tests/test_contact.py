@@ -407,6 +407,77 @@ def test_rectangle_flight_before_the_first_impact_is_a_parabola():
     assert abs(t1 - hi) <= 1e-6
 
 
+def rectangle_cascade(th0: float, y0: float, e: float, count: int, m=1.0, w=2.0, hgt=1.0):
+    """Event-driven oracle: exact parabolic flight of a rectangle dropped from rest at angle θ₀,
+    the earliest corner crossing located by a 10 µs scan and bisection, ``resolve_impact`` there.
+
+    Returns ``count`` impacts as (time, corner, v⁻, v⁺).
+    """
+    M = col.rectangle_mass_matrix(m, w, hgt)
+    cs = col.corners(w, hgt)
+    q, v, t, out = np.array([0.0, y0, th0]), np.zeros(3), 0.0, []
+
+    def gaps(s):
+        s = np.atleast_1d(s)
+        th = q[2] + v[2] * s
+        y = q[1] + v[1] * s - 0.5 * G * s * s
+        return np.array([y + np.sin(th) * d[0] + np.cos(th) * d[1] for d in cs])
+
+    s = np.arange(1, 100001) * 1e-5          # 1 s after each impact, in 10 µs steps
+    while len(out) < count:
+        g = gaps(s)
+        first = {j: int(np.argmax(g[j] < 0)) for j in range(len(cs)) if np.any(g[j] < 0)}
+        j = min(first, key=lambda j: first[j])
+        i = first[j]
+        lo, hi = (s[i - 1] if i else 0.0), s[i]
+        for _ in range(200):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if gaps(mid)[j, 0] > 0 else (lo, mid)
+        q = q + v * lo + np.array([0.0, -0.5 * G * lo * lo, 0.0])
+        v = v + np.array([0.0, -G * lo, 0.0])
+        t += lo
+        imp = col.resolve_impact(M, col.corner_jacobian(q[2], cs[j]), v, e)
+        out.append((t, j, v.copy(), imp.v_after))
+        v = imp.v_after
+    return out
+
+
+def test_nearly_flat_landing_resolves_the_three_impact_cascade():
+    """θ₀ = 1e-3: corner A, corner B 0.25 ms later, corner A again 0.49 ms after that (h = 1.5 ms,
+    so the last two fall into one step, which gets a second sub-node).  Times and post-impact
+    velocities match the event-driven cascade; the elastic impacts conserve the energy."""
+    m, w, hgt, th0, e = 1.0, 2.0, 1.0, 1e-3, 1.0
+    exact = rectangle_cascade(th0, 1.5, e, 3)
+    tr = trajectory.solve_initial_value(col.rectangle_drop(m, w, hgt, G, e), [0.0, 1.5, th0], [0.0, 0.0, 0.0],
+                                        1.5, 1000)
+    assert tr.success, tr.message
+    check_kkt(tr)
+    assert tr.complementarity_residual <= contact.COMPLEMENTARITY_TOL
+    # the second and third impacts share step 301, at its two sub-nodes
+    assert [(i.step, i.sub, i.contact) for i in tr.impacts[:3]] == [(300, 0, 0), (301, 0, 1), (301, 1, 0)]
+    np.testing.assert_array_equal(tr.steps_sub2, [301])
+    assert tr.t_sub2[0] == tr.impacts[2].t and tr.mu_sub2[0, 0] == tr.impacts[2].mu
+    assert tr.mu.shape == (1000, 4) and tr.t_sub.shape == (1000,) and tr.q_sub2.shape == (1, 3)
+    assert abs(tr.gap_sub2[0, 0]) <= 1e-9 and np.min(tr.gap_sub2) >= -KKT_TOL and np.min(tr.mu_sub2) >= -KKT_TOL
+    cs = col.corners(w, hgt)
+    for imp, (t_ex, j, vb, va) in zip(tr.impacts[:3], exact):
+        assert imp.contact == j and not imp.caught
+        assert abs(imp.t - t_ex) <= 1e-8
+        np.testing.assert_allclose(imp.v_before, vb, rtol=0, atol=1e-6)
+        np.testing.assert_allclose(imp.v_after, va, rtol=0, atol=1e-6)
+        ref = col.rectangle_impact(m, w, hgt, imp.q[2], imp.v_before, e, cs[imp.contact])
+        np.testing.assert_allclose(imp.v_after, ref.v_after, rtol=0, atol=1e-7)
+    np.testing.assert_allclose(tr.impacts[2].v_after, [0.0, 4.2301, 2.0123], atol=1e-4)
+    # elastic: the energy is conserved, across the cascade too
+    assert np.max(np.abs(tr.energy - tr.energy[0])) <= 1e-7 * tr.energy[0]
+    # the impulse per node lumps both sub-nodes of step 301 (hat weights of their times)
+    h = tr.t[1] - tr.t[0]
+    a1, a2 = tr.t_sub[301] / h - 301, tr.t_sub2[0] / h - 301
+    lam = tr.node_impulse
+    assert abs(lam[302].sum() - (tr.nu[302].sum() + a1 * tr.mu[301].sum() + a2 * tr.mu_sub2[0].sum()
+                                 + (1 - (tr.t_sub[302] / h - 302)) * tr.mu[302].sum())) <= 1e-12
+
+
 # ----------------------------------------------------------------------------- 6. bowl
 def test_bowl():
     tr = bowl()

@@ -38,13 +38,18 @@ slot derivatives of ``L_d``:
   is about 1 also for an impact late in its step); the unweighted ``|μ r|`` of
   every impact whose next node is open is checked separately (:data:`LAW_TOL`);
 * centred splits: a tiny objective ``w_β Σ β_k²`` picks ``α_k = ½`` in steps without impact;
+* two sub-nodes in a step: in the steps ``k2`` where the event-located guess has two impacts (none:
+  the NLP above, unchanged), a second sub-node ``x₂`` at ``t_k + α₂ h`` (``α_k + ε ≤ α₂ ≤ 1 − ε``,
+  impulse ``μ₂``, its own law and slacks) makes the chain ``q_k → q̃_k → x₂ → q_{k+1}``: the sub-node
+  rows of ``q̃_k`` (next point ``x₂``) and ``x₂`` (previous point ``q̃_k``), and node ``k + 1`` takes
+  ``x₂`` as its previous point.  A third impact in the same step is not representable;
 * look-ahead step: the NLP has ``N + LOOKAHEAD`` steps and only the first ``N`` are reported, and
   the last node force is complementary to the end gap too (``ρ φ(q_L)·h ν_{L−1}``).  The end node
   of an NLP has no successor, so a force there could otherwise "launch" the body into it; with
   the look-ahead every reported node keeps its row, force and successor.
 
 Reported per node: ``Λ_k = h ν_k + (1 − α_k) μ_k + α_{k−1} μ_{k−1}`` (sub-node impulses shared
-between their two nodes by the hat-function weights of their time), which for a ball is exactly
+between their two nodes by the hat-function weights of their time; a second sub-node's likewise), which for a ball is exactly
 the lumped momentum balance ``m g h + m (q_{k+1} − 2 q_k + q_{k−1})/h`` whatever the sub-nodes do,
 and node momenta that are the mean of the one-sided ones at a closed contact.
 
@@ -65,7 +70,8 @@ Solution strategy (chosen by the library)
    (RK4) from the start; every gap crossing is located by bisection, the
    impact law of :func:`castrajectory.collision.resolve_impact` is applied
    there and the flight continues.  The sub-node of that step is placed at the
-   crossing with the impact's ``μ``.  A slow arrival (normal speed below
+   crossing with the impact's ``μ``; a second crossing in the rest of that step gets a second
+   impact and sub-node (whole solve only).  A slow arrival (normal speed below
    ``v_z = max(2, 1/e) a h``, ``a`` the scene's acceleration scale) while every
    contact of the body moves slowly along the normal is caught instead (the
    accumulation point of Zeno bouncing): a plastic impact, after which the
@@ -152,10 +158,13 @@ class Impact:
     #: the contact is closed again at the next node: the body is caught (plastic, Newton's law
     #: waived; the accumulation of Zeno bouncing or rocking), not a bounce
     caught: bool = False
+    #: which sub-node of the step: 0 (the first, ``q_sub``), 1 (the second, ``q_sub2``)
+    sub: int = 0
 
     def as_dict(self) -> dict:
         return {"step": self.step, "t": self.t, "contact": self.contact, "mu": self.mu,
-                "q": self.q, "v_before": self.v_before, "v_after": self.v_after, "caught": self.caught}
+                "q": self.q, "v_before": self.v_before, "v_after": self.v_after, "caught": self.caught,
+                "sub": self.sub}
 
 
 @dataclass
@@ -187,6 +196,14 @@ class ContactTrajectory:
     attempts: List[dict] = field(default_factory=list)
     mode: str = "initial_value"
     method: str = "whole"
+    #: Steps with a second sub-node (where the event-located guess found two impacts in one step;
+    #: empty otherwise) and, as rows over these steps, its time t_k + α₂ h, configuration, impulses
+    #: and gaps.  In those steps ``t_sub``, ``q_sub``, ``mu`` hold the first sub-node.
+    steps_sub2: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    t_sub2: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    q_sub2: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    mu_sub2: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    gap_sub2: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
 
     @property
     def time_s(self) -> float:
@@ -200,6 +217,7 @@ class ContactTrajectory:
                 "node_impulse": self.node_impulse,
                 "gap": self.gap, "complementarity_residual": self.complementarity_residual,
                 "impacts": [i.as_dict() for i in self.impacts],
+                "steps_sub2": self.steps_sub2, "t_sub2": self.t_sub2, "mu_sub2": self.mu_sub2,
                 "homotopy": [vars(s) for s in self.homotopy], "attempts": self.attempts}
 
 
@@ -263,6 +281,7 @@ class ContactMechanics:
         self.p_plus = ca.Function("p_plus_sub", [qs, qk1, b, h], [pp])
         self.p_node_plus = ca.Function("p_node_plus", [qk, qs, b, h], [-D1(qk, qs, a * h)])
         self.p_node_minus = ca.Function("p_node_minus", [qsm, bm, qk, h], [D2(qsm, qk, (1 - am) * h)])
+        self._generic_functions(D1, D2, J, phi, Mf)
         # free sub-node (no impact, α = ½): Newton function for the guess
         F = D2(qk, qs, 0.5 * h) + D1(qs, qk1, 0.5 * h)
         self.free_sub = ca.Function("free_sub", [qk, qs, qk1, h], [F, ca.jacobian(F, qs)])
@@ -292,6 +311,34 @@ class ContactMechanics:
             self._flights[K] = ca.Function(f"flights{K}", [q, v, h], [Qs, Vs, Ps])
         return self._flights[K]
 
+    def _generic_functions(self, D1, D2, J, phi, Mf):
+        """Sub-node row, impact law and momenta of a sub-node between two arbitrary points.
+
+        Used for the steps with two sub-nodes (``ContactNLP`` with ``k2``): the chain
+        ``q_k → x₁ → x₂ → q_{k+1}``.  A point is given with ``b = α − ½`` (its time fraction in
+        the step): ``−½`` for the node ``q_k``, ``+½`` for ``q_{k+1}``; the sub-intervals are
+        ``(b − b_prev) h`` and ``(b_next − b) h``.  ``qn`` is the next node ``q_{k+1}``, whose gaps
+        weight the law as for one sub-node.
+        """
+        n, c, e, sym = self.n, self.c, self.e, ca.SX.sym
+        xp, x, xn, qn = sym("xp", n), sym("x", n), sym("xn", n), sym("qn", n)
+        bp, b, bn, h = sym("bp"), sym("b"), sym("bn"), sym("h")
+        mu, sp, sm, ell, scale = sym("mu", c), sym("sp", c), sym("sm", c), sym("delta", c), sym("scale")
+        pm = D2(xp, x, (b - bp) * h)
+        pp = -D1(x, xn, (bn - b) * h)
+        self.sub_g = ca.Function("c_sub_g", [xp, x, xn, bp, b, bn, mu, h],
+                                 [(pm - pp + ca.mtimes(J(x).T, mu)) / h])
+        r = ca.mtimes(J(x), ca.solve(Mf(x), pp + e * pm))
+        law = mu * r * phi(qn) / ell
+        self.impact_law_g = ca.Function("c_law_g", [xp, x, xn, bp, b, bn, mu, qn, h, ell], [law])
+        self.law_slack_g = ca.Function("c_law_slack_g", [xp, x, xn, bp, b, bn, mu, sp, sm, qn, h, ell, scale],
+                                       [law / scale - sp + sm])
+        self.law_check_g = ca.Function("c_law_check_g", [xp, x, xn, bp, b, bn, mu, qn, h], [mu * r, phi(qn)])
+        self.p_minus_g = ca.Function("p_minus_g", [xp, x, bp, b, h], [pm])
+        self.p_plus_g = ca.Function("p_plus_g", [x, xn, b, bn, h], [pp])
+        b1, b2 = sym("b1"), sym("b2")
+        self.order = ca.Function("c_order", [b1, b2], [b2 - b1])
+
     def _objective_and_law_functions(self):
         """Impact law with its l1 slacks and the objective terms, built once per system.
 
@@ -313,24 +360,35 @@ class ContactMechanics:
 
 
 # ----------------------------------------------------------------------------- the NLP
+def _v_zeno(cm: ContactMechanics, h: float, scales) -> float:
+    """Slow-arrival speed under which the guess lets the body be caught (event_guess).
+
+    v_z = max(2, 1/e) a h, so that above v_z a bounce leaves at e v_z ≥ a h and clears the next
+    node; for e = 0 every arrival is caught (plastic).
+    """
+    ell, pref, vref, aref = scales
+    factor = max(REST_SPEED_STEPS, 1.0 / cm.e) if cm.e > 0 else 1e12
+    return max(factor * aref * h, 1e-12 * vref)
+
+
 class ContactNLP:
     """Initial-value contact NLP over ``L`` steps of length ``h`` (see module docstring).
 
     ``scales = (length, momentum, velocity)`` normalise the penalty terms.
     """
 
-    def __init__(self, cm: ContactMechanics, L: int, h: float, scales):
+    def __init__(self, cm: ContactMechanics, L: int, h: float, scales, k2=None):
         self.cm, self.L, self.h = cm, L, h
         n, c = cm.n, cm.c
         ell, pref, vref, aref = scales
         self.scales_p = ell * pref
         self.scales_ell = ell
         self.scales_law = pref * vref
-        # slow-arrival speed under which the guess lets the body be caught (event_guess):
-        # v_z = max(2, 1/e) a h, so that above v_z a bounce leaves at e v_z ≥ a h and clears the
-        # next node; for e = 0 every arrival is caught (plastic).
-        factor = max(REST_SPEED_STEPS, 1.0 / cm.e) if cm.e > 0 else 1e12
-        self.v_zeno = max(factor * aref * h, 1e-12 * vref)
+        self.v_zeno = _v_zeno(cm, h, scales)
+        # steps with a second sub-node (sorted); empty: the one-sub-node NLP, unchanged
+        self.k2 = np.unique(np.asarray([] if k2 is None else k2, dtype=np.int64))
+        if self.k2.size and (self.k2[0] < 0 or self.k2[-1] >= L):
+            raise ValueError("second sub-node steps out of range")
         # weight length of the law where the guess has no bounce: W = φ(q_{k+1})/δ with δ = ℓ
         # (law_lengths sets a shorter δ at the guess's bounces)
         self.delta = ell
@@ -359,20 +417,61 @@ class ContactNLP:
         rho = P(nlp.parameter_index("rho"))
         nlp.equal_elements("initial", cm.initial,
                            [X(Q[0]), X(S[0]), X(B[0]), P(nlp.parameter_index("p0")), X(NU[0]), hh])
+        K2 = self.k2
+        # steps with one sub-node: the sub-node row and law as in the module docstring
+        k1 = np.setdiff1d(k, K2) if K2.size else k
+        # the point before node i: the last sub-node of step i − 1 (its second one in a K2 step)
+        S_last, B_last = S.copy(), B.copy()
+        if K2.size:
+            m2 = K2.size
+            nlp.variable("qs2", m2 * n)
+            nlp.variable("beta2", m2, lb=ALPHA_MIN - 0.5, ub=0.5 - ALPHA_MIN)
+            nlp.variable("mu2", m2 * c, lb=0.0)
+            nlp.variable("s_plus2", m2 * c, lb=0.0)
+            nlp.variable("s_minus2", m2 * c, lb=0.0)
+            nlp.parameter("law_length2", m2 * c, value=self.delta)
+            S2 = nlp.index("qs2").reshape(m2, n)
+            B2 = nlp.index("beta2").reshape(m2, 1)
+            MU2 = nlp.index("mu2").reshape(m2, c)
+            SP2 = nlp.index("s_plus2").reshape(m2, c)
+            SM2 = nlp.index("s_minus2").reshape(m2, c)
+            S_last[K2], B_last[K2] = S2, B2
         if L > 1:
             i = np.arange(1, L)
-            nlp.equal_elements("node", cm.node, [X(S[i - 1]), X(B[i - 1]), X(Q[i]), X(S[i]), X(B[i]), X(NU[i]), hh])
-        nlp.equal_elements("sub", cm.sub, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), hh])
+            nlp.equal_elements("node", cm.node, [X(S_last[i - 1]), X(B_last[i - 1]), X(Q[i]), X(S[i]), X(B[i]),
+                                                 X(NU[i]), hh])
+        nlp.equal_elements("sub", cm.sub, [X(Q[k1]), X(S[k1]), X(Q[k1 + 1]), X(B[k1]), X(MU[k1]), hh])
         nlp.inequality_elements("node_gap", cm.gap_row, [X(Q[1:])], lb=0.0)
         nlp.inequality_elements("sub_gap", cm.gap_row, [X(S)], lb=0.0)
-        nlp.equal_elements("impact_law", cm.law_slack,
-                           [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), X(SP[k]), X(SM[k]), hh,
-                            P(nlp.parameter_index("law_length").reshape(L, c)), np.array([self.scales_law])])
+        LL = P(nlp.parameter_index("law_length").reshape(L, c))
+        law_args = [X(Q[k1]), X(S[k1]), X(Q[k1 + 1]), X(B[k1]), X(MU[k1]), X(SP[k1]), X(SM[k1]), hh,
+                    LL if not K2.size else P(LL.index[k1]), np.array([self.scales_law])]
+        nlp.equal_elements("impact_law", cm.law_slack, law_args)
+        if K2.size:
+            lo, hi = np.array([-0.5]), np.array([0.5])
+            LL2 = P(nlp.parameter_index("law_length2").reshape(m2, c))
+            # x₁ between q_k and x₂, x₂ between x₁ and q_{k+1}; both laws weighted by φ(q_{k+1})
+            nlp.equal_elements("sub_first", cm.sub_g,
+                               [X(Q[K2]), X(S[K2]), X(S2), lo, X(B[K2]), X(B2), X(MU[K2]), hh])
+            nlp.equal_elements("sub_second", cm.sub_g,
+                               [X(S[K2]), X(S2), X(Q[K2 + 1]), X(B[K2]), X(B2), hi, X(MU2), hh])
+            nlp.inequality_elements("sub_gap2", cm.gap_row, [X(S2)], lb=0.0)
+            nlp.inequality_elements("sub_order", cm.order, [X(B[K2]), X(B2)], lb=ALPHA_MIN)
+            scl = np.array([self.scales_law])
+            nlp.equal_elements("impact_law_first", cm.law_slack_g,
+                               [X(Q[K2]), X(S[K2]), X(S2), lo, X(B[K2]), X(B2), X(MU[K2]), X(SP[K2]), X(SM[K2]),
+                                X(Q[K2 + 1]), hh, P(LL.index[K2]), scl])
+            nlp.equal_elements("impact_law_second", cm.law_slack_g,
+                               [X(S[K2]), X(S2), X(Q[K2 + 1]), X(B[K2]), X(B2), hi, X(MU2), X(SP2), X(SM2),
+                                X(Q[K2 + 1]), hh, LL2, scl])
         # exact (l1) penalties: complementarity products and the impact-law slacks
         nlp.minimize_elements("node_penalty", cm.product_penalty, [X(Q[k]), X(NU[k]), rho, np.array([ell * pref / h])])
         nlp.minimize_elements("sub_penalty", cm.product_penalty, [X(S[k]), X(MU[k]), rho, np.array([ell * pref])])
         nlp.minimize_elements("law_penalty", cm.slack_penalty, [X(SP[k]), X(SM[k]), rho])
         nlp.minimize_elements("split", cm.split, [X(B[k])])
+        if K2.size:
+            nlp.minimize_elements("sub_penalty2", cm.product_penalty, [X(S2), X(MU2), rho, np.array([ell * pref])])
+            nlp.minimize_elements("law_penalty2", cm.slack_penalty, [X(SP2), X(SM2), rho])
         # terminal condition: the last node force may not launch the body (its gap at the end node
         # q_L would otherwise be free; see the module docstring, "Look-ahead step")
         nlp.minimize_elements("end_penalty", cm.product_penalty, [X(Q[L]), X(NU[L - 1]), rho, np.array([ell * pref / h])])
@@ -398,6 +497,12 @@ class ContactNLP:
         if "s_plus" not in init:
             init["s_plus"] = np.zeros(self.L * c)
             init["s_minus"] = np.zeros(self.L * c)
+        if self.k2.size:
+            self._law_length2 = self.law_lengths2(guess)
+            self.nlp.set_parameter("law_length2", self._law_length2.reshape(-1))
+            if "s_plus2" not in init:
+                init["s_plus2"] = np.zeros(self.k2.size * c)
+                init["s_minus2"] = np.zeros(self.k2.size * c)
         steps: List[HomotopyStep] = []
         res, build = None, 0.0
         for rho in (penalties or PENALTY):
@@ -448,6 +553,43 @@ class ContactNLP:
         out[bounce] = np.clip(gnext[bounce], self.open_gap, self.delta)
         return out
 
+    def law_lengths2(self, guess) -> np.ndarray:
+        """δ of the second sub-nodes' laws (steps ``k2``): as :meth:`law_lengths`, from the guess's
+        ``bounced2`` (its second impacts) and next-node gaps; ℓ without them."""
+        n, c, L = self.cm.n, self.cm.c, self.L
+        out = np.full((self.k2.size, c), self.delta)
+        if "q" not in guess or "bounced2" not in guess:
+            return out
+        Q = np.asarray(guess["q"], float).reshape(L + 1, n)
+        gnext = np.asarray(self.cm.gap_row.map(self.k2.size)(Q[self.k2 + 1].T)).reshape(c, -1).T
+        bounce = np.asarray(guess["bounced2"], bool).reshape(-1, c) & (gnext > TOUCH_TOL * self.scales_ell)
+        out[bounce] = np.clip(gnext[bounce], self.open_gap, self.delta)
+        return out
+
+    def _second(self, values):
+        """The second sub-nodes' arrays (steps ``k2``): x₂, β₂, μ₂ and, per step, x₁, β₁, μ₁, q_k, q_{k+1}."""
+        n, c, K2 = self.cm.n, self.cm.c, self.k2
+        m2 = K2.size
+        Q = values["q"].reshape(self.L + 1, n)
+        return (values["qs2"].reshape(m2, n), values["beta2"].reshape(m2), values["mu2"].reshape(m2, c),
+                values["qs"].reshape(self.L, n)[K2], values["beta"].reshape(self.L)[K2],
+                values["mu"].reshape(self.L, c)[K2], Q[K2], Q[K2 + 1])
+
+    def _residual2(self, values):
+        """Terms of the residual at the steps with two sub-nodes: (|φ(x₂) μ₂|, weighted law, raw law, next gaps)
+        over both sub-nodes of those steps, and the raw law of x₁ (which :meth:`residual` replaces)."""
+        cm, h, c, m2 = self.cm, self.h, self.cm.c, self.k2.size
+        S2, B2, MU2, S1, B1, MU1, Qk, Qk1 = self._second(values)
+        lo, hi = -0.5 * np.ones(m2), 0.5 * np.ones(m2)
+        gs2 = np.asarray(cm.gap_row.map(m2)(S2.T)).reshape(c, m2).T
+        F = cm.impact_law_g.map(m2)
+        w1 = np.asarray(F(Qk.T, S1.T, S2.T, lo, B1, B2, MU1.T, Qk1.T, h, self._law_length[self.k2].T)).reshape(c, m2).T
+        w2 = np.asarray(F(S1.T, S2.T, Qk1.T, B1, B2, hi, MU2.T, Qk1.T, h, self._law_length2.T)).reshape(c, m2).T
+        G = cm.law_check_g.map(m2)
+        raw1, _ = (np.asarray(v).reshape(c, m2).T for v in G(Qk.T, S1.T, S2.T, lo, B1, B2, MU1.T, Qk1.T, h))
+        raw2, _ = (np.asarray(v).reshape(c, m2).T for v in G(S1.T, S2.T, Qk1.T, B1, B2, hi, MU2.T, Qk1.T, h))
+        return gs2 * MU2, w1, w2, raw1, raw2
+
     def residual(self, values) -> float:
         """Largest complementarity violation: |φ ν h|, |φ μ| and |μ r| (scaled as in the penalties)."""
         cm, L, h = self.cm, self.L, self.h
@@ -467,12 +609,22 @@ class ContactNLP:
         raw, nxt = (np.asarray(v).reshape(c, L).T for v in cm.law_check.map(L)(Q[:-1].T, S.T, Q[1:].T, B, MU.T, h))
         nxt2 = np.vstack([nxt[1:], nxt[-1:]])
         leaves = (nxt > self.open_gap) | (nxt2 > self.open_gap)
+        extra = []
+        if self.k2.size:
+            # steps with two sub-nodes: x₁'s law has x₂ as its next point (replacing the one-sub-node
+            # terms), x₂'s pair and law are added; both are checked when the body leaves after the step
+            pair2, w1, w2, raw1, raw2 = self._residual2(values)
+            law[self.k2], raw[self.k2] = w1, raw1
+            l2 = leaves[self.k2]
+            extra = [np.max(np.abs(pair2)) / self.scales_p, np.max(np.abs(w2)) / self.scales_law,
+                     (float(np.max(np.abs(raw2[l2]))) if np.any(l2) else 0.0)
+                     / self.scales_law * COMPLEMENTARITY_TOL / LAW_TOL]
         raw_max = float(np.max(np.abs(raw[leaves]))) if np.any(leaves) else 0.0
         g_end = np.asarray(cm.gap_row(Q[L])).reshape(-1)
         return float(max(np.max(np.abs(gq * NU * h)) / self.scales_p, np.max(np.abs(gs * MU)) / self.scales_p,
                          float(np.max(np.abs(g_end * NU[L - 1] * h))) / self.scales_p,
                          np.max(np.abs(law)) / self.scales_law,
-                         raw_max / self.scales_law * COMPLEMENTARITY_TOL / LAW_TOL))
+                         raw_max / self.scales_law * COMPLEMENTARITY_TOL / LAW_TOL, *extra))
 
 
 # ----------------------------------------------------------------------------- event-located guess
@@ -519,8 +671,14 @@ def simultaneous_impact(M, J, v, e, sweeps: int = 200):
 
 
 def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h: float,
-                length: float, v_zeno: float) -> Dict[str, np.ndarray]:
-    """Guess for ``L`` steps from ``(q0, v0)``: RK4 flight with located impacts (see module docstring)."""
+                length: float, v_zeno: float, two_impacts: bool = True) -> Dict[str, np.ndarray]:
+    """Guess for ``L`` steps from ``(q0, v0)``: RK4 flight with located impacts (see module docstring).
+
+    With ``two_impacts``, the rest of a bounce step is searched for a second crossing, which gets
+    a second impact (restitution e) in that step: the steps ``k2`` with their second sub-node
+    ``qs2``, ``beta2``, ``mu2``, ``bounced2`` (rows over ``k2``).  A third crossing in the same
+    step is not looked for (the flight continues through it).
+    """
     n, c, e = cm.n, cm.c, cm.e
     p0 = np.asarray(cm.system.mass_matrix(q0)) @ np.asarray(v0, float)
     Mf, gapf = cm.system.mass_matrix, cm.system.gap
@@ -530,6 +688,7 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
     MU = np.zeros((L, c))
     event = np.zeros(L, dtype=bool)
     BOUNCED = np.zeros((L, c), dtype=bool)      # impacts resolved with restitution (not caught, not resting)
+    second: Dict[int, tuple] = {}               # step -> (β₂, x₂, μ₂ row, bounced₂ row)
     q, v = np.asarray(q0, float).copy(), np.asarray(v0, float).copy()
     Q[0] = q
     # contacts held closed (caught, or resting from the start): the guess then flies constrained
@@ -629,7 +788,27 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
                 MU[k, together] = mus
                 BOUNCED[k, together] = mus > 0
                 imp.v_after = v_after
-            qn, vn, _ = (np.asarray(x).reshape(-1) for x in cm.flow(qc, imp.v_after, h - tc))
+            qn, vn, ph = (np.asarray(x).reshape(-1) for x in cm.flow(qc, imp.v_after, h - tc))
+            # a second crossing in the rest of the step (another contact, or the same one again)
+            crossing2 = ~((phc <= tol) & (ph >= -tol))
+            if two_impacts and tc < (1 - 2 * ALPHA_MIN) * h and np.any(ph[crossing2] < -tol):
+                tc2 = tc + _bisect_crossing(cm, qc, imp.v_after, h - tc, crossing2)
+                tc2 = min(max(tc2, tc + ALPHA_MIN * h), (1 - ALPHA_MIN) * h)
+                qc2, vc2, phc2 = (np.asarray(x).reshape(-1) for x in cm.flow(qc, imp.v_after, tc2 - tc))
+                j2 = int(np.argmin(np.where(crossing2, phc2, np.inf)))
+                Jall2 = np.asarray(gapf(qc2)[1])
+                Mc2 = np.asarray(Mf(qc2))
+                imp2 = resolve_impact(Mc2, Jall2[j2], vc2, e)
+                mu2, b2 = np.zeros(c), np.zeros(c, dtype=bool)
+                mu2[j2], b2[j2] = imp2.mu, True
+                together = np.where(crossing2 & (phc2 <= phc2[j2] + SIMULTANEOUS_TOL * length))[0]
+                if together.size > 1:
+                    mus, v_after = simultaneous_impact(Mc2, Jall2[together], vc2, e)
+                    mu2[together] = mus
+                    b2[together] = mus > 0
+                    imp2.v_after = v_after
+                second[k] = (tc2 / h - 0.5, qc2, mu2, b2)
+                qn, vn, _ = (np.asarray(x).reshape(-1) for x in cm.flow(qc2, imp2.v_after, h - tc2))
         q, v = qn, vn
         Q[k + 1] = q
         k += 1
@@ -665,13 +844,21 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
         if k == 0:
             r = np.asarray(cm.initial(Q[0], S[0], B[0], p0, np.zeros(c), h)).reshape(-1)
         else:
-            r = np.asarray(cm.node(S[k - 1], B[k - 1], Q[k], S[k], B[k], np.zeros(c), h)).reshape(-1)
+            sp, bp = (second[k - 1][1], second[k - 1][0]) if k - 1 in second else (S[k - 1], B[k - 1])
+            r = np.asarray(cm.node(sp, bp, Q[k], S[k], B[k], np.zeros(c), h)).reshape(-1)
         J = np.asarray(gapf(Q[k])[1])
         act = gq[k] <= tol
         sol = np.linalg.lstsq(J[act].T, -r, rcond=None)[0]
         NU[k, act] = np.maximum(sol, 0.0)
-    return {"q": Q.reshape(-1), "qs": S.reshape(-1), "beta": B, "mu": MU.reshape(-1), "nu": NU.reshape(-1),
-            "bounced": BOUNCED}
+    out = {"q": Q.reshape(-1), "qs": S.reshape(-1), "beta": B, "mu": MU.reshape(-1), "nu": NU.reshape(-1),
+           "bounced": BOUNCED}
+    if second:
+        k2 = np.array(sorted(second), dtype=np.int64)
+        out.update(k2=k2, beta2=np.array([second[k][0] for k in k2]),
+                   qs2=np.array([second[k][1] for k in k2]).reshape(-1),
+                   mu2=np.array([second[k][2] for k in k2]).reshape(-1),
+                   bounced2=np.array([second[k][3] for k in k2]))
+    return out
 
 
 # ----------------------------------------------------------------------------- driver
@@ -703,15 +890,18 @@ def solve_contact(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: s
     p0 = np.asarray(system.momentum(q0, qd0)).reshape(-1)
     scales = _scales(system, q0, qd0, length)
     attempts: List[dict] = []
-    whole = ContactNLP(cm, N + LOOKAHEAD, h, scales)
     t_guess = time.perf_counter()
-    guess = event_guess(cm, q0, qd0, N + LOOKAHEAD, h, length, whole.v_zeno)
+    guess = event_guess(cm, q0, qd0, N + LOOKAHEAD, h, length, _v_zeno(cm, h, scales))
     guess_time = time.perf_counter() - t_guess
+    # a second sub-node only in the steps where the guess has two impacts (none: the one-sub-node NLP)
+    whole = ContactNLP(cm, N + LOOKAHEAD, h, scales, k2=guess.get("k2"))
     res = whole.solve(q0, p0, guess, penalties, options, verbose)
     attempts.append(_attempt("whole", res))
     if not res.success:
         cur = _windows(cm, q0, p0, N, h, length, scales, penalties, options, verbose, attempts)
         if cur is not None:
+            # the windows have one sub-node per step: the second sub-nodes start from the guess
+            cur.update({key: guess[key] for key in ("k2", "qs2", "beta2", "mu2", "bounced2") if key in guess})
             res = whole.solve(q0, p0, cur, penalties, options, verbose)
             attempts.append(_attempt("whole-after-windows", res))
     return _finish(cm, whole, res, N, h, attempts, guess_time, p0)
@@ -750,7 +940,8 @@ def _windows(cm, q0, p0, N, h, length, scales, penalties, options, verbose, atte
             cache[L] = ContactNLP(cm, L + LOOKAHEAD, h, scales)
         w = cache[L]
         vK = np.linalg.solve(np.asarray(Mf(qK)), pK)
-        r = w.solve(qK, pK, event_guess(cm, qK, vK, L + LOOKAHEAD, h, length, w.v_zeno), penalties,
+        r = w.solve(qK, pK, event_guess(cm, qK, vK, L + LOOKAHEAD, h, length, w.v_zeno, two_impacts=False),
+                    penalties,
                     dict(options or {}, max_iter=min(WINDOW_MAX_ITER, int((options or {}).get(
                         "max_iter", WINDOW_MAX_ITER)))), verbose)
         attempts.append(_attempt(f"window {K}:{K + L}", r))
@@ -794,8 +985,21 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: Result, N: int, h: float,
     # complementarity tolerance, left on p⁺ as before
     closed = np.asarray(sysm.gap.map(N + 1)(q.T)[0]).reshape(c, N + 1).T <= TOUCH_TOL * tn.scales_ell
     half = 0.5 * np.einsum("kcn,kc->kn", Jn, np.where(closed, nu_full[:N + 1], 0.0))
+    # second sub-nodes (steps tn.k2; only those of the reported horizon are reported)
+    K2 = tn.k2
+    m2 = K2.size
+    if m2:
+        S2a, B2a, MU2a = (res.values["qs2"].reshape(m2, n), res.values["beta2"].reshape(m2),
+                          res.values["mu2"].reshape(m2, c))
+    else:
+        S2a, B2a, MU2a = np.zeros((0, n)), np.zeros(0), np.zeros((0, c))
+    rep2 = K2 < N
+    last = {int(k): i for i, k in enumerate(K2)}
     pp = np.asarray(cm.p_node_plus.map(N)(q[:-1].T, S.T, B, hv)).T
-    pN = np.asarray(cm.p_node_minus(S[-1], B[-1], q[-1], h)).reshape(1, -1)
+    if N - 1 in last:
+        pN = np.asarray(cm.p_node_minus(S2a[last[N - 1]], B2a[last[N - 1]], q[-1], h)).reshape(1, -1)
+    else:
+        pN = np.asarray(cm.p_node_minus(S[-1], B[-1], q[-1], h)).reshape(1, -1)
     p = np.vstack([pp - half[:N], pN + half[N:]])
     p[0] = p0
     M = np.asarray(sysm.mass_matrix.map(N + 1)(q.T)).reshape(n, N + 1, n).transpose(1, 0, 2)
@@ -811,16 +1015,32 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: Result, N: int, h: float,
     q_full = res.values["q"].reshape(-1, n)[:N + 2]
     gap_full = np.asarray(sysm.gap.map(N + 2)(q_full.T)[0]).reshape(c, N + 2).T
     impacts = []
-    for k, j in zip(*np.where(MU > IMPULSE_TOL * tn.scales_p / tn.scales_ell)):
-        pm = np.asarray(cm.p_minus(q[k], S[k], B[k], h)).reshape(-1)
-        pl = np.asarray(cm.p_plus(S[k], q[k + 1], B[k], h)).reshape(-1)
-        Ms = np.asarray(sysm.mass_matrix(S[k]))
+    cands = [(int(k), 0, int(j)) for k, j in zip(*np.where(MU > IMPULSE_TOL * tn.scales_p / tn.scales_ell))]
+    cands += [(int(K2[i]), 1, int(j)) for i, j in zip(*np.where(MU2a > IMPULSE_TOL * tn.scales_p / tn.scales_ell))
+              if K2[i] < N]
+    for k, sub, j in sorted(cands):
+        if sub == 0 and k in last:          # first of two sub-nodes: its next point is the second
+            i = last[k]
+            x, tk, muk = S[k], float(t_sub[k]), float(MU[k, j])
+            pm = np.asarray(cm.p_minus(q[k], S[k], B[k], h)).reshape(-1)
+            pl = np.asarray(cm.p_plus_g(S[k], S2a[i], B[k], B2a[i], h)).reshape(-1)
+        elif sub == 1:
+            i = last[k]
+            x, tk, muk = S2a[i], float(t[k] + (0.5 + B2a[i]) * h), float(MU2a[i, j])
+            pm = np.asarray(cm.p_minus_g(S[k], S2a[i], B[k], B2a[i], h)).reshape(-1)
+            pl = np.asarray(cm.p_plus_g(S2a[i], q[k + 1], B2a[i], 0.5, h)).reshape(-1)
+        else:
+            x, tk, muk = S[k], float(t_sub[k]), float(MU[k, j])
+            pm = np.asarray(cm.p_minus(q[k], S[k], B[k], h)).reshape(-1)
+            pl = np.asarray(cm.p_plus(S[k], q[k + 1], B[k], h)).reshape(-1)
+        Ms = np.asarray(sysm.mass_matrix(x))
         vb, va = np.linalg.solve(Ms, pm), np.linalg.solve(Ms, pl)
-        Jj = np.asarray(sysm.gap(S[k])[1])[j]
-        an = abs(float(np.asarray(cm.acc_normal(S[k], vb)).reshape(-1)[j]))
+        Jj = np.asarray(sysm.gap(x)[1])[j]
+        an = abs(float(np.asarray(cm.acc_normal(x, vb)).reshape(-1)[j]))
         if -float(Jj @ vb) > IMPACT_SPEED_STEPS * an * h:
-            impacts.append(Impact(int(k), float(t_sub[k]), int(j), float(MU[k, j]), S[k].copy(), vb, va,
-                                  caught=bool(max(gap_full[k + 1, j], gap_full[k + 2, j]) <= tn.open_gap)))
+            impacts.append(Impact(int(k), tk, int(j), muk, np.array(x, float).copy(), vb, va,
+                                  caught=bool(max(gap_full[k + 1, j], gap_full[k + 2, j]) <= tn.open_gap),
+                                  sub=sub))
     # Impulse per node: Λ_k = h ν_k + (1 − α_k) μ_k + α_{k−1} μ_{k−1}, each sub-node impulse shared
     # between its two nodes by linear (hat-function) interpolation of its time; node N takes the
     # look-ahead step's node force and sub-node share (its dual cell reaches past T).  For a body
@@ -830,7 +1050,18 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: Result, N: int, h: float,
     mu_full = res.values["mu"][:NL * c].reshape(NL, c)
     lam = nu_full[:N + 1] + (1.0 - alpha_full[:N + 1, None]) * mu_full[:N + 1]
     lam[1:] += alpha_full[:N, None] * mu_full[:N]
+    for i, k in enumerate(K2):
+        # the second sub-node's impulse, shared by the hat weights of its time fraction α₂
+        a2 = 0.5 + B2a[i]
+        if k <= N:
+            lam[k] += (1.0 - a2) * MU2a[i]
+        if k + 1 <= N:
+            lam[k + 1] += a2 * MU2a[i]
     nu = nu_full[:N + 1].copy()
+    steps2 = K2[rep2]
+    t_sub2 = t[steps2] + (0.5 + B2a[rep2]) * h
+    gap_sub2 = (np.asarray(sysm.gap.map(int(rep2.sum()))(S2a[rep2].T)[0]).reshape(c, -1).T if rep2.any()
+                else np.zeros((0, c)))
     total_iter = sum(a["iterations"] for a in attempts)
     return ContactTrajectory(
         t=t, q=q, p=p, v=v, energy=energy, t_sub=t_sub, q_sub=S, mu=MU, nu=nu, gap=gap, gap_sub=gap_sub,
@@ -838,4 +1069,5 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: Result, N: int, h: float,
         status=res.status, success=res.success, message=res.message, iterations=int(total_iter),
         build_time_s=float(sum(a["build_time_s"] for a in attempts)),
         solve_time_s=float(guess_time + sum(a["solve_time_s"] for a in attempts)),
-        scheme=cm.dm.scheme.name, homotopy=list(res.homotopy), attempts=attempts)
+        scheme=cm.dm.scheme.name, homotopy=list(res.homotopy), attempts=attempts,
+        steps_sub2=steps2, t_sub2=t_sub2, q_sub2=S2a[rep2], mu_sub2=MU2a[rep2], gap_sub2=gap_sub2)
