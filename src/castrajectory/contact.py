@@ -77,12 +77,21 @@ Solution strategy (chosen by the library)
    accumulation point of Zeno bouncing): a plastic impact, after which the
    caught contacts are *held* (each RK4 step projected back onto ``φ_j = 0``,
    ``J_j v = 0``: the body rests or slides) until the free flight would lift one off.
-2. **Whole solve** of all ``N`` steps from that guess with the penalty ladder;
-   if it fails, **horizon windows** (small contact NLPs marched over the
+2. **Whole solve** of all ``N`` steps from that guess with the penalty ladder.
+   If it fails where the residual's unweighted check of Newton's law rejects
+   the last point Ipopt solved (a *loophole*: the law's weight small there, or
+   the waiver used for a catch that lifts off again), those laws are weighted
+   by ``φ(q_{k+2})/ℓ`` as well (a catch must hold) and the whole solve restarts
+   from the guess (at most :data:`HELD_ROUNDS` rounds; :meth:`ContactNLP.loopholes`).
+3. If that fails too, **horizon windows** (small contact NLPs marched over the
    horizon, each with its own event-located guess and iteration budget) whose
-   assembled solution starts a final whole solve.
+   assembled solution starts a final whole solve.  If every window converged
+   but that final solve does not, the assembled point itself is the answer
+   provided it satisfies the whole NLP (scaled rows within
+   :data:`ASSEMBLED_ROW_TOL`, residual within :data:`COMPLEMENTARITY_TOL`),
+   reported with the status ``Assembled_From_Windows``.
 
-The reported status is that of the last whole-trajectory solve.
+Otherwise the reported status is that of the last whole-trajectory solve.
 """
 from __future__ import annotations
 
@@ -275,6 +284,12 @@ class ContactMechanics:
         self.gap_row = ca.Function("c_gap", [qk], [phi(qk)])
         self.split = ca.Function("c_split", [b], [SPLIT_WEIGHT * b * b])
         self._law_parts = (qk, qs, qk1, b, mu, h, ell, law)
+        # a catch that must hold: the law weighted by φ(q_{k+1})/δ + κ φ(q_{k+2}) (κ per contact, 1/ℓ
+        # where the solution used the waiver for a catch that lifts off again, ContactNLP.loopholes)
+        qk2, kap = sym("qk2", n), sym("kappa", c)
+        law_next = mu * r * (phi(qk1) / ell + kap * phi(qk2))
+        self.impact_law_next = ca.Function("c_law_next", [qk, qs, qk1, qk2, b, mu, h, ell, kap], [law_next])
+        self._law_next_parts = (qk, qs, qk1, qk2, b, mu, h, ell, kap, law_next)
         self._rho = sym("rho")
         self._objective_and_law_functions()
         self.p_minus = ca.Function("p_minus_sub", [qk, qs, b, h], [pm])
@@ -355,6 +370,11 @@ class ContactMechanics:
         #: ``ρ Σ_j φ_j(q) λ_j / scale`` for a gap and its impulse (or force)
         self.product_penalty = ca.Function("c_pen", [q, lam, rho, scale],
                                            [rho * ca.dot(self.system.gap(q)[0], lam) / scale])
+        qk_, qs_, qk1_, qk2_, b_, mu_, h_, ell_, kap_, law_next = self._law_next_parts
+        #: the same with the weight ``φ(q_{k+1})/δ + κ φ(q_{k+2})`` (steps of ``ContactNLP.k_next``)
+        self.law_slack_next = ca.Function("c_law_slack_next",
+                                          [qk_, qs_, qk1_, qk2_, b_, mu_, sp, sm, h_, ell_, kap_, scale],
+                                          [law_next / scale - sp + sm])
         #: ``ρ Σ (s⁺ + s⁻)``
         self.slack_penalty = ca.Function("c_slack_pen", [sp, sm, rho], [rho * ca.sum1(sp + sm)])
 
@@ -377,7 +397,7 @@ class ContactNLP:
     ``scales = (length, momentum, velocity)`` normalise the penalty terms.
     """
 
-    def __init__(self, cm: ContactMechanics, L: int, h: float, scales, k2=None):
+    def __init__(self, cm: ContactMechanics, L: int, h: float, scales, k2=None, held=None):
         self.cm, self.L, self.h = cm, L, h
         n, c = cm.n, cm.c
         ell, pref, vref, aref = scales
@@ -389,6 +409,14 @@ class ContactNLP:
         self.k2 = np.unique(np.asarray([] if k2 is None else k2, dtype=np.int64))
         if self.k2.size and (self.k2[0] < 0 or self.k2[-1] >= L):
             raise ValueError("second sub-node steps out of range")
+        # catches that must hold (ContactNLP.loopholes): per step and contact, the law also weighted by
+        # φ(q_{k+2})/ℓ; not in the steps with two sub-nodes nor in the last step (no q_{k+2})
+        self.held = np.zeros((L, cm.c), dtype=bool)
+        if held is not None:
+            self.held[:] = np.asarray(held, bool).reshape(L, cm.c)
+            self.held[self.k2] = False
+            self.held[L - 1] = False
+        self.k_next = np.where(np.any(self.held, axis=1))[0]
         # weight length of the law where the guess has no bounce: W = φ(q_{k+1})/δ with δ = ℓ
         # (law_lengths sets a shorter δ at the guess's bounces)
         self.delta = ell
@@ -419,7 +447,8 @@ class ContactNLP:
                            [X(Q[0]), X(S[0]), X(B[0]), P(nlp.parameter_index("p0")), X(NU[0]), hh])
         K2 = self.k2
         # steps with one sub-node: the sub-node row and law as in the module docstring
-        k1 = np.setdiff1d(k, K2) if K2.size else k
+        KN = self.k_next
+        k1 = np.setdiff1d(k, np.union1d(K2, KN)) if K2.size or KN.size else k
         # the point before node i: the last sub-node of step i − 1 (its second one in a K2 step)
         S_last, B_last = S.copy(), B.copy()
         if K2.size:
@@ -445,8 +474,13 @@ class ContactNLP:
         nlp.inequality_elements("sub_gap", cm.gap_row, [X(S)], lb=0.0)
         LL = P(nlp.parameter_index("law_length").reshape(L, c))
         law_args = [X(Q[k1]), X(S[k1]), X(Q[k1 + 1]), X(B[k1]), X(MU[k1]), X(SP[k1]), X(SM[k1]), hh,
-                    LL if not K2.size else P(LL.index[k1]), np.array([self.scales_law])]
+                    LL if not (K2.size or KN.size) else P(LL.index[k1]), np.array([self.scales_law])]
         nlp.equal_elements("impact_law", cm.law_slack, law_args)
+        if KN.size:
+            self.kappa = np.where(self.held, 1.0 / ell, 0.0)
+            nlp.equal_elements("impact_law_next", cm.law_slack_next,
+                               [X(Q[KN]), X(S[KN]), X(Q[KN + 1]), X(Q[KN + 2]), X(B[KN]), X(MU[KN]), X(SP[KN]),
+                                X(SM[KN]), hh, P(LL.index[KN]), self.kappa[KN], np.array([self.scales_law])])
         if K2.size:
             lo, hi = np.array([-0.5]), np.array([0.5])
             LL2 = P(nlp.parameter_index("law_length2").reshape(m2, c))
@@ -505,6 +539,7 @@ class ContactNLP:
                 init["s_minus2"] = np.zeros(self.k2.size * c)
         steps: List[HomotopyStep] = []
         res, build = None, 0.0
+        self.last_good = None            # (ρ, Result) of the last penalty step Ipopt solved
         for rho in (penalties or PENALTY):
             self.nlp.set_parameter("rho", rho)
             res = self.nlp.solve(init=init if res is None else None, warm=res, options=opts, verbose=verbose,
@@ -513,6 +548,8 @@ class ContactNLP:
                 build = res.build_time_s
             resid = self.residual(res.values)
             steps.append(HomotopyStep(rho, res.status, res.iterations, res.solve_time_s, resid, parameter="rho"))
+            if res.success:
+                self.last_good = (rho, res)
             if not res.success or resid <= COMPLEMENTARITY_TOL:
                 break
         res.build_time_s = build
@@ -566,6 +603,52 @@ class ContactNLP:
         out[bounce] = np.clip(gnext[bounce], self.open_gap, self.delta)
         return out
 
+    def row_violation(self, p0, values) -> float:
+        """Largest scaled violation of this NLP's rows at ``values`` (all of its variables, e.g.
+        assembled from horizon windows): the momentum rows (``initial``, ``node``, ``sub``, ...)
+        relative to the force scale ``p_ref/h``, the gap rows relative to ``ℓ``, the law rows
+        (already scaled) as they are, and the bounds relative to ``ℓ``."""
+        nlp = self.nlp
+        nlp.set_parameter("p0", p0)
+        x = np.concatenate([np.asarray(values[b.name], float).reshape(-1) for b in nlp._vars])
+        p = np.concatenate([b.init for b in nlp._params])
+        g = np.asarray(nlp.functions()["jac_g"](x, p)[0]).reshape(-1)
+        lbg, ubg = np.concatenate(nlp._glb), np.concatenate(nlp._gub)
+        worst = 0.0
+        for name, con in nlp._cons.items():
+            sl = con.slice
+            v = np.maximum(lbg[sl] - g[sl], 0.0) + np.maximum(g[sl] - ubg[sl], 0.0)
+            if not v.size:
+                continue
+            if "gap" in name or name == "sub_order":
+                v = v / self.scales_ell
+            elif not name.startswith("impact_law"):
+                v = v / (self.scales_p / self.scales_ell / self.h)
+            worst = max(worst, float(np.max(v)))
+        lbx = np.concatenate([b.lb for b in nlp._vars])
+        ubx = np.concatenate([b.ub for b in nlp._vars])
+        bnd = np.maximum(lbx - x, 0.0) + np.maximum(x - ubx, 0.0)
+        return max(worst, float(np.max(bnd)) / self.scales_ell)
+
+    def loopholes(self, values) -> np.ndarray:
+        """Where the residual's unweighted check of Newton's law rejects ``values``, per step and
+        contact: an impulse after which the contact is open at node k + 1 or k + 2 (beyond the hop
+        a h²/8 of a resting body) whose law misses by more than :data:`LAW_TOL`.  Either the weight
+        ``φ(q_{k+1})/δ`` is small there, or the waiver was used for a catch that does not hold
+        (closed at node k + 1, open again at k + 2).  Steps with two sub-nodes and the last step are
+        left out."""
+        cm, L, h, c = self.cm, self.L, self.h, self.cm.c
+        Q = values["q"].reshape(L + 1, cm.n)
+        S = values["qs"].reshape(L, cm.n)
+        MU = values["mu"].reshape(L, c)
+        B = values["beta"].reshape(L)
+        raw, nxt = (np.asarray(v).reshape(c, L).T for v in cm.law_check.map(L)(Q[:-1].T, S.T, Q[1:].T, B, MU.T, h))
+        nxt2 = np.vstack([nxt[1:], nxt[-1:]])
+        out = (np.abs(raw) > LAW_TOL * self.scales_law) & ((nxt > self.open_gap) | (nxt2 > self.open_gap))
+        out[self.k2] = False
+        out[L - 1] = False
+        return out
+
     def _second(self, values):
         """The second sub-nodes' arrays (steps ``k2``): x₂, β₂, μ₂ and, per step, x₁, β₁, μ₁, q_k, q_{k+1}."""
         n, c, K2 = self.cm.n, self.cm.c, self.k2
@@ -603,6 +686,11 @@ class ContactNLP:
         gs = np.asarray(cm.gap_row.map(L)(S.T)).reshape(c, L).T
         law = np.asarray(cm.impact_law.map(L)(Q[:-1].T, S.T, Q[1:].T, B, MU.T, h,
                                               self._law_length.T)).reshape(c, L).T
+        if self.k_next.size:
+            KN = self.k_next
+            law[KN] = np.asarray(cm.impact_law_next.map(KN.size)(
+                Q[KN].T, S[KN].T, Q[KN + 1].T, Q[KN + 2].T, B[KN], MU[KN].T, h, self._law_length[KN].T,
+                self.kappa[KN].T)).reshape(c, KN.size).T
         # Newton's law of every impact after which the body leaves (one of the next two nodes open
         # by more than the hop of a resting body, a h²/8): unweighted, so an impact late in its
         # step (small next-node gap, small weight) is held to the same tolerance
@@ -897,6 +985,22 @@ def solve_contact(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: s
     whole = ContactNLP(cm, N + LOOKAHEAD, h, scales, k2=guess.get("k2"))
     res = whole.solve(q0, p0, guess, penalties, options, verbose)
     attempts.append(_attempt("whole", res))
+    held = np.zeros((whole.L, cm.c), dtype=bool)
+    for _ in range(HELD_ROUNDS if not res.success else 0):
+        # the law used as a loophole at the last point Ipopt solved (ContactNLP.loopholes): there
+        # the law is weighted by φ(q_{k+2})/ℓ as well, a catch must hold; the whole solve again
+        # from the guess (docs/derivations.md, "Contact trajectories", §4, "Catches that hold")
+        if whole.last_good is None:
+            break
+        new = whole.loopholes(whole.last_good[1].values) & ~held
+        if not np.any(new):
+            break
+        held |= new
+        whole = ContactNLP(cm, N + LOOKAHEAD, h, scales, k2=guess.get("k2"), held=held)
+        res = whole.solve(q0, p0, guess, penalties, options, verbose)
+        attempts.append(_attempt("whole-held", res))
+        if res.success:
+            break
     if not res.success:
         cur = _windows(cm, q0, p0, N, h, length, scales, penalties, options, verbose, attempts)
         if cur is not None:
@@ -904,7 +1008,40 @@ def solve_contact(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: s
             cur.update({key: guess[key] for key in ("k2", "qs2", "beta2", "mu2", "bounced2") if key in guess})
             res = whole.solve(q0, p0, cur, penalties, options, verbose)
             attempts.append(_attempt("whole-after-windows", res))
+            if not res.success:
+                res = _assembled(whole, p0, cur, res)
     return _finish(cm, whole, res, N, h, attempts, guess_time, p0)
+
+
+#: Largest scaled row violation (ContactNLP.row_violation) of a point assembled from horizon windows
+#: that is reported in place of a failed whole solve.
+ASSEMBLED_ROW_TOL = 1e-9
+
+
+def _assembled(whole: ContactNLP, p0, cur: dict, res: Result) -> Result:
+    """The point assembled from horizon windows that all converged, as the answer, if it satisfies the
+    whole NLP to tolerance (scaled rows within :data:`ASSEMBLED_ROW_TOL`, the complementarity residual
+    with the whole NLP's law lengths within :data:`COMPLEMENTARITY_TOL`) where the whole solve from it
+    did not converge; ``res`` (that failed solve) otherwise.  Reported with the status
+    ``Assembled_From_Windows``."""
+    # the law slacks of second sub-nodes are not part of the windows' point: zero (the check then sees the law)
+    values = {b.name: (np.asarray(cur[b.name], float).reshape(-1) if b.name in cur else
+                       np.zeros(b.init.size) if b.name.startswith("s_") else None) for b in whole.nlp._vars}
+    if any(v is None for v in values.values()):
+        return res
+    whole._law_length = whole.law_lengths(cur)
+    if whole.k2.size:
+        whole._law_length2 = whole.law_lengths2(cur)
+    rows, resid = whole.row_violation(p0, values), whole.residual(values)
+    if rows > ASSEMBLED_ROW_TOL or resid > COMPLEMENTARITY_TOL:
+        return res
+    return Result(values=values, multipliers={}, bound_multipliers={}, objective=float("nan"),
+                  status="Assembled_From_Windows", success=True,
+                  message=(f"every horizon window converged; their assembled trajectory satisfies the whole NLP "
+                           f"(rows to {rows:.1e}, complementarity residual {resid:.1e}), where the whole solve "
+                           f"from it stopped with {res.status} (residual {res.complementarity_residual:.2e})"),
+                  iterations=0, build_time_s=0.0, solve_time_s=0.0, complementarity_residual=resid,
+                  homotopy=list(res.homotopy))
 
 
 def _attempt(stage: str, res: Result) -> dict:
@@ -913,6 +1050,9 @@ def _attempt(stage: str, res: Result) -> dict:
             "complementarity_residual": res.complementarity_residual,
             "penalty_steps": len(res.homotopy)}
 
+
+#: Rounds of re-solves with the catches that do not hold weighted by the gap after next.
+HELD_ROUNDS = 3
 
 #: Shortest horizon window tried before giving up.
 MIN_WINDOW = 8
