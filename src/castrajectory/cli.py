@@ -142,7 +142,10 @@ def contact_outcome(title: str, system, tr, data: dict, lines: List[str], ground
         f"{tr.complementarity_residual:.1e}; energy {tr.energy[0]:.8g} -> {tr.energy[-1]:.8g}",
         f"relaxation (penalty) steps: {len(tr.homotopy)}; attempts: {len(tr.attempts)}",
         status_line(status, tr)]
-    data = {"status": status, "iterations": tr.iterations, "build_time_s": tr.build_time_s,
+    # solver_status and message say how the answer was reached (e.g. Assembled_From_Windows: every
+    # horizon window converged and the assembled point satisfies the whole NLP; see contact.py)
+    data = {"status": status, "solver_status": tr.status, "message": tr.message,
+            "iterations": tr.iterations, "build_time_s": tr.build_time_s,
             "solve_time_s": tr.solve_time_s, **data,
             "complementarity_residual": tr.complementarity_residual,
             "homotopy": [vars(s) for s in tr.homotopy], "attempts": tr.attempts}
