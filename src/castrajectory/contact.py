@@ -260,13 +260,10 @@ class ContactMechanics:
                                    [(p0 + D1(q0, qs, a * h)) / h + ca.mtimes(J(q0).T, nu)])
         self.node = ca.Function("c_node", [qsm, bm, qk, qs, b, nu, h],
                                 [(D2(qsm, qk, (1 - am) * h) + D1(qk, qs, a * h)) / h + ca.mtimes(J(qk).T, nu)])
-        self.sub = ca.Function("c_sub", [qk, qs, qk1, b, mu, h],
-                               [(D2(qk, qs, a * h) + D1(qs, qk1, (1 - a) * h) + ca.mtimes(J(qs).T, mu)) / h])
-        pm = D2(qk, qs, a * h)
-        pp = -D1(qs, qk1, (1 - a) * h)
-        Js = J(qs)
-        Minv = lambda p: ca.solve(Mf(qs), p)  # noqa: E731
-        r = ca.mtimes(Js, Minv(pp + e * pm))
+        self._kinematics = kin = lambda xp, x, xn, tau_m, tau_p: _sub_node_kinematics(  # noqa: E731
+            D1, D2, J, Mf, e, xp, x, xn, tau_m, tau_p)
+        pm, pp, r = kin(qk, qs, qk1, a * h, (1 - a) * h)
+        self.sub = ca.Function("c_sub", [qk, qs, qk1, b, mu, h], [(pm - pp + ca.mtimes(J(qs).T, mu)) / h])
         # Newton's law on the normal velocity at the sub-node, weighted by W = φ(q_{k+1})/δ: the law
         # holds unless the contact is closed again at the next node, where the body is caught (the
         # accumulation point of Zeno bouncing, where no step-resolved flight is left, or a body at
@@ -276,27 +273,24 @@ class ContactMechanics:
         # grazing corner in our trials; the unweighted law of every real impact is checked
         # separately (ContactNLP.residual).
         ell = sym("delta", c)
-        law = mu * r * phi(qk1) / ell
-        self.impact_law = ca.Function("c_law", [qk, qs, qk1, b, mu, h, ell], [law])
+        self.impact_law, self.law_slack = self._law_functions(
+            "", [qk, qs, qk1, b, mu], [h, ell], mu * r * phi(qk1) / ell)
         # the unweighted law and the next node's gaps, for the residual of real (not caught) impacts
         self.law_check = ca.Function("c_law_check", [qk, qs, qk1, b, mu, h], [mu * r, phi(qk1)])
         self.pair = ca.Function("c_pair", [qk, nu], [ca.vertcat(phi(qk), nu)])
         self.gap_row = ca.Function("c_gap", [qk], [phi(qk)])
         self.split = ca.Function("c_split", [b], [SPLIT_WEIGHT * b * b])
-        self._law_parts = (qk, qs, qk1, b, mu, h, ell, law)
         # a catch that must hold: the law weighted by φ(q_{k+1})/δ + κ φ(q_{k+2}) (κ per contact, 1/ℓ
         # where the solution used the waiver for a catch that lifts off again, ContactNLP.loopholes)
         qk2, kap = sym("qk2", n), sym("kappa", c)
-        law_next = mu * r * (phi(qk1) / ell + kap * phi(qk2))
-        self.impact_law_next = ca.Function("c_law_next", [qk, qs, qk1, qk2, b, mu, h, ell, kap], [law_next])
-        self._law_next_parts = (qk, qs, qk1, qk2, b, mu, h, ell, kap, law_next)
-        self._rho = sym("rho")
-        self._objective_and_law_functions()
+        self.impact_law_next, self.law_slack_next = self._law_functions(
+            "_next", [qk, qs, qk1, qk2, b, mu], [h, ell, kap], mu * r * (phi(qk1) / ell + kap * phi(qk2)))
+        self._objective_functions()
         self.p_minus = ca.Function("p_minus_sub", [qk, qs, b, h], [pm])
         self.p_plus = ca.Function("p_plus_sub", [qs, qk1, b, h], [pp])
         self.p_node_plus = ca.Function("p_node_plus", [qk, qs, b, h], [-D1(qk, qs, a * h)])
         self.p_node_minus = ca.Function("p_node_minus", [qsm, bm, qk, h], [D2(qsm, qk, (1 - am) * h)])
-        self._generic_functions(D1, D2, J, phi, Mf)
+        self._generic_functions(J, phi)
         # free sub-node (no impact, α = ½): Newton function for the guess
         F = D2(qk, qs, 0.5 * h) + D1(qs, qk1, 0.5 * h)
         self.free_sub = ca.Function("free_sub", [qk, qs, qk1, h], [F, ca.jacobian(F, qs)])
@@ -326,7 +320,19 @@ class ContactMechanics:
             self._flights[K] = ca.Function(f"flights{K}", [q, v, h], [Qs, Vs, Ps])
         return self._flights[K]
 
-    def _generic_functions(self, D1, D2, J, phi, Mf):
+    def _law_functions(self, suffix: str, head, tail, law):
+        """Newton's law row ``law`` (inputs ``head + tail``, ``head`` ending with ``μ``) and its
+        ℓ1 slack form ``law/scale − s⁺ + s⁻`` (inputs ``head + [s⁺, s⁻] + tail + [scale]``).
+
+        Scales enter as element arguments, so every ContactNLP (the whole trajectory and every
+        horizon window) shares the same functions, and their derivatives are formed once.
+        """
+        sym, c = ca.SX.sym, self.c
+        sp, sm, scale = sym("sp", c), sym("sm", c), sym("scale")
+        return (ca.Function(f"c_law{suffix}", head + tail, [law]),
+                ca.Function(f"c_law_slack{suffix}", head + [sp, sm] + tail + [scale], [law / scale - sp + sm]))
+
+    def _generic_functions(self, J, phi):
         """Sub-node row, impact law and momenta of a sub-node between two arbitrary points.
 
         Used for the steps with two sub-nodes (``ContactNLP`` with ``k2``): the chain
@@ -335,48 +341,40 @@ class ContactMechanics:
         ``(b − b_prev) h`` and ``(b_next − b) h``.  ``qn`` is the next node ``q_{k+1}``, whose gaps
         weight the law as for one sub-node.
         """
-        n, c, e, sym = self.n, self.c, self.e, ca.SX.sym
+        n, c, sym = self.n, self.c, ca.SX.sym
         xp, x, xn, qn = sym("xp", n), sym("x", n), sym("xn", n), sym("qn", n)
         bp, b, bn, h = sym("bp"), sym("b"), sym("bn"), sym("h")
-        mu, sp, sm, ell, scale = sym("mu", c), sym("sp", c), sym("sm", c), sym("delta", c), sym("scale")
-        pm = D2(xp, x, (b - bp) * h)
-        pp = -D1(x, xn, (bn - b) * h)
+        mu, ell = sym("mu", c), sym("delta", c)
+        pm, pp, r = self._kinematics(xp, x, xn, (b - bp) * h, (bn - b) * h)
         self.sub_g = ca.Function("c_sub_g", [xp, x, xn, bp, b, bn, mu, h],
                                  [(pm - pp + ca.mtimes(J(x).T, mu)) / h])
-        r = ca.mtimes(J(x), ca.solve(Mf(x), pp + e * pm))
-        law = mu * r * phi(qn) / ell
-        self.impact_law_g = ca.Function("c_law_g", [xp, x, xn, bp, b, bn, mu, qn, h, ell], [law])
-        self.law_slack_g = ca.Function("c_law_slack_g", [xp, x, xn, bp, b, bn, mu, sp, sm, qn, h, ell, scale],
-                                       [law / scale - sp + sm])
+        self.impact_law_g, self.law_slack_g = self._law_functions(
+            "_g", [xp, x, xn, bp, b, bn, mu], [qn, h, ell], mu * r * phi(qn) / ell)
         self.law_check_g = ca.Function("c_law_check_g", [xp, x, xn, bp, b, bn, mu, qn, h], [mu * r, phi(qn)])
         self.p_minus_g = ca.Function("p_minus_g", [xp, x, bp, b, h], [pm])
         self.p_plus_g = ca.Function("p_plus_g", [x, xn, b, bn, h], [pp])
         b1, b2 = sym("b1"), sym("b2")
         self.order = ca.Function("c_order", [b1, b2], [b2 - b1])
 
-    def _objective_and_law_functions(self):
-        """Impact law with its l1 slacks and the objective terms, built once per system.
-
-        Scales enter as element arguments, so every ContactNLP (the whole trajectory and every
-        horizon window) shares the same functions, and their derivatives are formed once.
-        """
-        qk, qs, qk1, b, mu, h, ell, law = self._law_parts
-        sym, c, rho = ca.SX.sym, self.c, self._rho
-        sp, sm, scale = sym("sp", c), sym("sm", c), sym("scale")
-        #: ``law/scale − s⁺ + s⁻``
-        self.law_slack = ca.Function("c_law_slack", [qk, qs, qk1, b, mu, sp, sm, h, ell, scale],
-                                     [law / scale - sp + sm])
+    def _objective_functions(self):
+        """The objective terms (penalties), built once per system; scales are element arguments."""
+        sym, c = ca.SX.sym, self.c
+        rho, sp, sm, scale = sym("rho"), sym("sp", c), sym("sm", c), sym("scale")
         q, lam = sym("q", self.n), sym("lam", c)
         #: ``ρ Σ_j φ_j(q) λ_j / scale`` for a gap and its impulse (or force)
         self.product_penalty = ca.Function("c_pen", [q, lam, rho, scale],
                                            [rho * ca.dot(self.system.gap(q)[0], lam) / scale])
-        qk_, qs_, qk1_, qk2_, b_, mu_, h_, ell_, kap_, law_next = self._law_next_parts
-        #: the same with the weight ``φ(q_{k+1})/δ + κ φ(q_{k+2})`` (steps of ``ContactNLP.k_next``)
-        self.law_slack_next = ca.Function("c_law_slack_next",
-                                          [qk_, qs_, qk1_, qk2_, b_, mu_, sp, sm, h_, ell_, kap_, scale],
-                                          [law_next / scale - sp + sm])
         #: ``ρ Σ (s⁺ + s⁻)``
         self.slack_penalty = ca.Function("c_slack_pen", [sp, sm, rho], [rho * ca.sum1(sp + sm)])
+
+
+def _sub_node_kinematics(D1, D2, J, Mf, e, xp, x, xn, tau_m, tau_p):
+    """Momenta on both sides of a sub-node ``x`` between ``xp`` and ``xn`` (sub-intervals ``tau_m``,
+    ``tau_p``), ``p̃⁻ = D₂L_d(xp, x)`` and ``p̃⁺ = −D₁L_d(x, xn)``, and Newton's law residual
+    ``r = ∇φ(x) M(x)⁻¹ (p̃⁺ + e p̃⁻)`` (zero for every contact that obeys the law)."""
+    pm = D2(xp, x, tau_m)
+    pp = -D1(x, xn, tau_p)
+    return pm, pp, ca.mtimes(J(x), ca.solve(Mf(x), pp + e * pm))
 
 
 # ----------------------------------------------------------------------------- the NLP
@@ -637,6 +635,17 @@ class ContactNLP:
         ``φ(q_{k+1})/δ`` is small there, or the waiver was used for a catch that does not hold
         (closed at node k + 1, open again at k + 2).  Steps with two sub-nodes and the last step are
         left out."""
+        raw, leaves = self._raw_law(values)
+        out = (np.abs(raw) > LAW_TOL * self.scales_law) & leaves
+        out[self.k2] = False
+        out[self.L - 1] = False
+        return out
+
+    def _raw_law(self, values):
+        """Unweighted Newton law ``μ r`` per step and contact (one-sub-node form), and where the body
+        leaves after the impulse: one of the next two nodes open by more than the hop of a resting
+        body, a h²/8.  Its check holds an impact late in its step (small next-node gap, small
+        weight) to the same tolerance, and rejects a "catch" that lifts off again."""
         cm, L, h, c = self.cm, self.L, self.h, self.cm.c
         Q = values["q"].reshape(L + 1, cm.n)
         S = values["qs"].reshape(L, cm.n)
@@ -644,10 +653,7 @@ class ContactNLP:
         B = values["beta"].reshape(L)
         raw, nxt = (np.asarray(v).reshape(c, L).T for v in cm.law_check.map(L)(Q[:-1].T, S.T, Q[1:].T, B, MU.T, h))
         nxt2 = np.vstack([nxt[1:], nxt[-1:]])
-        out = (np.abs(raw) > LAW_TOL * self.scales_law) & ((nxt > self.open_gap) | (nxt2 > self.open_gap))
-        out[self.k2] = False
-        out[L - 1] = False
-        return out
+        return raw, (nxt > self.open_gap) | (nxt2 > self.open_gap)
 
     def _second(self, values):
         """The second sub-nodes' arrays (steps ``k2``): x₂, β₂, μ₂ and, per step, x₁, β₁, μ₁, q_k, q_{k+1}."""
@@ -691,12 +697,8 @@ class ContactNLP:
             law[KN] = np.asarray(cm.impact_law_next.map(KN.size)(
                 Q[KN].T, S[KN].T, Q[KN + 1].T, Q[KN + 2].T, B[KN], MU[KN].T, h, self._law_length[KN].T,
                 self.kappa[KN].T)).reshape(c, KN.size).T
-        # Newton's law of every impact after which the body leaves (one of the next two nodes open
-        # by more than the hop of a resting body, a h²/8): unweighted, so an impact late in its
-        # step (small next-node gap, small weight) is held to the same tolerance
-        raw, nxt = (np.asarray(v).reshape(c, L).T for v in cm.law_check.map(L)(Q[:-1].T, S.T, Q[1:].T, B, MU.T, h))
-        nxt2 = np.vstack([nxt[1:], nxt[-1:]])
-        leaves = (nxt > self.open_gap) | (nxt2 > self.open_gap)
+        # Newton's law of every impact after which the body leaves, unweighted (_raw_law)
+        raw, leaves = self._raw_law(values)
         extra = []
         if self.k2.size:
             # steps with two sub-nodes: x₁'s law has x₂ as its next point (replacing the one-sub-node
