@@ -16,7 +16,10 @@ import sys
 
 import numpy as np
 
-from castrajectory import cli, collision, plotting, trajectory
+from castrajectory import cli
+from castrajectory.models import collision
+from castrajectory.inspect import plotting
+from castrajectory.solve import trajectory
 from castrajectory.validation import InputError, finite, positive
 
 
@@ -90,7 +93,6 @@ def run(args):
     cli.check_animation_path(args.animate)
     system, tr, cmp_ = solve(args.height, args.velocity, args.restitution, args.mass, args.g, args.T, args.n,
                              options=cli.ipopt_options(args), verbose=args.verbose)
-    status = "ok" if tr.success else tr.status
     n_b = len(cmp_["impact_times"])
     lines = [f"bouncing ball: H = {args.height:g} m, e = {args.restitution:g}, N = {args.n}, T = {args.T:g} s",
              f"{n_b} impacts; max |t - t_exact| = {cli.fmt(cmp_['impact_time_error'], '.3e')} s; "
@@ -105,13 +107,10 @@ def run(args):
     lines += [f"lowest gap {cmp_['min_gap']:.2e} m; complementarity residual {tr.complementarity_residual:.1e}; "
               f"energy {tr.energy[0]:.6g} -> {tr.energy[-1]:.6g} J",
               f"relaxation (penalty) steps: {len(tr.homotopy)}; attempts: {len(tr.attempts)}",
-              cli.status_line(status, tr)]
-    data = {"status": status, "iterations": tr.iterations, "build_time_s": tr.build_time_s,
-            "solve_time_s": tr.solve_time_s, "t": tr.t, "q": tr.q[:, 0], "mu": cmp_["mu_node"],
+              cli.status_line(tr.status, tr)]
+    data = {"t": tr.t, "q": tr.q[:, 0], "mu": cmp_["mu_node"],
             "mu_sub": tr.mu[:, 0], "t_sub": tr.t_sub, "nu": tr.nu[:, 0],
             "apex_heights": cmp_["apex_heights"], "energy": tr.energy,
-            "complementarity_residual": tr.complementarity_residual,
-            "homotopy": [vars(s) for s in tr.homotopy], "attempts": tr.attempts,
             **{k: v for k, v in cmp_.items() if k not in ("mu_node",)}}
 
     def plot(path):
@@ -128,7 +127,7 @@ def run(args):
         plotting.animate_points(system.positions(tr.q), tr.t, path, links=False, pivot=None,
                                 ground=np.array([[-0.5, 0.0], [0.5, 0.0]]), title="bouncing ball")
 
-    return cli.Outcome(tr.success, data, lines, tr.message, writers={"plot": plot, "animate": animate})
+    return cli.Outcome.of(tr, data, lines, writers={"plot": plot, "animate": animate})
 
 
 def main(argv=None):

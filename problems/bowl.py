@@ -12,7 +12,9 @@ import sys
 
 import numpy as np
 
-from castrajectory import cli, collision, trajectory
+from castrajectory import cli
+from castrajectory.models import collision
+from castrajectory.solve import trajectory
 from castrajectory.problems.rectangle_drop import add_body_flags, initial_state
 from castrajectory.validation import positive
 

@@ -14,7 +14,8 @@ import time
 
 import numpy as np
 
-from castrajectory import cli, collision
+from castrajectory import cli
+from castrajectory.models import collision
 from castrajectory.validation import finite, positive
 
 
@@ -76,10 +77,9 @@ def run(args):
         f"KE after − before = {imp.ke_after - imp.ke_before:.3e}",
         f"status: ok (closed form, no Ipopt solve); build {build:.3f} s, solve {solve:.4f} s",
     ]
-    data = imp.as_dict()
-    data.update({"iterations": 0, "build_time_s": build, "solve_time_s": solve,
-                 "admissible_direction_casadi": derived, "admissible_direction_mismatch": mismatch})
-    return cli.Outcome(True, data, summary)
+    data = {**imp.as_dict(), "admissible_direction_casadi": derived, "admissible_direction_mismatch": mismatch}
+    return cli.Outcome(success=True, message="closed form, no Ipopt solve", iterations=0, build_time_s=build,
+                       solve_time_s=solve, data=data, summary=summary)
 
 
 def main(argv=None):

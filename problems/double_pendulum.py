@@ -12,7 +12,9 @@ time-stepping baselines for comparison.
 """
 import sys
 
-from castrajectory import cli, pendulum, simulate
+from castrajectory import cli
+from castrajectory.models import pendulum
+from castrajectory.solve import simulate
 
 
 def parser():

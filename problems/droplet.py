@@ -11,7 +11,9 @@ pins the contact span instead of leaving it free.
 import math
 import sys
 
-from castrajectory import cli, droplet, plotting
+from castrajectory import cli
+from castrajectory.solve import droplet
+from castrajectory.inspect import plotting
 
 
 def parser():
@@ -35,7 +37,7 @@ def run(args):
     # discretise + solve
     sol = droplet.solve(drop, args.n, args.formulation, options=cli.ipopt_options(args), verbose=args.verbose)
     # inspect
-    cap, e, r = sol.analytic, sol.errors, sol.result
+    cap, e = sol.analytic, sol.errors
     deg = math.degrees
     summary = cli.table([
         ["quantity", "discrete", "analytic", "error"],
@@ -52,9 +54,8 @@ def run(args):
     young = ("Young residual γ_gl cos θ + γ_sl − γ_sg = " + cli.fmt(sol.young_residual, ".3e")
              if sol.young_residual is not None else "Young's law does not apply: the span is pinned")
     summary = [f"droplet: {sol.formulation} formulation, N = {sol.n}, {mode}", *summary, young,
-               cli.status_line(sol.status, r)]
-    return cli.Outcome(sol.success, sol.as_dict(), summary, r.message,
-                       writers={"plot": lambda path: plotting.droplet_shape(sol, path)})
+               cli.status_line(sol.status, sol)]
+    return cli.Outcome.of(sol, summary=summary, writers={"plot": lambda path: plotting.droplet_shape(sol, path)})
 
 
 def main(argv=None):

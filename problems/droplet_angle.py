@@ -11,7 +11,9 @@ Young's equation γ_gl cos θ + γ_sl − γ_sg = 0.
 import math
 import sys
 
-from castrajectory import cli, droplet, plotting
+from castrajectory import cli
+from castrajectory.solve import droplet
+from castrajectory.inspect import plotting
 
 
 def parser():
@@ -28,7 +30,6 @@ def run(args):
     drop = droplet.Droplet(args.gamma_gl, args.gamma_sl, args.gamma_sg, args.area)
     sol = droplet.solve_angle(drop, options=cli.ipopt_options(args), verbose=args.verbose)
     young = droplet.young_angle(drop.gamma_gl, drop.gamma_sl, drop.gamma_sg)
-    r = sol.result
     summary = [
         "droplet_angle: reduced problem min E(θ)",
         *cli.table([
@@ -40,10 +41,9 @@ def run(args):
             ["energy", cli.fmt(sol.energy), ""],
         ]),
         f"Young residual γ_gl cos θ + γ_sl − γ_sg = {sol.young_residual:.3e}",
-        cli.status_line(sol.status, r),
+        cli.status_line(sol.status, sol),
     ]
-    return cli.Outcome(sol.success, sol.as_dict(), summary, r.message,
-                       writers={"plot": lambda path: plotting.reduced_energy(sol, path)})
+    return cli.Outcome.of(sol, summary=summary, writers={"plot": lambda path: plotting.reduced_energy(sol, path)})
 
 
 def main(argv=None):

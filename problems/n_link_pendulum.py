@@ -7,7 +7,9 @@ with every link at the same angle from the downward vertical.
 """
 import sys
 
-from castrajectory import cli, pendulum, simulate
+from castrajectory import cli
+from castrajectory.models import pendulum
+from castrajectory.solve import simulate
 from castrajectory.validation import integer_at_least
 
 

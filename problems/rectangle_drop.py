@@ -13,8 +13,10 @@ import sys
 
 import numpy as np
 
-from castrajectory import cli, collision, trajectory
-from castrajectory.contact import simultaneous_impact
+from castrajectory import cli
+from castrajectory.models import collision
+from castrajectory.solve import trajectory
+from castrajectory.solve.contact import simultaneous_impact
 from castrajectory.validation import finite
 
 CORNER_NAMES = ["lower left", "lower right", "upper right", "upper left"]

@@ -11,7 +11,9 @@ stay stable and keep the energy bounded, while explicit RK4 blows up.
 import math
 import sys
 
-from castrajectory import cli, pendulum, simulate
+from castrajectory import cli
+from castrajectory.models import pendulum
+from castrajectory.solve import simulate
 from castrajectory.validation import positive
 
 

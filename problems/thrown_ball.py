@@ -11,7 +11,9 @@ import sys
 
 import numpy as np
 
-from castrajectory import cli, pendulum, trajectory
+from castrajectory import cli
+from castrajectory.models import pendulum
+from castrajectory.solve import trajectory
 
 
 def parser():
@@ -39,7 +41,6 @@ def run(args):
     err = float(np.max(np.abs(traj.q - exact)))
     v0_err = float(np.max(np.abs(traj.v[0] - v0_exact)))
     traj.method = "whole (boundary)"
-    traj.status = "ok" if traj.success else traj.status
     lines = [f"max |q - parabola| over the nodes = {err:.3e}",
              f"launch velocity {np.round(traj.v[0], 10).tolist()} (analytic {np.round(v0_exact, 10).tolist()}), "
              f"error {v0_err:.3e}"]

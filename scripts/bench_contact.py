@@ -33,7 +33,9 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 
-from castrajectory import collision, stepping, trajectory  # noqa: E402
+from castrajectory.models import collision  # noqa: E402
+from castrajectory.baselines import stepping
+from castrajectory.solve import trajectory
 
 SCENES = {
     "ball (e = 1, N = 3000)": (lambda: collision.bouncing_ball(1.0, 9.81, 1.0), [1.0], [0.0], 2.5, 3000),

@@ -98,9 +98,9 @@ for _var in BLAS_THREAD_VARS:
 
 import numpy as np  # noqa: E402
 
-from castrajectory import droplet as d  # noqa: E402
-from castrajectory import jit  # noqa: E402
-from castrajectory import nlp as nlp_mod  # noqa: E402
+from castrajectory.solve import droplet as d  # noqa: E402
+from castrajectory.solve import jit  # noqa: E402
+from castrajectory.solve import nlp as nlp_mod  # noqa: E402
 
 #: The benchmarked scene (partial wetting, Young's angle 60 degrees).
 DROP = d.Droplet(gamma_gl=1.0, gamma_sl=0.5, gamma_sg=1.0, area=1.0)

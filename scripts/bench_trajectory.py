@@ -61,9 +61,11 @@ for _var in BLAS_THREAD_VARS:
 
 import numpy as np  # noqa: E402
 
-from castrajectory import jit, pendulum, study  # noqa: E402
-from castrajectory import nlp as nlp_mod  # noqa: E402
-from castrajectory.simulate import simulate  # noqa: E402
+from castrajectory.solve import jit  # noqa: E402
+from castrajectory.models import pendulum
+from castrajectory.inspect import study
+from castrajectory.solve import nlp as nlp_mod  # noqa: E402
+from castrajectory.solve.simulate import simulate  # noqa: E402
 
 Q0, QD0, T = np.array([2.0, 1.0]), np.zeros(2), 5.0
 TARGET = 1e-8
@@ -112,8 +114,8 @@ def newton_lu_seconds(scheme: str, n: int, q, stages, repeats: int):
         from scipy.sparse.linalg import splu
     except ImportError:
         return None, None
-    from castrajectory.discrete import DiscreteMechanics
-    from castrajectory.trajectory import TrajectoryNLP
+    from castrajectory.discretise.lagrangians import DiscreteMechanics
+    from castrajectory.solve.trajectory import TrajectoryNLP
     system = pendulum.double_pendulum()
     dm = DiscreteMechanics(system, scheme)
     p0 = np.asarray(system.momentum(Q0, QD0)).reshape(-1)

@@ -20,7 +20,7 @@ import sys
 
 import numpy as np
 
-from castrajectory import plotting, study
+from castrajectory.inspect import plotting, study
 
 
 def main(argv=None) -> int:

@@ -11,7 +11,8 @@ import argparse
 import os
 import sys
 
-from castrajectory import droplet, plotting, study
+from castrajectory.solve import droplet
+from castrajectory.inspect import plotting, study
 
 
 def main(argv=None):

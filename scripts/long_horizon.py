@@ -38,7 +38,8 @@ for _var in BLAS_THREAD_VARS:
 
 import numpy as np  # noqa: E402
 
-from castrajectory import pendulum, plotting, study  # noqa: E402
+from castrajectory.models import pendulum  # noqa: E402
+from castrajectory.inspect import plotting, study
 
 BOUNDED_FACTOR = 1.5
 DRIFT_TAIL_RATIO = 3.0

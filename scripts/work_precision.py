@@ -43,7 +43,9 @@ for _var in BLAS_THREAD_VARS:
 
 import numpy as np  # noqa: E402
 
-from castrajectory import pendulum, plotting, study, stepping  # noqa: E402
+from castrajectory.models import pendulum  # noqa: E402
+from castrajectory.inspect import plotting, study
+from castrajectory.baselines import stepping
 
 TARGET = 1e-8
 #: CVODES tolerance of the reference: at 1e-13 the double pendulum's q(5) is off by

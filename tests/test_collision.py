@@ -21,7 +21,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from castrajectory import collision as col
+from castrajectory.models import collision as col
 from castrajectory.validation import InputError
 
 ROOT = Path(__file__).resolve().parents[1]

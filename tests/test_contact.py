@@ -23,9 +23,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from castrajectory import collision as col
-from castrajectory import contact, mechanics, pendulum, simulate, trajectory
-from castrajectory.discrete import DiscreteMechanics
+from castrajectory.models import collision as col
+from castrajectory.solve import contact, simulate, trajectory
+from castrajectory.models import mechanics, pendulum
+from castrajectory.discretise.lagrangians import DiscreteMechanics
 from castrajectory.problems import bouncing_ball
 from castrajectory.validation import InputError
 
@@ -395,7 +396,7 @@ def test_rocking_block_e08_assembled_from_windows():
     point; the assembled windows satisfy the whole NLP and are the answer, reported as such."""
     system = col.rectangle_drop(1.0, 2.0, 1.0, G, 0.8)
     tr = trajectory.solve_initial_value(system, [0.0, 2.0, 0.3], [0.5, 0.0, 1.0], 4.0, 1500)
-    assert tr.status == "Assembled_From_Windows" and "every horizon window converged" in tr.message
+    assert tr.solver_status == "Assembled_From_Windows" and "every horizon window converged" in tr.message
     assert all(a["status"] == "Solve_Succeeded" for a in tr.attempts if a["stage"].startswith("window"))
     bounces, checked = _rocking_checks(tr, 0.8)
     assert checked >= 15
@@ -645,7 +646,7 @@ def test_script_refuses_bad_input(args, needle):
 def test_spring_ball_bounce_times_converge_at_second_order_and_beat_moreau_jean():
     """Ball on a spring (harmonic flight, e = 0.9): the sub-node locates every bounce of the
     midpoint flight, so the bounce-time error is the flight's O(h²); Moreau–Jean impacts at steps, O(h)."""
-    from castrajectory import study
+    from castrajectory.inspect import study
     ns = [250, 500, 1000]
     rows = study.contact_work_precision(ns, cases=["spring_ball"])
     whole = [r for r in rows if r["method"] == "whole"]

@@ -9,8 +9,8 @@ import math
 import numpy as np
 import pytest
 
-from castrajectory import droplet as dl
-from castrajectory.droplet import Droplet
+from castrajectory.solve import droplet as dl
+from castrajectory.models.droplet import Droplet
 from castrajectory.validation import InputError
 
 from helpers import (

@@ -9,7 +9,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from castrajectory.nlp import NLP, X
+from castrajectory.solve.nlp import NLP, X
 from castrajectory.result import SolveError
 
 SYMBOLICS = pytest.mark.parametrize("sym", [ca.SX, ca.MX], ids=["SX", "MX"])
@@ -78,7 +78,7 @@ def kkt_stationarity(nlp_syms, f, constraints, res):
 def test_qp_values_objective_and_multipliers(sym):
     nlp, syms, f = build_qp(sym)
     res = nlp.solve()
-    assert res.success and res.status == "Solve_Succeeded"
+    assert res.success and res.solver_status == "Solve_Succeeded" and res.status == "ok"
     values, fstar, mult, bmult = qp_exact(**QP_RHS)
     for k, v in values.items():
         assert res[k] == pytest.approx([v], abs=1e-7), k
@@ -449,7 +449,7 @@ def test_symbolic_kinds_agree(sym):
 # ----------------------------------------------------------------------------- compiled element functions
 def _element_chain_nlp(E: int, hessian: str = "exact") -> NLP:
     """A nonlinear chain with every kind of element argument (shared variable, parameter, constants)."""
-    from castrajectory.nlp import P
+    from castrajectory.solve.nlp import P
 
     a, b, s, c, k = (ca.SX.sym(n) for n in "abs" "ck")
     con = ca.Function("con", [a, b, s, c, k], [ca.vertcat(ca.sin(a) * b ** 2 + s * c - k, a * ca.exp(0.1 * b) * s)])
@@ -484,7 +484,7 @@ def _evaluate_functions(nlp: NLP, seed: int = 0) -> dict:
 @pytest.mark.parametrize("E", [5, 200, 1301])  # a plain map (5, 200); chunks of 64 plus a rest (1301)
 def test_compiled_elements_match_virtual_machine(monkeypatch, tmp_path, E):
     """Compiled and interpreted element functions give the same Jacobian and Hessian (1e-12)."""
-    from castrajectory import jit, nlp as nlp_mod
+    from castrajectory.solve import jit, nlp as nlp_mod
 
     if jit.compiler() is None:
         pytest.skip("no C compiler")
@@ -518,7 +518,7 @@ def _square_chain(E: int) -> NLP:
 
 
 def test_compiled_solve_matches_virtual_machine(monkeypatch, tmp_path):
-    from castrajectory import jit, nlp as nlp_mod
+    from castrajectory.solve import jit, nlp as nlp_mod
 
     monkeypatch.setenv("CASTRAJECTORY_CACHE_DIR", str(tmp_path))
     monkeypatch.setattr(nlp_mod, "JIT_MIN_ELEMENTS", 1)
@@ -538,7 +538,7 @@ def _fresh_function(tag: float) -> ca.Function:
 
 
 def test_jit_disk_cache_hit_does_not_recompile(monkeypatch, tmp_path):
-    from castrajectory import jit
+    from castrajectory.solve import jit
 
     if jit.compiler() is None:
         pytest.skip("no C compiler")
@@ -566,7 +566,7 @@ def test_jit_disk_cache_hit_does_not_recompile(monkeypatch, tmp_path):
 
 @pytest.mark.parametrize("how", ["missing", "failing", "disabled"])
 def test_jit_falls_back_to_virtual_machine(monkeypatch, tmp_path, how):
-    from castrajectory import jit, nlp as nlp_mod
+    from castrajectory.solve import jit, nlp as nlp_mod
 
     monkeypatch.setenv("CASTRAJECTORY_CACHE_DIR", str(tmp_path))
     if how == "missing":
@@ -593,7 +593,7 @@ def test_jit_falls_back_to_virtual_machine(monkeypatch, tmp_path, how):
 
 
 def test_jit_cache_dir_is_per_user_and_overridable(monkeypatch, tmp_path):
-    from castrajectory import jit
+    from castrajectory.solve import jit
 
     monkeypatch.delenv("CASTRAJECTORY_CACHE_DIR", raising=False)
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))

@@ -7,7 +7,7 @@ from matplotlib import animation
 from matplotlib.figure import Figure
 from PIL import Image
 
-from castrajectory import plotting
+from castrajectory.inspect import plotting
 
 
 def _t(n=200, T=2.0):

@@ -15,9 +15,9 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from castrajectory import stepping as st
-from castrajectory.mechanics import LagrangianSystem, MassMatrix, Potential
-from castrajectory.pendulum import (cartesian_pendulum, double_pendulum, double_pendulum_modes,
+from castrajectory.baselines import stepping as st
+from castrajectory.models.mechanics import LagrangianSystem, MassMatrix, Potential
+from castrajectory.models.pendulum import (cartesian_pendulum, double_pendulum, double_pendulum_modes,
                                     n_link_pendulum)
 from castrajectory.validation import InputError
 

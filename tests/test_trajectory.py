@@ -18,10 +18,10 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from castrajectory import stepping as st
-from castrajectory import trajectory as tr
-from castrajectory.nlp import NLP, X
-from castrajectory.pendulum import cartesian_pendulum, double_pendulum, n_link_pendulum, point_mass
+from castrajectory.baselines import stepping as st
+from castrajectory.solve import trajectory as tr
+from castrajectory.solve.nlp import NLP, X
+from castrajectory.models.pendulum import cartesian_pendulum, double_pendulum, n_link_pendulum, point_mass
 from castrajectory.result import SUCCESS_STATUSES
 from castrajectory.validation import InputError
 
@@ -485,7 +485,7 @@ def solve_log(monkeypatch):
 
     def counting(self, *args, **kwargs):
         res = original(self, *args, **kwargs)
-        calls.append((self.N, res.status, res.iterations))
+        calls.append((self.N, res.solver_status, res.iterations))
         return res
 
     monkeypatch.setattr(tr.TrajectoryNLP, "solve", counting)
@@ -498,7 +498,7 @@ def _check_levels(r, calls, N):
     assert [lv.iterations for lv in r.levels] == [c[2] for c in calls]
     assert r.iterations == sum(c[2] for c in calls)
     last = r.levels[-1]
-    assert last.n == N and last.horizon == N and last.status == r.status
+    assert last.n == N and last.horizon == N and last.status == r.solver_status
     assert all(lv.horizon <= lv.n for lv in r.levels)
 
 

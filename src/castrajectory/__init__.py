@@ -1,0 +1,72 @@
+"""castrajectory: variational mechanics posed as nonlinear programs in CasADi and solved with Ipopt.
+
+The package is built in layers; each folder is one room, and imports only point down
+(``tests/test_layers.py`` checks it):
+
+* ``models/``      describe: what the physics is (Lagrangian systems, the droplet, the impact law),
+                   each model with its analytic oracle;
+* ``discretise/``  how it becomes finitely many unknowns: the named program, discrete Lagrangians,
+                   the whole-trajectory, droplet and contact transcriptions;
+* ``baselines/``   time-steppers kept for comparison only;
+* ``solve/``       one NLP handed to Ipopt, the solve strategies and the one entry point ``simulate``;
+* ``inspect/``     studies, error measures and pictures (the only place matplotlib is imported);
+* ``cli/``         argument parsing, the scene registry, the console command and the report.
+
+``result`` (the one result contract) and ``validation`` (the bad-input error) sit under all of them.
+
+The flat module names of earlier versions (``castrajectory.droplet``, ``castrajectory.nlp``, ...)
+still import: they are aliases of the modules that now hold their contents (see ``_MOVED``).
+"""
+from __future__ import annotations
+
+import importlib
+import importlib.abc
+import importlib.util
+import sys
+
+#: Old flat module name -> the module that holds its contents now.
+_MOVED = {
+    "mechanics": "castrajectory.models.mechanics",
+    "pendulum": "castrajectory.models.pendulum",
+    "collision": "castrajectory.models.collision",
+    "droplet": "castrajectory.solve.droplet",
+    "discrete": "castrajectory.discretise.lagrangians",
+    "nlp": "castrajectory.solve.nlp",
+    "assembly": "castrajectory.solve.assembly",
+    "jit": "castrajectory.solve.jit",
+    "trajectory": "castrajectory.solve.trajectory",
+    "contact": "castrajectory.solve.contact",
+    "simulate": "castrajectory.solve.simulate",
+    "stepping": "castrajectory.baselines.stepping",
+    "study": "castrajectory.inspect.study",
+    "plotting": "castrajectory.inspect.plotting",
+    "report": "castrajectory.cli.report",
+}
+
+
+class _Alias(importlib.abc.MetaPathFinder, importlib.abc.Loader):
+    """``import castrajectory.<old>`` gives the very module object of its new home (no copy)."""
+
+    def find_spec(self, fullname, path=None, target=None):
+        head, _, leaf = fullname.partition(".")
+        if head == __name__ and leaf in _MOVED:
+            return importlib.util.spec_from_loader(fullname, self)
+        return None
+
+    def create_module(self, spec):
+        module = importlib.import_module(_MOVED[spec.name.partition(".")[2]])
+        self._spec = module.__spec__
+        return module
+
+    def exec_module(self, module):
+        module.__spec__ = self._spec  # the import system stamped the alias's spec on it; restore
+
+
+if not any(isinstance(f, _Alias) for f in sys.meta_path):
+    sys.meta_path.append(_Alias())
+
+
+def __getattr__(name):
+    if name in _MOVED:
+        return importlib.import_module(f"{__name__}.{name}")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -1,4 +1,23 @@
-"""The outcome of one NLP solve.
+"""The one result contract of castrajectory, and the result of one NLP solve.
+
+The contract (:class:`Result`, after scipy's ``OdeResult``)
+-----------------------------------------------------------
+Every method and every scene returns a subclass of :class:`Result`:
+
+* ``success``: the method reached what it was asked for (for Ipopt: ``Solve_Succeeded``);
+* ``status``: ``"ok"``, or the failure's name (``Maximum_Iterations_Exceeded``, ...);
+* ``solver_status``: the method's own word for how it ended (Ipopt's return status), kept
+  for the record; ``None`` where the method has none;
+* ``message``: one line saying what happened, and on failure what to try next;
+* ``iterations``, ``build_time_s``, ``solve_time_s``: counters and wall times summed over
+  every solve the method ran;
+* ``as_dict()``: the JSON object of the result (the contract's keys, then the subclass's);
+* ``raise_for_status()``: ``self`` on success, :class:`SolveError` otherwise.
+
+A solve that did not converge does **not** raise: it returns a result with
+``success = False``.  Only Ipopt's ``Solve_Succeeded`` counts as success;
+``Solved_To_Acceptable_Level`` is reported as a failure, because the requested
+tolerance was not reached.
 
 Sign convention for multipliers (stated once, used everywhere)
 --------------------------------------------------------------
@@ -19,15 +38,6 @@ the rate at which the optimal objective ``f*`` changes when the active bound
 
 Bound multipliers on decision variables follow the same rule
 (``-lam_x``: positive when a lower bound is active).
-
-Failure
--------
-A solve that did not converge does **not** raise.  It returns a ``Result``
-with ``success = False`` and a ``message`` saying what happened and what to try
-next; :meth:`Result.raise_for_status` turns that into an exception for callers
-that prefer one.  Only Ipopt's ``Solve_Succeeded`` counts as success;
-``Solved_To_Acceptable_Level`` is reported as a failure, because the requested
-tolerance was not reached.
 """
 from __future__ import annotations
 
@@ -60,14 +70,63 @@ class SolveError(RuntimeError):
         self.result = result
 
 
+#: The contract's fields, in the order of :meth:`Result.as_dict`.
+CONTRACT = ("status", "message", "iterations", "build_time_s", "solve_time_s")
+
+
+@dataclass(kw_only=True)
+class Result:
+    """The contract shared by every method's and scene's result (see module docstring)."""
+
+    success: bool
+    status: str = ""
+    message: str = ""
+    iterations: int = 0
+    build_time_s: float = 0.0
+    solve_time_s: float = 0.0
+    solver_status: Optional[str] = None
+
+    def __post_init__(self):
+        if self.success:
+            self.status = "ok"
+        elif not self.status or self.status == "ok":
+            self.status = self.solver_status or "failed"
+
+    @property
+    def time_s(self) -> float:
+        """Build plus solve wall time."""
+        return self.build_time_s + self.solve_time_s
+
+    def contract(self) -> dict:
+        """The contract's fields, to hand on to a result built from this one (``Sub(..., **r.contract())``)."""
+        return {"success": self.success, "status": self.status, "message": self.message,
+                "iterations": self.iterations, "build_time_s": self.build_time_s,
+                "solve_time_s": self.solve_time_s, "solver_status": self.solver_status}
+
+    def fail(self, status: str, message: str) -> None:
+        """Turn this result into a failure named ``status`` (e.g. a check after the solver converged)."""
+        self.success, self.status, self.message = False, status, message
+
+    def as_dict(self) -> dict:
+        """The JSON object: the contract's keys; subclasses add theirs (``{**super().as_dict(), ...}``)."""
+        return {k: getattr(self, k) for k in CONTRACT}
+
+    def raise_for_status(self) -> "Result":
+        """Return ``self`` if the method succeeded, raise :class:`SolveError` otherwise."""
+        if not self.success:
+            raise SolveError(self)
+        return self
+
+
 @dataclass
 class HomotopyStep:
     """One step of a complementarity homotopy.
 
     ``sigma`` is the value of the homotopy parameter named by ``parameter``:
-    ``"sigma"`` for the Scholtes relaxation of :meth:`castrajectory.nlp.NLP.solve`
+    ``"sigma"`` for the Scholtes relaxation of :meth:`castrajectory.solve.nlp.NLP.solve`
     (``a_i b_i ≤ σ``, σ → 0), ``"rho"`` for the exact-penalty weight of
-    :mod:`castrajectory.contact` (ρ rising until complementarity holds).
+    :mod:`castrajectory.solve.contact` (ρ rising until complementarity holds).  ``status`` is
+    the solver's own (Ipopt's return status): a step is a record of the solve, not a result.
     """
 
     sigma: float
@@ -78,20 +137,17 @@ class HomotopyStep:
     parameter: str = "sigma"
 
 
-@dataclass
-class Result:
-    """Values, multipliers and statistics of one NLP solve (see module docstring)."""
+@dataclass(kw_only=True)
+class NLPResult(Result):
+    """Values, multipliers and statistics of one NLP solve (see module docstring).
+
+    ``solver_status`` is Ipopt's return status; ``status`` is ``"ok"`` or that status.
+    """
 
     values: Dict[str, np.ndarray]
     multipliers: Dict[str, np.ndarray]
     bound_multipliers: Dict[str, np.ndarray]
     objective: float
-    status: str
-    success: bool
-    message: str
-    iterations: int
-    build_time_s: float
-    solve_time_s: float
     complementarity_residual: Optional[float] = None
     homotopy: List[HomotopyStep] = field(default_factory=list)
     # Raw primal/dual vectors, kept for warm starts.
@@ -102,11 +158,9 @@ class Result:
     def __getitem__(self, name: str) -> np.ndarray:
         return self.values[name]
 
-    def raise_for_status(self) -> "Result":
-        """Return ``self`` if the solve succeeded, raise :class:`SolveError` otherwise."""
-        if not self.success:
-            raise SolveError(self)
-        return self
+    def as_dict(self) -> dict:
+        return {**super().as_dict(), "objective": self.objective, "values": self.values,
+                "multipliers": self.multipliers, "complementarity_residual": self.complementarity_residual}
 
     @staticmethod
     def describe_status(status: str) -> str:

@@ -11,43 +11,33 @@ from typing import Optional
 
 import numpy as np
 
-from . import stepping, trajectory
-from .discrete import SCHEMES
-from .mechanics import LagrangianSystem
-from .validation import InputError, one_of
+from ..baselines import stepping
+from . import trajectory
+from ..discretise.lagrangians import SCHEMES
+from ..models.mechanics import LagrangianSystem
+from ..result import Result
+from ..validation import InputError, one_of
 
 METHODS = ("whole", "march", "rk4", "implicit-euler")
 
 
-@dataclass
-class Run:
+@dataclass(kw_only=True)
+class Run(Result):
+    """A trajectory by any method: the contract, ``t``, ``q``, velocities ``v``, ``energy``, and the
+    method's own result in ``detail`` (a :class:`~castrajectory.solve.trajectory.Trajectory` or a
+    :class:`~castrajectory.baselines.stepping.Stepped`)."""
+
     t: np.ndarray
     q: np.ndarray
     v: np.ndarray
     energy: np.ndarray
-    status: str
-    success: bool
-    message: str
-    iterations: int
-    build_time_s: float
-    solve_time_s: float
     scheme: Optional[str]
     method: str
-    detail: object = None  # the underlying Trajectory or Stepped
-
-    @property
-    def time_s(self) -> float:
-        return self.build_time_s + self.solve_time_s
+    detail: object = None
 
     def as_dict(self) -> dict:
-        """The JSON keys shared by every mechanics scene (see DESIGN.md and issue 3)."""
-        return trajectory_json(self)
-
-
-def trajectory_json(run) -> dict:
-    """``status, iterations, build_time_s, solve_time_s, scheme, method, t, q, energy`` of a run."""
-    return {k: getattr(run, k) for k in ("status", "iterations", "build_time_s", "solve_time_s",
-                                         "scheme", "method", "t", "q", "energy")}
+        """The JSON keys shared by every mechanics scene: the contract, scheme, method, t, q, energy."""
+        return {**super().as_dict(), **trajectory.trajectory_keys(self)}
 
 
 def simulate(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str = "midpoint",
@@ -59,15 +49,13 @@ def simulate(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str = 
         raise InputError(f"the {method} baseline has no contact model; contact scenes use method 'whole'")
     if method == "whole":
         tr = trajectory.solve_initial_value(system, q0, qd0, T, N, scheme, options=options, verbose=verbose)
-        status = "ok" if tr.success else tr.status
-        return Run(tr.t, tr.q, tr.v, tr.energy, status, tr.success, tr.message, tr.iterations,
-                   tr.build_time_s, tr.solve_time_s, scheme, method, tr)
+        return Run(t=tr.t, q=tr.q, v=tr.v, energy=tr.energy, scheme=scheme, method=method, detail=tr,
+                   **tr.contract())
     if method == "march":
         st = stepping.march(system, q0, qd0, T, N, scheme)
     elif method == "rk4":
         st = stepping.rk4(system, q0, qd0, T, N)
     else:
         st = stepping.implicit_euler(system, q0, qd0, T, N)
-    status = "ok" if st.success else "failed"
-    return Run(st.t, st.q, st.qd, st.energy, status, st.success, st.message, 0,
-               st.build_time_s, st.solve_time_s, scheme if method == "march" else None, method, st)
+    return Run(t=st.t, q=st.q, v=st.qd, energy=st.energy, scheme=scheme if method == "march" else None,
+               method=method, detail=st, **st.contract())

@@ -64,7 +64,7 @@ import casadi as ca
 import numpy as np
 
 from .mechanics import Atoms, LagrangianSystem, MassMatrix
-from .validation import InputError, finite, integer_at_least, positive
+from ..validation import InputError, finite, integer_at_least, positive
 
 NAMES = ["cx", "cy", "theta"]
 

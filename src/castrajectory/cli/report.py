@@ -12,8 +12,10 @@ import os
 import time
 from typing import List
 
-from . import droplet, plotting, study
-from .cli import jsonable
+from ..solve import droplet
+from ..inspect import plotting
+from ..inspect import study
+from .scene import SCENES, jsonable
 
 
 def _droplet_entry(out: str, name: str, title: str, drop: droplet.Droplet, n: int, formulation: str):
@@ -95,7 +97,6 @@ def _contact_stability(out: str):
 
     import numpy as np
 
-    from .cli import SCENES
     lines = ["### Stability on extreme contact cases", "",
              "Each case runs its problem script; a failure is recorded here (status column) and counted "
              "below, not hidden.", "",
@@ -165,7 +166,6 @@ def _mechanics_scenes(out: str):
 def _script_scenes(out: str, heading: str, intro: str, scenes, plot_name: str = "energy"):
     import importlib
 
-    from .cli import SCENES
     lines = [heading, "", intro, ""]
     ok = True
     for stem, scene, argv, title, animate in scenes:
@@ -189,7 +189,7 @@ def _work_precision(out: str, quick: bool):
     """Double pendulum (T = 5 s, θ = (2, 1)): error at T and energy error against run time."""
     import numpy as np
 
-    from . import pendulum
+    from ..models import pendulum
     schemes = ("midpoint", "trapezoid", "galerkin4")
     pairs = [("whole", s) for s in schemes] + [("march", s) for s in ("midpoint", "galerkin4")] \
         + [("rk4", None), ("implicit-euler", None)]
@@ -224,7 +224,7 @@ def _long_horizon(out: str, quick: bool):
     """Small-amplitude pendulum over many periods: bounded energy (variational) against RK4 drift."""
     import math as _m
 
-    from . import pendulum
+    from ..models import pendulum
     periods = 100 if quick else 1000
     steps = 20
     g, amp = 9.81, 0.1

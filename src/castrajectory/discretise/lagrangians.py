@@ -44,7 +44,7 @@ from typing import Dict, Tuple
 import casadi as ca
 import numpy as np
 
-from .mechanics import LagrangianSystem
+from ..models.mechanics import LagrangianSystem
 
 
 @dataclass(frozen=True)

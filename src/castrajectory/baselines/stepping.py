@@ -50,9 +50,10 @@ from typing import Optional, Tuple
 import casadi as ca
 import numpy as np
 
-from .discrete import SCHEMES, DiscreteMechanics
-from .mechanics import LagrangianSystem
-from .validation import InputError, integer_at_least, one_of, positive
+from ..discretise.lagrangians import SCHEMES, DiscreteMechanics
+from ..models.mechanics import LagrangianSystem
+from ..result import Result
+from ..validation import InputError, integer_at_least, one_of, positive
 
 __all__ = ["Stepped", "rk4", "implicit_euler", "march", "reference"]
 
@@ -70,9 +71,9 @@ NEWTON_ACCEPT = 1e-9
 
 
 # ----------------------------------------------------------------------------- result
-@dataclass
-class Stepped:
-    """A marched trajectory.
+@dataclass(kw_only=True)
+class Stepped(Result):
+    """A marched trajectory (the contract of :class:`castrajectory.result.Result`, plus these).
 
     ``t`` (N+1,), ``q`` and ``qd`` (N+1, n), ``energy`` (N+1,).  For the
     variational integrator ``qd`` comes from the discrete Legendre transform
@@ -91,10 +92,6 @@ class Stepped:
     energy: np.ndarray
     method: str
     scheme: Optional[str]
-    build_time_s: float
-    solve_time_s: float
-    success: bool
-    message: str
     newton_error: float = float("nan")
     p: Optional[np.ndarray] = None
     lam: Optional[np.ndarray] = None
@@ -102,6 +99,10 @@ class Stepped:
     @property
     def h(self) -> float:
         return float(self.t[1] - self.t[0])
+
+    def as_dict(self) -> dict:
+        return {**super().as_dict(), "scheme": self.scheme, "method": self.method, "t": self.t, "q": self.q,
+                "qd": self.qd, "energy": self.energy}
 
 
 # ----------------------------------------------------------------------------- input checks
@@ -242,7 +243,8 @@ def rk4(system: LagrangianSystem, q0, qd0, T: float, N: int) -> Stepped:
     t, X, solve = _timed_march(march_fn, np.concatenate([q0, qd0]), T, N)
     ok, msg, _ = _verdict(t, X, None, "rk4")
     q, qd = X[:, :n], X[:, n:]
-    return Stepped(t, q, qd, system.energies(q, qd), "rk4", None, build, solve, ok, msg)
+    return Stepped(t=t, q=q, qd=qd, energy=system.energies(q, qd), method="rk4", scheme=None, build_time_s=build,
+                   solve_time_s=solve, success=ok, message=msg)
 
 
 # ----------------------------------------------------------------------------- implicit Euler
@@ -265,8 +267,8 @@ def implicit_euler(system: LagrangianSystem, q0, qd0, T: float, N: int) -> Stepp
     corr = _corrections(_correction(r, x, xo), X[1:], X[:-1]) if _first_bad(X) < 0 else None
     ok, msg, worst = _verdict(t, X, corr, "implicit_euler")
     q, qd = X[:, :n], X[:, n:]
-    return Stepped(t, q, qd, system.energies(q, qd), "implicit_euler", None, build, solve, ok, msg,
-                   newton_error=worst)
+    return Stepped(t=t, q=q, qd=qd, energy=system.energies(q, qd), method="implicit_euler", scheme=None,
+                   build_time_s=build, solve_time_s=solve, success=ok, message=msg, newton_error=worst)
 
 
 # ----------------------------------------------------------------------------- variational integrator
@@ -341,15 +343,17 @@ def march(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str = "mi
     if k >= 0:
         msg = (f"{what}: non-finite values in step {k} (t = {t[k]:.6g} -> {t[k + 1]:.6g}); "
                "increase N or check the model's domain")
-        return Stepped(t, q, nan_nodes, np.full(N + 1, np.nan), "variational", scheme, build, solve,
-                       False, msg, p=nan_nodes, lam=lam if m else None)
+        return Stepped(t=t, q=q, qd=nan_nodes, energy=np.full(N + 1, np.nan), method="variational", scheme=scheme,
+                       build_time_s=build, solve_time_s=solve, success=False, message=msg, p=nan_nodes,
+                       lam=lam if m else None)
     corr = np.vstack([_corrections(_correction(r0, y, par0), y0[None, :], np.concatenate([q0, p0])[None, :]),
                       _corrections(_correction(r, y, S), Y[1:], Sall[:-1])])
     p = dm.momenta(q, Z, h)
     qd = dm.velocities(q, p)
     ok, msg, worst = _verdict(t, np.hstack([q, qd]), corr, what)
-    return Stepped(t, q, qd, system.energies(q, qd), "variational", scheme, build, solve, ok, msg,
-                   newton_error=worst, p=p, lam=lam if m else None)
+    return Stepped(t=t, q=q, qd=qd, energy=system.energies(q, qd), method="variational", scheme=scheme,
+                   build_time_s=build, solve_time_s=solve, success=ok, message=msg, newton_error=worst, p=p,
+                   lam=lam if m else None)
 
 
 # ----------------------------------------------------------------------------- reference
@@ -436,5 +440,6 @@ def moreau_jean(system: LagrangianSystem, q0, qd0, T: float, N: int, sweeps: int
     solve = time.perf_counter() - t0
     t = np.linspace(0.0, T, N + 1)
     ok = bool(np.all(np.isfinite(q)))
-    return Stepped(t, q, v, system.energies(q, v), "moreau-jean", None, build, solve, ok,
-                   "marched" if ok else "non-finite state")
+    return Stepped(t=t, q=q, qd=v, energy=system.energies(q, v), method="moreau-jean", scheme=None,
+                   build_time_s=build, solve_time_s=solve, success=ok,
+                   message="marched" if ok else "non-finite state")

@@ -1,4 +1,7 @@
-"""Whole-trajectory solves: all discrete Euler–Lagrange equations in one NLP.
+"""Whole-trajectory solves: all discrete Euler–Lagrange equations in one NLP, handed to Ipopt.
+
+The rows are written by :class:`castrajectory.discretise.trajectory.TrajectoryTranscription`;
+this module solves them.
 
 Two modes on a uniform grid ``t_k = k h``, ``h = T/N``:
 
@@ -47,13 +50,14 @@ from typing import Dict, List, Optional
 import casadi as ca
 import numpy as np
 
-from .discrete import DiscreteMechanics
-from .mechanics import LagrangianSystem
-from .nlp import NLP, P, X
-from .result import Result
-from .validation import InputError, integer_at_least, positive
+from ..discretise.lagrangians import DiscreteMechanics
+from ..discretise.trajectory import TrajectoryTranscription
+from ..models.mechanics import LagrangianSystem
+from ..result import NLPResult, Result
+from .nlp import NLP
+from ..validation import InputError, integer_at_least, positive
 
-#: Ipopt settings for the square DEL systems (see DESIGN.md: MUMPS scaling off).
+#: Ipopt settings for the square DEL systems (MUMPS scaling off: see solve.nlp.DEFAULT_IPOPT_OPTIONS).
 #: ``min_refinement_steps 0``: no forced iterative-refinement solve per KKT solve (Ipopt still
 #: refines when the residual ratio asks for it); measured 0.17 -> 0.145 s for the 1-iteration
 #: final solve of the double pendulum at N = 32000 (midpoint), 0.33 -> 0.28 s (galerkin4).
@@ -62,7 +66,7 @@ TRAJECTORY_IPOPT = {"tol": 1e-12, "max_iter": 100, "constr_mult_init_max": 0, "m
 
 @dataclass
 class Level:
-    """One whole-trajectory solve on the way to the answer."""
+    """One whole-trajectory solve on the way to the answer (a record: ``status`` is Ipopt's return status)."""
 
     n: int
     horizon: int  # nodes with active equations (n = full trajectory)
@@ -75,8 +79,15 @@ class Level:
     function_time_s: float = 0.0
 
 
-@dataclass
-class Trajectory:
+@dataclass(kw_only=True)
+class Trajectory(Result):
+    """A whole-trajectory solution (the contract of :class:`castrajectory.result.Result`, plus these).
+
+    ``t`` (N+1,), ``q`` (N+1, n), ``stages`` (N, s), node momenta ``p`` and velocities ``v``
+    (from the discrete Legendre transform), ``energy`` (N+1,), constraint ``multipliers``
+    (or None), the discrete action ``action``, and every sub-solve in ``levels``.
+    """
+
     t: np.ndarray
     q: np.ndarray
     stages: np.ndarray
@@ -84,25 +95,20 @@ class Trajectory:
     v: np.ndarray
     energy: np.ndarray
     multipliers: Optional[np.ndarray]
-    status: str
-    success: bool
-    message: str
-    iterations: int
-    build_time_s: float
-    solve_time_s: float
     scheme: str
     mode: str
     method: str = "whole"
     levels: List[Level] = field(default_factory=list)
     action: float = float("nan")  # discrete action S_d = Σ L_d
 
-    @property
-    def time_s(self) -> float:
-        return self.build_time_s + self.solve_time_s
-
     def as_dict(self) -> dict:
-        from .simulate import trajectory_json
-        return {**trajectory_json(self), "mode": self.mode, "levels": [vars(lv) for lv in self.levels]}
+        return {**super().as_dict(), **trajectory_keys(self), "mode": self.mode,
+                "levels": [vars(lv) for lv in self.levels]}
+
+
+def trajectory_keys(run) -> dict:
+    """The keys every mechanics scene's JSON holds besides the contract: scheme, method, t, q, energy."""
+    return {k: getattr(run, k) for k in ("scheme", "method", "t", "q", "energy")}
 
 
 def _check_state(name, value, n):
@@ -114,86 +120,18 @@ def _check_state(name, value, n):
     return arr
 
 
-class TrajectoryNLP:
-    """The whole-trajectory NLP for one grid (see module docstring)."""
+class TrajectoryNLP(TrajectoryTranscription):
+    """The whole-trajectory transcription of one grid, written into an Ipopt :class:`~castrajectory.solve.nlp.NLP`."""
+
+    program = NLP
 
     def __init__(self, dm: DiscreteMechanics, N: int, T: float, mode: str, q0, end):
-        self.dm, self.N, self.T, self.mode = dm, N, T, mode
         self.function_time_s = 0.0  # of the last solve (see Level.function_time_s)
-        self.h = h = T / N
-        n, s, m = dm.n, dm.s, dm.m
-        st = dm.scheme.stages
-        # Initial value: a square feasibility problem, so the zero Hessian is exact (see NLP).
-        self.nlp = nlp = NLP(hessian="zero" if mode == "initial_value" else "exact")
-        q_init = np.tile(q0, N + 1)
-        nlp.variable("q", (N + 1) * n, init=q_init)
-        if s:
-            nlp.variable("Z", N * s)
-        if m and mode == "initial_value":
-            # boundary mode: the constraint multipliers are Ipopt's own (see _finish)
-            nlp.variable("lam", N * m)
-            if s:
-                nlp.variable("nu", N * st * m)
-        Q = nlp.index("q").reshape(N + 1, n)
-        Zi = nlp.index("Z").reshape(N, s) if s else np.zeros((N, 0), dtype=np.int64)
-        ivp_m = m and mode == "initial_value"
-        Li = nlp.index("lam").reshape(-1, m) if ivp_m else None
-        Ni = nlp.index("nu").reshape(N, st * m) if (ivp_m and s) else None
-        none = np.zeros(0)
-        hh = np.array([h])
-        zarg = (lambda rows: X(Zi[rows])) if s else (lambda rows: none)
-        self.Q, self.Zi, self.Li, self.Ni = Q, Zi, Li, Ni
+        super().__init__(dm, N, T, mode, q0, end)
 
-        if mode == "initial_value":
-            # p0 is a parameter so that one NLP serves many initial momenta (horizon windows)
-            nlp.parameter("p0", n, value=end)
-            lam0 = X(Li[0]) if m else none
-            nlp.equal_elements("initial", dm.initial_residual,
-                               [X(Q[0]), zarg(0), X(Q[1]), P(nlp.parameter_index("p0")), lam0, hh])
-            if N > 1:
-                k = np.arange(1, N)
-                lam = X(Li[k]) if m else none
-                nlp.equal_elements("del", dm.del_residual,
-                                   [X(Q[k - 1]), zarg(k - 1), X(Q[k]), zarg(k), X(Q[k + 1]), lam, hh])
-            nlp.minimize(ca.SX(0))
-        else:
-            a, b, Zs = ca.SX.sym("a", n), ca.SX.sym("b", n), ca.SX.sym("Z", s)
-            act = ca.Function("action", [a, Zs, b], [dm.Ld(a, Zs, b, h) / h])
-            k = np.arange(N)
-            nlp.minimize_elements("action", act, [X(Q[k]), zarg(k), X(Q[k + 1])])
-        if s and mode == "initial_value":
-            k = np.arange(N)
-            nu = X(Ni[k]) if (m and s) else np.zeros(0)
-            nlp.equal_elements("stage", dm.stage_residual, [X(Q[k]), X(Zi[k]), X(Q[k + 1]), nu, hh])
-        if m:
-            nodes = np.arange(1, N + 1) if mode == "initial_value" else np.arange(1, N)
-            nlp.equal_elements("constraint", dm.constraint_rows, [X(Q[nodes])])
-            if s:
-                for j in range(st):
-                    nlp.equal_elements(f"stage_constraint{j}", dm.constraint_rows,
-                                       [X(Zi[:, j * n:(j + 1) * n])])
-        self.set_start(q0, end)
-
-    def set_start(self, q0, end) -> None:
-        """New ``q0`` and ``p0`` (initial value) or ``q_N`` (boundary) without rebuilding."""
-        self.q0 = np.asarray(q0, float)
-        self.end = np.asarray(end, float)
-        if self.mode == "initial_value":
-            self.nlp.set_parameter("p0", self.end)
-
-    # --------------------------------------------------------------- solve
-    def _fixed_bounds(self) -> Dict[str, tuple]:
-        """Bounds fixing ``q_0`` (and ``q_N`` in boundary mode); Ipopt removes fixed unknowns."""
-        N, n = self.N, self.dm.n
-        qlo = np.full((N + 1, n), -np.inf)
-        qhi = np.full((N + 1, n), np.inf)
-        qlo[0] = qhi[0] = self.q0
-        if self.mode == "boundary":
-            qlo[N] = qhi[N] = self.end
-        return {"q": (qlo.reshape(-1), qhi.reshape(-1))}
 
     def solve(self, guess: Dict[str, np.ndarray], options: Optional[dict] = None,
-              verbose: bool = False) -> Result:
+              verbose: bool = False) -> NLPResult:
         opts = dict(TRAJECTORY_IPOPT)
         if self.mode == "boundary":
             # The gradient of S_d/h is the DEL residual, whose round-off floor grows like
@@ -203,7 +141,7 @@ class TrajectoryNLP:
             opts["obj_scaling_factor"] = min(1.0, 100.0 * self.h ** 2 / m_ref)
         opts.update(options or {})
         init = {k: v for k, v in guess.items() if k in self.nlp.variable_names}
-        res = self.nlp.solve(init=init, options=opts, verbose=verbose, bounds=self._fixed_bounds())
+        res = self.nlp.solve(init=init, options=opts, verbose=verbose, bounds=self.fixed_bounds())
         stats = self.nlp.build(opts, verbose).stats()  # the solver just used (cached by its options)
         self.function_time_s = float(sum(v for k, v in stats.items() if k.startswith("t_wall_nlp_")))
         return res
@@ -268,7 +206,7 @@ def _extrapolate(coarse, fine, nxt: TrajectoryNLP) -> Dict[str, np.ndarray]:
 
     ``coarse`` and ``fine`` are ``(TrajectoryNLP, values)``.  With a scheme of order ``p``
     the level's error is ``e(h) ≈ C h^p``; the two levels give
-    ``C h_f^p ≈ (u_f − u_c)/((h_c/h_f)^p − 1)`` (``u_c`` interpolated to the fine grid), and
+    ``C h_f^p ≈ (u_c − u_f)/((h_c/h_f)^p − 1)`` (``u_c`` interpolated to the fine grid), and
     the solution on ``nxt``'s grid is ``u_f − C h_f^p (1 − (h/h_f)^p)`` — the discrete
     solution at ``h``, not the limit ``h → 0``: that is what the Newton iteration on the
     finer grid converges to.  Both interpolations use quintic stencils
@@ -350,7 +288,7 @@ def _solve_level(tn: TrajectoryNLP, guess, options, verbose, log: List[Level], a
         first["max_iter"] = min(cap, FIRST_ATTEMPT_MAX_ITER)
         window_opts["max_iter"] = min(cap, WINDOW_MAX_ITER)
     res = tn.solve(guess, options=first, verbose=verbose)
-    log.append(Level(tn.N, tn.N, res.status, res.iterations, res.build_time_s, res.solve_time_s,
+    log.append(Level(tn.N, tn.N, res.solver_status, res.iterations, res.build_time_s, res.solve_time_s,
                      tn.function_time_s))
     if res.success or not allow_windows:
         return res
@@ -387,7 +325,7 @@ def _solve_level(tn: TrajectoryNLP, guess, options, verbose, log: List[Level], a
             if s:
                 wg["nu"] = Nc[K:K + L].reshape(-1).copy()
         r = w.solve(wg, options=window_opts, verbose=verbose)
-        log.append(Level(N, K + L, r.status, r.iterations, r.build_time_s if new_build else 0.0, r.solve_time_s,
+        log.append(Level(N, K + L, r.solver_status, r.iterations, r.build_time_s if new_build else 0.0, r.solve_time_s,
                          w.function_time_s))
         if r.success:
             qw = r.values["q"].reshape(L + 1, n)
@@ -417,12 +355,12 @@ def _solve_level(tn: TrajectoryNLP, guess, options, verbose, log: List[Level], a
     solver_before = tn.nlp._solver
     res = tn.solve(cur, options=first if (K >= N or not final) else options, verbose=verbose)
     rebuilt = tn.nlp._solver is not solver_before  # other Ipopt options than the first attempt
-    log.append(Level(N, N, res.status, res.iterations, res.build_time_s if rebuilt else 0.0, res.solve_time_s,
+    log.append(Level(N, N, res.solver_status, res.iterations, res.build_time_s if rebuilt else 0.0, res.solve_time_s,
                      tn.function_time_s))
     return res
 
 
-def _finish(tn: TrajectoryNLP, res: Result, log: List[Level], mode: str) -> Trajectory:
+def _finish(tn: TrajectoryNLP, res: NLPResult, log: List[Level], mode: str) -> Trajectory:
     dm, N = tn.dm, tn.N
     q = res.values["q"].reshape(N + 1, dm.n)
     Z = res.values["Z"].reshape(N, dm.s) if dm.s else np.zeros((N, 0))
@@ -438,10 +376,9 @@ def _finish(tn: TrajectoryNLP, res: Result, log: List[Level], mode: str) -> Traj
             lam = res.multipliers["constraint"].reshape(-1, dm.m) / (2 * dm.scheme.node_weight)
     return Trajectory(
         t=np.linspace(0.0, tn.T, N + 1), q=q, stages=Z, p=p, v=v, energy=energy, multipliers=lam,
-        status=res.status, success=res.success, message=res.message,
-        iterations=int(sum(lv.iterations for lv in log)),
-        build_time_s=float(sum(lv.build_time_s for lv in log)),
-        solve_time_s=float(sum(lv.solve_time_s for lv in log)),
+        **{**res.contract(), "iterations": int(sum(lv.iterations for lv in log)),
+           "build_time_s": float(sum(lv.build_time_s for lv in log)),
+           "solve_time_s": float(sum(lv.solve_time_s for lv in log))},
         scheme=dm.scheme.name, mode=mode, levels=log,
         action=float(np.sum(np.asarray(dm.Ld.map(N)(q[:-1].T, Z.T, q[1:].T, tn.h)))))
 

@@ -308,6 +308,11 @@ def contact_work_precision(rows: List[dict], title: Optional[str] = None) -> Fig
 
 
 # ----------------------------------------------------------------------------- animation
+def mp4_available() -> bool:
+    """Whether an MP4 encoder (ffmpeg) is present for :func:`animate_points`."""
+    return bool(animation.FFMpegWriter.isAvailable())
+
+
 class _SharedPaletteGifWriter(animation.PillowWriter):
     """:class:`~matplotlib.animation.PillowWriter` that quantises every frame to one shared palette.
 

@@ -1,14 +1,14 @@
-"""Named nonlinear programs, solved with CasADi ``nlpsol`` and Ipopt.
+"""One NLP handed to Ipopt: CasADi ``nlpsol`` on a :class:`~castrajectory.discretise.program.Program`.
 
-An :class:`NLP` collects named decision variables, parameters, constraints
-(equalities, inequalities and complementarity pairs) and one objective::
+:class:`NLP` is a :class:`~castrajectory.discretise.program.Program` (named
+variables and constraints, element families) that can also be solved::
 
     nlp = NLP()
     x = nlp.variable("x", 3, lb=0.0, init=1.0)
     nlp.minimize(casadi.sumsqr(x - 2))
     nlp.equal("budget", casadi.sum1(x), 3.0)
     res = nlp.solve()
-    res["x"], res.multipliers["budget"]      # d f*/d(budget) = -2/3 * ... (see result.py)
+    res["x"], res.multipliers["budget"]      # d f*/d(budget) (see castrajectory.result)
 
 The sign of every multiplier is documented once, in :mod:`castrajectory.result`:
 ``multiplier = d f*/d bound``.
@@ -17,12 +17,10 @@ The Ipopt solver is created once, on the first call to :meth:`NLP.solve`, and
 reused by later calls (new initial guesses, parameter values or relaxation
 steps), so construction cost is paid once and reported as ``build_time_s``.
 
-Structured NLPs can add whole families of identical constraints or objective
-terms at once with :meth:`NLP.equal_elements`, :meth:`NLP.inequality_elements`
-and :meth:`NLP.minimize_elements`: one small CasADi function, evaluated for
-every element on index arrays into the decision vector.  Such an NLP is
-differentiated element by element (:mod:`castrajectory.assembly`), so building
-the solver costs a few array operations per nonzero instead of whole-graph AD.
+A program with element families is differentiated element by element
+(:mod:`castrajectory.solve.assembly`), so building the solver costs a few array
+operations per nonzero instead of whole-graph AD; large families run compiled
+element functions (:mod:`castrajectory.solve.jit`).
 
 Complementarity pairs ``0 <= a  ⟂  b >= 0`` are relaxed in the Scholtes way,
 ``a >= 0, b >= 0, a_i b_i <= sigma``, and solved by a homotopy ``sigma -> 0``
@@ -32,22 +30,21 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from typing import Dict, List, Optional, Sequence, Union
+from typing import Dict, List, Optional, Sequence
 
 import casadi as ca
 import numpy as np
 
 from . import jit
 from .assembly import Contribution, assemble, dense_vector
-from .result import SUCCESS_STATUSES, HomotopyStep, Result
-
-Number = Union[float, int]
-Expr = Union[ca.SX, ca.MX, ca.DM, float, np.ndarray]
+from ..discretise.program import (  # noqa: F401  (X, P, Constraint: re-exported)
+    Constraint, P, Program, X, _column, _Group)
+from ..result import SUCCESS_STATUSES, HomotopyStep, NLPResult
 
 #: Ipopt options used unless the caller overrides them.
 #: MUMPS scaling is switched off: on the large, sparse, square systems of this
 #: library the default scaling made MUMPS fail at the first iteration
-#: (see shared design notes); without it the same problems converge in a few
+#: (see docs/notes.md); without it the same problems converge in a few
 #: iterations.
 DEFAULT_IPOPT_OPTIONS: Dict[str, object] = {
     "tol": 1e-10,
@@ -212,324 +209,15 @@ def _gather_columns(src, idx: np.ndarray, n: int):
     return ca.reshape(_gather(src, flat), n, idx.shape[0] if idx.ndim == 2 else 1)
 
 
-@dataclass(frozen=True)
-class Constraint:
-    """Handle returned when a constraint is added; look multipliers up by ``name``."""
-
-    name: str
-    kind: str  # "equality", "inequality"
-    size: int
-    slice: slice
-
-
-@dataclass
-class _Block:
-    name: str
-    sym: object
-    lb: np.ndarray
-    ub: np.ndarray
-    init: np.ndarray
-
-
-class X:
-    """Element argument read from the decision vector at ``index``.
-
-    ``index`` has shape ``(E, n)`` (row ``e`` feeds element ``e``) or ``(n,)``
-    (the same entries for every element).  Positions come from :meth:`NLP.index`.
-    """
-
-    def __init__(self, index):
-        self.index = np.asarray(index, dtype=np.int64)
-
-
-class P(X):
-    """Element argument read from the parameter vector at ``index`` (see :meth:`NLP.parameter_index`)."""
-
-
-@dataclass
-class _Group:
-    """A family of ``count`` identical constraints or objective terms."""
-
-    name: str
-    fn: ca.Function
-    args: list  # X, P or constant arrays of shape (E, n) / (n,)
-    count: int
-    size: int  # outputs per element
-
-
-def _element_args(fn: ca.Function, args: Sequence, where: str):
-    if fn.n_out() != 1:
-        raise ValueError(f"{where}: the element function must have exactly one output")
-    if len(args) != fn.n_in():
-        raise ValueError(f"{where}: {fn.n_in()} arguments expected, got {len(args)}")
-    count, out = None, []
-    for i, a in enumerate(args):
-        n = fn.size1_in(i) * fn.size2_in(i)
-        if isinstance(a, X):
-            arr = a.index
-        else:
-            arr = np.asarray(a, dtype=float)
-            if not np.all(np.isfinite(arr)):
-                raise ValueError(f"{where}: argument {i} is not finite")
-        if arr.ndim == 0:
-            arr = arr.reshape(1)
-        if arr.ndim == 1:
-            if arr.size != n:
-                raise ValueError(f"{where}: argument {i} needs {n} entries per element, got {arr.size}")
-        elif arr.ndim == 2:
-            if arr.shape[1] != n:
-                raise ValueError(f"{where}: argument {i} needs {n} columns, got {arr.shape[1]}")
-            if count is not None and arr.shape[0] != count:
-                raise ValueError(f"{where}: argument {i} has {arr.shape[0]} elements, expected {count}")
-            count = arr.shape[0]
-        else:
-            raise ValueError(f"{where}: argument {i} must be 1-D or 2-D")
-        out.append(type(a)(arr) if isinstance(a, X) else arr)
-    if count is None:
-        count = 1
-    return out, count
-
-
 def _nz(M):
     """The structural nonzeros of an SX matrix as a dense column (constant zeros kept)."""
     return ca.densify(ca.vertcat(*M.nonzeros())) if M.nnz() else ca.SX(0, 1)
 
 
-def _column(value, n: int, what: str) -> np.ndarray:
-    arr = np.asarray(value, dtype=float).reshape(-1)
-    if arr.size == 1:
-        arr = np.full(n, float(arr[0]))
-    if arr.size != n:
-        raise ValueError(f"{what}: expected {n} values, got {arr.size}")
-    return arr
 
 
-class NLP:
-    """A nonlinear program with named variables and constraints.
-
-    Parameters
-    ----------
-    symbolic:
-        ``casadi.SX`` (default: fastest for scalar-heavy expressions) or
-        ``casadi.MX`` (for graphs built with ``map``).
-    hessian:
-        ``"exact"`` (default) or ``"zero"``.  ``"zero"`` hands Ipopt a zero
-        Hessian of the Lagrangian.  It is exact for a *square feasibility
-        problem* (objective ≡ 0, as many independent equalities as unknowns):
-        there ``∇gᵀλ = 0`` forces ``λ = 0``, the Lagrangian's Hessian vanishes at
-        the solution and the primal Newton step ``-J⁻¹g`` does not depend on it.
-        It saves the most expensive derivative evaluation (element families only).
-    """
-
-    def __init__(self, symbolic=ca.SX, hessian: str = "exact"):
-        if hessian not in ("exact", "zero"):
-            raise ValueError("hessian must be 'exact' or 'zero'")
-        self._sym = symbolic
-        self._hessian = hessian
-        self._t0 = time.perf_counter()
-        self._t_described = self._t0  # end of the last description call
-        self._vars: List[_Block] = []
-        self._params: List[_Block] = []
-        self._g: List[object] = []
-        self._glb: List[np.ndarray] = []
-        self._gub: List[np.ndarray] = []
-        self._cons: Dict[str, Constraint] = {}
-        self._ng = 0
-        self._comps: List[tuple] = []  # (name, a, b) expressions
-        self._comp_groups: List[tuple] = []  # (name, |a b| function, element args, count)
-        self._f = None
-        self._f_groups: List[_Group] = []
-        self._solver = None
-        self._solver_key = None
-        self._build_time = None
-        self._functions: Dict[str, ca.Function] = {}
-
-    # ------------------------------------------------------------------ description
-    def variable(self, name: str, size: int = 1, lb: Number = -np.inf, ub: Number = np.inf, init=0.0):
-        """Add a column of ``size`` decision variables; return its symbol."""
-        self._check_new(name)
-        sym = self._sym.sym(name, size)
-        self._vars.append(_Block(name, sym, _column(lb, size, f"{name}.lb"), _column(ub, size, f"{name}.ub"),
-                                 _column(init, size, f"{name}.init")))
-        self._t_described = time.perf_counter()
-        return sym
-
-    def parameter(self, name: str, size: int = 1, value=0.0):
-        """Add a column of parameters (fixed during a solve, changeable between solves)."""
-        self._check_new(name)
-        sym = self._sym.sym(name, size)
-        v = _column(value, size, f"{name}.value")
-        self._params.append(_Block(name, sym, v, v, v))
-        return sym
-
-    def set_parameter(self, name: str, value) -> None:
-        for p in self._params:
-            if p.name == name:
-                p.init = _column(value, p.init.size, f"{name}.value")
-                return
-        raise KeyError(name)
-
-    def minimize(self, expr) -> None:
-        if self._f is not None:
-            raise ValueError("the objective is already set")
-        self._f = expr
-        self._t_described = time.perf_counter()
-
-    def equal(self, name: str, expr, rhs=0.0) -> Constraint:
-        """Add ``expr == rhs``; its multiplier is ``d f*/d rhs``."""
-        n = expr.numel()
-        r = _column(rhs, n, f"{name}.rhs")
-        return self._add(name, "equality", expr, r, r)
-
-    def inequality(self, name: str, expr, lb=-np.inf, ub=np.inf) -> Constraint:
-        """Add ``lb <= expr <= ub``; its multiplier is ``d f*/d(active bound)``."""
-        n = expr.numel()
-        lo, hi = _column(lb, n, f"{name}.lb"), _column(ub, n, f"{name}.ub")
-        if np.any(lo > hi):
-            raise ValueError(f"{name}: lower bound above upper bound")
-        return self._add(name, "inequality", expr, lo, hi)
-
-    def complementarity(self, name: str, a, b) -> Constraint:
-        """Add the pairs ``0 <= a_i  ⟂  b_i >= 0``.
-
-        The multipliers of ``a >= 0`` and ``b >= 0`` are reported as
-        ``"<name>.a"`` and ``"<name>.b"``; the relaxed products as ``"<name>"``.
-        """
-        if a.numel() != b.numel():
-            raise ValueError(f"{name}: both sides of a complementarity pair need the same size")
-        n = a.numel()
-        self._add(f"{name}.a", "inequality", a, np.zeros(n), np.full(n, np.inf))
-        self._add(f"{name}.b", "inequality", b, np.zeros(n), np.full(n, np.inf))
-        if "__sigma" not in [p.name for p in self._params]:
-            self.parameter("__sigma", 1, 0.0)
-        sigma = [p.sym for p in self._params if p.name == "__sigma"][0]
-        con = self._add(name, "inequality", a * b - sigma, np.full(n, -np.inf), np.zeros(n))
-        self._comps.append((name, a, b))
-        return con
-
-    # ------------------------------------------------------------------ element families
-    @staticmethod
-    def _position(blocks, name: str) -> np.ndarray:
-        i = 0
-        for b in blocks:
-            if b.name == name:
-                return np.arange(i, i + b.init.size)
-            i += b.init.size
-        raise KeyError(name)
-
-    def index(self, name: str) -> np.ndarray:
-        """Positions of variable block ``name`` in the stacked decision vector."""
-        return self._position(self._vars, name)
-
-    def parameter_index(self, name: str) -> np.ndarray:
-        """Positions of parameter block ``name`` in the stacked parameter vector."""
-        return self._position(self._params, name)
-
-    def _group(self, name, fn, args) -> _Group:
-        if self._sym is not ca.SX:
-            raise ValueError("element families need an SX-based NLP (the default)")
-        args, count = _element_args(fn, args, name)
-        return _Group(name, fn, args, count, fn.size1_out(0) * fn.size2_out(0))
-
-    def equal_elements(self, name: str, fn: ca.Function, args: Sequence, rhs=0.0) -> Constraint:
-        """Add ``fn(args_e) == rhs`` for every element ``e``; rows are element-major.
-
-        Each entry of ``args`` is :class:`X` (decision variables), :class:`P`
-        (parameters) or a constant array, with one row per element or one row
-        shared by all elements.
-        """
-        grp = self._group(name, fn, args)
-        n = grp.count * grp.size
-        r = _column(rhs, n, f"{name}.rhs")
-        return self._add(name, "equality", grp, r, r)
-
-    def inequality_elements(self, name: str, fn: ca.Function, args: Sequence, lb=-np.inf, ub=np.inf) -> Constraint:
-        """Add ``lb <= fn(args_e) <= ub`` for every element (see :meth:`equal_elements`)."""
-        grp = self._group(name, fn, args)
-        n = grp.count * grp.size
-        lo, hi = _column(lb, n, f"{name}.lb"), _column(ub, n, f"{name}.ub")
-        if np.any(lo > hi):
-            raise ValueError(f"{name}: lower bound above upper bound")
-        return self._add(name, "inequality", grp, lo, hi)
-
-    def minimize_elements(self, name: str, fn: ca.Function, args: Sequence) -> None:
-        """Add ``sum_e fn(args_e)`` (scalar ``fn``) to the objective."""
-        grp = self._group(name, fn, args)
-        if grp.size != 1:
-            raise ValueError(f"{name}: an objective element must be scalar")
-        self._f_groups.append(grp)
-        self._t_described = time.perf_counter()
-
-    def complementarity_elements(self, name: str, fn: ca.Function, args: Sequence) -> Constraint:
-        """Add ``0 <= a_e ⟂ b_e >= 0`` for every element, with ``[a; b] = fn(args_e)``.
-
-        ``fn`` returns one column of even length ``2r``: the first ``r`` entries
-        are ``a``, the last ``r`` are ``b``.  As for :meth:`complementarity`, the
-        rows ``"<name>.a" >= 0``, ``"<name>.b" >= 0`` and the relaxed products
-        ``"<name>": a_i b_i - sigma <= 0`` are added (element families), and
-        :meth:`solve` runs the Scholtes homotopy ``sigma -> 0``.
-        """
-        k = fn.size1_out(0) * fn.size2_out(0)
-        if k % 2:
-            raise ValueError(f"{name}: a complementarity element returns [a; b] of even length")
-        r = k // 2
-        syms = [ca.SX.sym(f"a{i}", fn.size1_in(i), fn.size2_in(i)) for i in range(fn.n_in())]
-        out = ca.vec(fn(*syms))
-        a, b = out[:r], out[r:]
-        sig = ca.SX.sym("sigma")
-        fa = ca.Function(f"{name}_a", syms, [a])
-        fb = ca.Function(f"{name}_b", syms, [b])
-        fprod = ca.Function(f"{name}_prod", syms + [sig], [a * b - sig])
-        nargs, count = _element_args(fn, args, name)
-        if "__sigma" not in [p.name for p in self._params]:
-            self.parameter("__sigma", 1, 0.0)
-        n = count * r
-        self.inequality_elements(f"{name}.a", fa, args, lb=np.zeros(n))
-        self.inequality_elements(f"{name}.b", fb, args, lb=np.zeros(n))
-        con = self.inequality_elements(name, fprod, list(args) + [P(self.parameter_index("__sigma"))],
-                                       ub=np.zeros(n))
-        self._comp_groups.append((name, ca.Function(f"{name}_abs", syms, [ca.fabs(a * b)]), nargs, count))
-        return con
-
-    @property
-    def has_complementarity(self) -> bool:
-        return bool(self._comps or self._comp_groups)
-
-    def constraint(self, name: str) -> Constraint:
-        return self._cons[name]
-
-    @property
-    def variable_names(self) -> List[str]:
-        return [b.name for b in self._vars]
-
-    @property
-    def constraint_names(self) -> List[str]:
-        return list(self._cons)
-
-    def _check_new(self, name: str) -> None:
-        if self._solver is not None:
-            raise RuntimeError("the NLP cannot change after its solver was built")
-        if any(b.name == name for b in self._vars + self._params):
-            raise ValueError(f"duplicate name {name!r}")
-
-    def _add(self, name, kind, expr, lb, ub) -> Constraint:
-        if self._solver is not None:
-            raise RuntimeError("the NLP cannot change after its solver was built")
-        if name in self._cons:
-            raise ValueError(f"duplicate constraint name {name!r}")
-        if isinstance(expr, _Group):
-            n = expr.count * expr.size
-            self._g.append(expr)
-        else:
-            n = expr.numel()
-            self._g.append(ca.vec(expr))
-        con = Constraint(name, kind, n, slice(self._ng, self._ng + n))
-        self._glb.append(lb)
-        self._gub.append(ub)
-        self._cons[name] = con
-        self._ng += n
-        self._t_described = time.perf_counter()
-        return con
+class NLP(Program):
+    """A :class:`~castrajectory.discretise.program.Program` that Ipopt solves (see module docstring)."""
 
     # ------------------------------------------------------------------ solving
     def _ipopt_options(self, options, verbose):
@@ -727,27 +415,6 @@ class NLP:
             self.build()
         return dict(self._functions)
 
-    def _split(self, vec, blocks) -> Dict[str, np.ndarray]:
-        out, i = {}, 0
-        for b in blocks:
-            n = b.init.size
-            out[b.name] = vec[i:i + n].copy()
-            i += n
-        return out
-
-    def evaluator(self, *exprs) -> ca.Function:
-        """A CasADi function ``(x, p) -> exprs`` of the stacked variables and parameters."""
-        xs = ca.vertcat(*[b.sym for b in self._vars])
-        ps = ca.vertcat(*[b.sym for b in self._params]) if self._params else self._sym(0, 1)
-        return ca.Function("evaluate", [xs, ps], list(exprs))
-
-    def evaluate(self, result: Result, *exprs) -> list:
-        """Values of expressions of this NLP's symbols at a result, as flat numpy arrays."""
-        p = np.concatenate([b.init for b in self._params]) if self._params else np.zeros(0)
-        out = self.evaluator(*exprs)(result.x, p)
-        out = out if isinstance(out, (list, tuple)) else [out]
-        return [np.asarray(v, float).reshape(-1) for v in out]
-
     def _comp_residual(self, x: np.ndarray, p: np.ndarray) -> Optional[float]:
         """``max |a_i b_i|`` over every complementarity pair (expressions and element families)."""
         if not self.has_complementarity:
@@ -771,11 +438,11 @@ class NLP:
             worst = max(worst, float(vals.max()) if vals.size else 0.0)
         return worst
 
-    def solve(self, init: Optional[Dict[str, object]] = None, *, warm: Optional[Result] = None,
+    def solve(self, init: Optional[Dict[str, object]] = None, *, warm: Optional[NLPResult] = None,
               options: Optional[dict] = None, verbose: bool = False, expand: bool = False,
               homotopy: Sequence[float] = (1e-1, 1e-2, 1e-3, 1e-5, 1e-7, 0.0),
-              bounds: Optional[Dict[str, tuple]] = None) -> Result:
-        """Solve and return a :class:`~castrajectory.result.Result` (never raises on non-convergence).
+              bounds: Optional[Dict[str, tuple]] = None) -> NLPResult:
+        """Solve and return a :class:`~castrajectory.result.NLPResult` (never raises on non-convergence).
 
         Parameters
         ----------
@@ -848,15 +515,15 @@ class NLP:
         lam_g = np.asarray(sol["lam_g"]).reshape(-1)
         p = np.concatenate([b.init for b in self._params]) if self._params else np.zeros(0)
         success = status in SUCCESS_STATUSES
-        message = Result.describe_status(status)
+        message = NLPResult.describe_status(status)
         if self.has_complementarity and success and steps[-1].sigma != 0.0:
             message += f"; relaxation stopped at sigma = {steps[-1].sigma:g}"
-        res = Result(
+        res = NLPResult(
             values=self._split(x, self._vars),
             multipliers={c.name: -lam_g[c.slice] for c in self._cons.values()},
             bound_multipliers=self._split(-lam_x, self._vars),
             objective=float(sol["f"]),
-            status=status,
+            solver_status=status,
             success=success,
             message=message,
             iterations=total_iter,

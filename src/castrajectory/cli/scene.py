@@ -1,4 +1,4 @@
-"""Command-line plumbing shared by the problem scripts, and the ``castrajectory`` console command.
+"""Command-line plumbing shared by the problem scripts, and the scene registry.
 
 A problem script defines ``parser()`` and ``run(args) -> Outcome`` and calls
 :func:`run_scene`, which applies the conventions of every scene:
@@ -11,14 +11,12 @@ A problem script defines ``parser()`` and ``run(args) -> Outcome`` and calls
 * ``--plot`` / ``--animate`` files are written only after a successful solve,
   so a refused or failed run never overwrites earlier output.
 
-Console: ``castrajectory list``, ``castrajectory run <scene> [flags]``,
-``castrajectory report --out DIR``.
+The console command (``castrajectory list``, ``run``, ``report``) is :func:`castrajectory.cli.main`.
 """
 from __future__ import annotations
 
 import argparse
 import contextlib
-import importlib
 import json
 import math
 import os
@@ -28,7 +26,8 @@ from typing import Callable, Dict, List, Optional
 
 import numpy as np
 
-from .validation import InputError
+from ..result import Result
+from ..validation import InputError
 
 #: Scene name -> module (the files in problems/, installed as castrajectory.problems).
 SCENES = {
@@ -73,8 +72,8 @@ def add_plot(p: argparse.ArgumentParser) -> None:
 def add_trajectory_flags(p: argparse.ArgumentParser, T: float, n: int, scheme: str = "midpoint",
                          methods: bool = True) -> None:
     """Flags shared by the mechanics scenes: horizon, grid, scheme, method, plot and animation."""
-    from .discrete import SCHEMES
-    from .simulate import METHODS
+    from ..discretise.lagrangians import SCHEMES
+    from ..solve.simulate import METHODS
     p.add_argument("--T", type=float, default=T, help="duration T in s (> 0)")
     p.add_argument("--n", type=int, default=n, help="number of time steps N (>= 2)")
     p.add_argument("--scheme", choices=list(SCHEMES), default=scheme, help="discrete Lagrangian")
@@ -93,15 +92,15 @@ def check_animation_path(path: Optional[str]) -> None:
     if ext not in (".gif", ".mp4"):
         raise InputError(f"--animate needs a .gif or .mp4 path (got {path!r})")
     if ext == ".mp4":
-        from matplotlib.animation import FFMpegWriter
-        if not FFMpegWriter.isAvailable():
+        from ..inspect import plotting
+        if not plotting.mp4_available():
             raise InputError("--animate .mp4 needs ffmpeg, which was not found; use a .gif path")
 
 
 def trajectory_outcome(title: str, system, run, extra: Optional[dict] = None,
                        extra_lines: Optional[List[str]] = None, links: bool = True) -> "Outcome":
     """Summary, JSON data and plot/animation writers of a mechanics scene."""
-    from . import plotting
+    from ..inspect import plotting
     e = np.asarray(run.energy, float)
     drift = float(np.max(np.abs(e - e[0]))) if e.size and np.all(np.isfinite(e)) else float("nan")
     rel = drift / max(abs(e[0]), 1e-300) if e.size else float("nan")
@@ -113,8 +112,6 @@ def trajectory_outcome(title: str, system, run, extra: Optional[dict] = None,
              f"energy: E(0) = {e[0]:.10g}, max |E - E(0)| = {drift:.3e} ({rel:.3e} relative)",
              *(extra_lines or []),
              status_line(run.status, run)]
-    data = run.as_dict()
-    data.update(extra or {})
 
     def plot(path):
         fig = plotting.energy_plot(run.t, {how: e}, title=f"{title}: energy error")
@@ -125,7 +122,7 @@ def trajectory_outcome(title: str, system, run, extra: Optional[dict] = None,
             raise InputError("this scene has no points to animate")
         plotting.animate_points(system.positions(run.q), run.t, path, links=links, title=title)
 
-    return Outcome(run.success, data, lines, run.message, writers={"plot": plot, "animate": animate})
+    return Outcome.of(run, extra, lines, writers={"plot": plot, "animate": animate})
 
 
 def contact_outcome(title: str, system, tr, data: dict, lines: List[str], ground=None,
@@ -135,20 +132,12 @@ def contact_outcome(title: str, system, tr, data: dict, lines: List[str], ground
     ``series`` (label -> values per node) defaults to the smallest gap per node;
     ``ground`` is the polyline drawn under the animation.
     """
-    from . import plotting
-    status = "ok" if tr.success else tr.status
+    from ..inspect import plotting
     lines = list(lines) + [
         f"lowest gap {min(tr.gap.min(), tr.gap_sub.min()):.2e}; complementarity residual "
         f"{tr.complementarity_residual:.1e}; energy {tr.energy[0]:.8g} -> {tr.energy[-1]:.8g}",
         f"relaxation (penalty) steps: {len(tr.homotopy)}; attempts: {len(tr.attempts)}",
-        status_line(status, tr)]
-    # solver_status and message say how the answer was reached (e.g. Assembled_From_Windows: every
-    # horizon window converged and the assembled point satisfies the whole NLP; see contact.py)
-    data = {"status": status, "solver_status": tr.status, "message": tr.message,
-            "iterations": tr.iterations, "build_time_s": tr.build_time_s,
-            "solve_time_s": tr.solve_time_s, **data,
-            "complementarity_residual": tr.complementarity_residual,
-            "homotopy": [vars(s) for s in tr.homotopy], "attempts": tr.attempts}
+        status_line(tr.status, tr)]
 
     def plot(path):
         ser = series if series is not None else {"smallest gap": tr.gap.min(axis=1)}
@@ -160,18 +149,31 @@ def contact_outcome(title: str, system, tr, data: dict, lines: List[str], ground
         plotting.animate_points(system.positions(tr.q), tr.t, path, links=True, pivot=None, trail=False,
                                 ground=ground, title=title)
 
-    return Outcome(tr.success, data, lines, tr.message, writers={"plot": plot, "animate": animate})
+    # the JSON: the trajectory's as_dict() (with solver_status and message, which say how the answer
+    # was reached, e.g. Assembled_From_Windows), the scene's keys on top
+    return Outcome.of(tr, data, lines, writers={"plot": plot, "animate": animate})
 
 
-@dataclass
-class Outcome:
-    """What a scene's ``run`` returns."""
+@dataclass(kw_only=True)
+class Outcome(Result):
+    """What a scene's ``run`` returns: the contract of its answer, the JSON data, summary lines and writers.
 
-    success: bool
-    data: dict
-    summary: List[str]
-    message: str = ""
+    ``data`` is the scene's JSON object: its answer's ``as_dict()`` with the scene's own keys
+    (oracle errors, the arrays it reports) on top (:meth:`of`).
+    """
+
+    data: dict = field(default_factory=dict)
+    summary: List[str] = field(default_factory=list)
     writers: Dict[str, Callable[[str], None]] = field(default_factory=dict)  # flag name -> writer(path)
+
+    @classmethod
+    def of(cls, result: Result, data: Optional[dict] = None, summary=(), writers=None) -> "Outcome":
+        """The outcome of a scene whose answer is ``result``: JSON ``result.as_dict()`` updated with ``data``."""
+        return cls(**result.contract(), data={**result.as_dict(), **(data or {})}, summary=list(summary),
+                   writers=dict(writers or {}))
+
+    def as_dict(self) -> dict:
+        return {**super().as_dict(), **self.data}
 
 
 def jsonable(obj):
@@ -211,7 +213,10 @@ def stdout_to_stderr(enabled: bool = True):
 
 def run_scene(parser: argparse.ArgumentParser, run: Callable[[argparse.Namespace], Outcome],
               argv: Optional[List[str]] = None) -> int:
-    """Parse, run, write outputs and return the exit code (see module docstring)."""
+    """Parse, run, write outputs and return the exit code (see module docstring).
+
+    The JSON printed is ``outcome.as_dict()``.
+    """
     args = parser.parse_args(argv)
     prog = parser.prog
     try:
@@ -227,7 +232,7 @@ def run_scene(parser: argparse.ArgumentParser, run: Callable[[argparse.Namespace
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
     if args.json:
-        sys.stdout.write(json.dumps(jsonable(outcome.data), allow_nan=False) + "\n")
+        sys.stdout.write(json.dumps(jsonable(outcome.as_dict()), allow_nan=False) + "\n")
     else:
         print("\n".join(outcome.summary))
     if not outcome.success:
@@ -250,37 +255,3 @@ def table(rows: List[List[str]]) -> List[str]:
     """Left-aligned plain-text table."""
     widths = [max(len(str(r[i])) for r in rows) for i in range(len(rows[0]))]
     return ["  ".join(str(c).ljust(w) for c, w in zip(r, widths)).rstrip() for r in rows]
-
-
-# ---------------------------------------------------------------------------- console command
-def main(argv: Optional[List[str]] = None) -> int:
-    argv = list(sys.argv[1:] if argv is None else argv)
-    p = ArgumentParser(prog="castrajectory", description="Variational mechanics as NLPs (CasADi + Ipopt).")
-    sub = p.add_subparsers(dest="command", required=True)
-    sub.add_parser("list", help="list the scenes")
-    r = sub.add_parser("run", help="run a scene: castrajectory run <scene> [scene flags]", add_help=False)
-    r.add_argument("scene")
-    rep = sub.add_parser("report", help="solve every scene at its defaults and write a report")
-    rep.add_argument("--out", required=True, metavar="DIR", help="output directory")
-    rep.add_argument("--quick", action="store_true", help="smaller convergence sweep (N up to 2048)")
-    if argv[:1] == ["run"]:
-        if len(argv) < 2 or argv[1].startswith("-"):
-            print("castrajectory: error: run needs a scene name; see `castrajectory list`", file=sys.stderr)
-            return 2
-        name = argv[1]
-        if name not in SCENES:
-            print(f"castrajectory: error: unknown scene {name!r}; known: {', '.join(SCENES)}", file=sys.stderr)
-            return 2
-        return importlib.import_module(SCENES[name]).main(argv[2:])
-    args = p.parse_args(argv)
-    if args.command == "list":
-        for name, mod in SCENES.items():
-            doc = (importlib.import_module(mod).__doc__ or "").strip().splitlines()
-            print(f"{name:16s} {doc[0] if doc else ''}")
-        return 0
-    from .report import write_report
-    return write_report(args.out, quick=args.quick)
-
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())

@@ -31,7 +31,7 @@ import casadi as ca
 import numpy as np
 
 from .mechanics import Atoms, Gravity, LagrangianSystem, Spring
-from .validation import InputError, finite, positive
+from ..validation import InputError, finite, positive
 
 
 def _gravity(g: float):

@@ -14,7 +14,10 @@ from typing import Callable, Iterable, List, Optional, Sequence
 
 import numpy as np
 
-from . import collision, droplet, stepping, trajectory
+from ..models import collision
+from ..solve import droplet
+from ..baselines import stepping
+from ..solve import trajectory
 
 DROPLET_ERRORS = ("shape", "contact_angle", "span", "energy", "pressure")
 
@@ -102,7 +105,7 @@ def trajectory_label(method: str, scheme: Optional[str]) -> str:
 
 def _system_of(system_or_factory):
     """``(system, factory)``: a ``LagrangianSystem`` is used as is; anything else is called."""
-    from .mechanics import LagrangianSystem
+    from ..models.mechanics import LagrangianSystem
 
     if isinstance(system_or_factory, LagrangianSystem):
         return system_or_factory, None
@@ -138,8 +141,8 @@ def trajectory_run(system, q0, qd0, T: float, n: int, method: str, scheme: Optio
     """
     import time
 
-    from .simulate import simulate
-    from .validation import InputError
+    from ..solve.simulate import simulate
+    from ..validation import InputError
 
     sys_, _ = _system_of(system)
     row = {"label": trajectory_label(method, scheme), "method": method,
@@ -205,7 +208,7 @@ def work_precision_sweep(system, q0, qd0, T: float, methods_schemes: Sequence[tu
     """
     import functools
 
-    from .stepping import reference
+    from ..baselines.stepping import reference
 
     sys0, factory = _system_of(system)
     q0 = np.asarray(q0, float).reshape(-1)
@@ -330,7 +333,7 @@ def long_horizon_run(system, q0, qd0, T: float, n: int, method: str, scheme: Opt
     """
     import time
 
-    from .simulate import simulate
+    from ..solve.simulate import simulate
 
     sys_, _ = _system_of(system)
     E0 = float(sys_.energy(np.asarray(q0, float), np.asarray(qd0, float)))

@@ -1,0 +1,52 @@
+"""The command line: problem-script plumbing (:mod:`.scene`), the scene registry, the console command.
+
+``castrajectory list``, ``castrajectory run <scene> [flags]`` and ``castrajectory report --out DIR``
+(:mod:`.report`).  Problem scripts use the plumbing re-exported here (``cli.run_scene``, ...).
+"""
+from __future__ import annotations
+
+import importlib
+import sys
+from typing import List, Optional
+
+from .scene import (
+    SCENES, ArgumentParser, Outcome, add_plot, add_trajectory_flags, check_animation_path, contact_outcome, fmt,
+    ipopt_options, jsonable, run_scene, scene_parser, status_line, stdout_to_stderr, table, trajectory_outcome)
+
+#: The problem scripts' plumbing, re-exported from :mod:`.scene`, and the console command.
+__all__ = ["SCENES", "ArgumentParser", "Outcome", "add_plot", "add_trajectory_flags", "check_animation_path",
+           "contact_outcome", "fmt", "ipopt_options", "jsonable", "run_scene", "scene_parser", "status_line",
+           "stdout_to_stderr", "table", "trajectory_outcome", "main"]
+
+
+def main(argv: Optional[List[str]] = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    p = ArgumentParser(prog="castrajectory", description="Variational mechanics as NLPs (CasADi + Ipopt).")
+    sub = p.add_subparsers(dest="command", required=True)
+    sub.add_parser("list", help="list the scenes")
+    r = sub.add_parser("run", help="run a scene: castrajectory run <scene> [scene flags]", add_help=False)
+    r.add_argument("scene")
+    rep = sub.add_parser("report", help="solve every scene at its defaults and write a report")
+    rep.add_argument("--out", required=True, metavar="DIR", help="output directory")
+    rep.add_argument("--quick", action="store_true", help="smaller convergence sweep (N up to 2048)")
+    if argv[:1] == ["run"]:
+        if len(argv) < 2 or argv[1].startswith("-"):
+            print("castrajectory: error: run needs a scene name; see `castrajectory list`", file=sys.stderr)
+            return 2
+        name = argv[1]
+        if name not in SCENES:
+            print(f"castrajectory: error: unknown scene {name!r}; known: {', '.join(SCENES)}", file=sys.stderr)
+            return 2
+        return importlib.import_module(SCENES[name]).main(argv[2:])
+    args = p.parse_args(argv)
+    if args.command == "list":
+        for name, mod in SCENES.items():
+            doc = (importlib.import_module(mod).__doc__ or "").strip().splitlines()
+            print(f"{name:16s} {doc[0] if doc else ''}")
+        return 0
+    from .report import write_report
+    return write_report(args.out, quick=args.quick)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,169 @@
+"""CasADi element functions of the contact transcription, for one system and a two-point scheme.
+
+:class:`ContactMechanics` builds, once per system and scheme, every small function the contact
+program is made of: the initial, node and sub-node momentum rows, gaps, Newton's impact law
+(weighted and with its ℓ1 slacks), the penalty terms, the sub-node momenta, and the RK4 flow
+used by the event-located guess.  The rows they form are :mod:`.transcription`; the
+derivation is ``docs/derivations.md``, "Contact trajectories".
+"""
+from __future__ import annotations
+
+from typing import Dict
+
+import casadi as ca
+
+from ...models.mechanics import LagrangianSystem
+from ...validation import InputError
+from ..lagrangians import DiscreteMechanics
+
+
+#: Weight of Σβ² (the split of impact-free steps), far below the penalties.
+SPLIT_WEIGHT = 1e-6
+#: RK4 substeps per step in the event-located guess.
+GUESS_SUBSTEPS = 4
+
+
+class ContactMechanics:
+    """CasADi element functions of the contact transcription for one system and scheme."""
+
+    def __init__(self, system: LagrangianSystem, scheme: str):
+        if system.contact is None:
+            raise ValueError("the system has no contact term")
+        dm = DiscreteMechanics(system, scheme)
+        if dm.s:
+            raise InputError(f"contact trajectories need a two-point scheme (midpoint or trapezoid), not {scheme}")
+        if dm.m:
+            raise InputError("contact trajectories with holonomic constraints are not supported")
+        self.system, self.dm = system, dm
+        self.n, self.c, self.e = n, c, e = dm.n, system.ncontact, system.contact.restitution
+        z = ca.SX(0, 1)
+        D1 = lambda a, b, tau: dm.D1(a, z, b, tau)  # noqa: E731
+        D2 = lambda a, b, tau: dm.D2(a, z, b, tau)  # noqa: E731
+        gapf = system.gap
+        Mf = system.mass_matrix
+        sym = ca.SX.sym
+        q0, qk, qs, qsm, qk1 = sym("q0", n), sym("q", n), sym("qs", n), sym("qsm", n), sym("qk1", n)
+        b, bm, h = sym("beta"), sym("betam"), sym("h")
+        mu, nu, p0 = sym("mu", c), sym("nu", c), sym("p0", n)
+        a, am = 0.5 + b, 0.5 + bm
+        J = lambda q: gapf(q)[1]  # noqa: E731
+        phi = lambda q: gapf(q)[0]  # noqa: E731
+        self.initial = ca.Function("c_initial", [q0, qs, b, p0, nu, h],
+                                   [(p0 + D1(q0, qs, a * h)) / h + ca.mtimes(J(q0).T, nu)])
+        self.node = ca.Function("c_node", [qsm, bm, qk, qs, b, nu, h],
+                                [(D2(qsm, qk, (1 - am) * h) + D1(qk, qs, a * h)) / h + ca.mtimes(J(qk).T, nu)])
+        self._kinematics = kin = lambda xp, x, xn, tau_m, tau_p: _sub_node_kinematics(  # noqa: E731
+            D1, D2, J, Mf, e, xp, x, xn, tau_m, tau_p)
+        pm, pp, r = kin(qk, qs, qk1, a * h, (1 - a) * h)
+        self.sub = ca.Function("c_sub", [qk, qs, qk1, b, mu, h], [(pm - pp + ca.mtimes(J(qs).T, mu)) / h])
+        # Newton's law on the normal velocity at the sub-node, weighted by W = φ(q_{k+1})/δ: the law
+        # holds unless the contact is closed again at the next node, where the body is caught (the
+        # accumulation point of Zeno bouncing, where no step-resolved flight is left, or a body at
+        # rest).  δ is a parameter per step and contact (ContactNLP.law_lengths): ℓ, or for a bounce
+        # of the guess its next-node gap, so that W ≈ 1 also for a bounce late in its step.  A global
+        # small δ (ℓ/100, or a saturating W with δ = a h²/8) made Ipopt fail on the bowl and on a
+        # grazing corner in our trials; the unweighted law of every real impact is checked
+        # separately (ContactNLP.residual).
+        ell = sym("delta", c)
+        self.impact_law, self.law_slack = self._law_functions(
+            "", [qk, qs, qk1, b, mu], [h, ell], mu * r * phi(qk1) / ell)
+        # the unweighted law and the next node's gaps, for the residual of real (not caught) impacts
+        self.law_check = ca.Function("c_law_check", [qk, qs, qk1, b, mu, h], [mu * r, phi(qk1)])
+        self.pair = ca.Function("c_pair", [qk, nu], [ca.vertcat(phi(qk), nu)])
+        self.gap_row = ca.Function("c_gap", [qk], [phi(qk)])
+        self.split = ca.Function("c_split", [b], [SPLIT_WEIGHT * b * b])
+        # a catch that must hold: the law weighted by φ(q_{k+1})/δ + κ φ(q_{k+2}) (κ per contact, 1/ℓ
+        # where the solution used the waiver for a catch that lifts off again, ContactNLP.loopholes)
+        qk2, kap = sym("qk2", n), sym("kappa", c)
+        self.impact_law_next, self.law_slack_next = self._law_functions(
+            "_next", [qk, qs, qk1, qk2, b, mu], [h, ell, kap], mu * r * (phi(qk1) / ell + kap * phi(qk2)))
+        self._objective_functions()
+        self.p_minus = ca.Function("p_minus_sub", [qk, qs, b, h], [pm])
+        self.p_plus = ca.Function("p_plus_sub", [qs, qk1, b, h], [pp])
+        self.p_node_plus = ca.Function("p_node_plus", [qk, qs, b, h], [-D1(qk, qs, a * h)])
+        self.p_node_minus = ca.Function("p_node_minus", [qsm, bm, qk, h], [D2(qsm, qk, (1 - am) * h)])
+        self._generic_functions(J, phi)
+        # free sub-node (no impact, α = ½): Newton function for the guess
+        F = D2(qk, qs, 0.5 * h) + D1(qs, qk1, 0.5 * h)
+        self.free_sub = ca.Function("free_sub", [qk, qs, qk1, h], [F, ca.jacobian(F, qs)])
+        # RK4 flow over tau with GUESS_SUBSTEPS substeps, for the event-located guess
+        v, tau = sym("v", n), sym("tau")
+        acc = system.acceleration
+        x, dt = ca.vertcat(qk, v), tau / GUESS_SUBSTEPS
+        f = lambda x: ca.vertcat(x[n:], acc(x[:n], x[n:]))  # noqa: E731
+        for _ in range(GUESS_SUBSTEPS):
+            k1 = f(x)
+            k2 = f(x + dt / 2 * k1)
+            k3 = f(x + dt / 2 * k2)
+            k4 = f(x + dt * k3)
+            x = x + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        self.flow = ca.Function("flow", [qk, v, tau], [x[:n], x[n:], phi(x[:n])])
+        self._flights: Dict[int, ca.Function] = {}
+        self.acc_normal = ca.Function("acc_normal", [qk, v], [ca.mtimes(J(qk), acc(qk, v))])
+
+
+    def flights(self, K: int) -> ca.Function:
+        """``K`` RK4 steps of length ``h`` from ``(q, v)``: nodes, velocities and gaps as columns."""
+        if K not in self._flights:
+            q, v, h = ca.MX.sym("q", self.n), ca.MX.sym("v", self.n), ca.MX.sym("h")
+            step = ca.Function("step", [q, v, h], self.flow(q, v, h))
+            acc = step.mapaccum("flights", K, [0, 1], [0, 1])
+            Qs, Vs, Ps = acc(q, v, h)
+            self._flights[K] = ca.Function(f"flights{K}", [q, v, h], [Qs, Vs, Ps])
+        return self._flights[K]
+
+    def _law_functions(self, suffix: str, head, tail, law):
+        """Newton's law row ``law`` (inputs ``head + tail``, ``head`` ending with ``μ``) and its
+        ℓ1 slack form ``law/scale − s⁺ + s⁻`` (inputs ``head + [s⁺, s⁻] + tail + [scale]``).
+
+        Scales enter as element arguments, so every ContactNLP (the whole trajectory and every
+        horizon window) shares the same functions, and their derivatives are formed once.
+        """
+        sym, c = ca.SX.sym, self.c
+        sp, sm, scale = sym("sp", c), sym("sm", c), sym("scale")
+        return (ca.Function(f"c_law{suffix}", head + tail, [law]),
+                ca.Function(f"c_law_slack{suffix}", head + [sp, sm] + tail + [scale], [law / scale - sp + sm]))
+
+    def _generic_functions(self, J, phi):
+        """Sub-node row, impact law and momenta of a sub-node between two arbitrary points.
+
+        Used for the steps with two sub-nodes (``ContactNLP`` with ``k2``): the chain
+        ``q_k → x₁ → x₂ → q_{k+1}``.  A point is given with ``b = α − ½`` (its time fraction in
+        the step): ``−½`` for the node ``q_k``, ``+½`` for ``q_{k+1}``; the sub-intervals are
+        ``(b − b_prev) h`` and ``(b_next − b) h``.  ``qn`` is the next node ``q_{k+1}``, whose gaps
+        weight the law as for one sub-node.
+        """
+        n, c, sym = self.n, self.c, ca.SX.sym
+        xp, x, xn, qn = sym("xp", n), sym("x", n), sym("xn", n), sym("qn", n)
+        bp, b, bn, h = sym("bp"), sym("b"), sym("bn"), sym("h")
+        mu, ell = sym("mu", c), sym("delta", c)
+        pm, pp, r = self._kinematics(xp, x, xn, (b - bp) * h, (bn - b) * h)
+        self.sub_g = ca.Function("c_sub_g", [xp, x, xn, bp, b, bn, mu, h],
+                                 [(pm - pp + ca.mtimes(J(x).T, mu)) / h])
+        self.impact_law_g, self.law_slack_g = self._law_functions(
+            "_g", [xp, x, xn, bp, b, bn, mu], [qn, h, ell], mu * r * phi(qn) / ell)
+        self.law_check_g = ca.Function("c_law_check_g", [xp, x, xn, bp, b, bn, mu, qn, h], [mu * r, phi(qn)])
+        self.p_minus_g = ca.Function("p_minus_g", [xp, x, bp, b, h], [pm])
+        self.p_plus_g = ca.Function("p_plus_g", [x, xn, b, bn, h], [pp])
+        b1, b2 = sym("b1"), sym("b2")
+        self.order = ca.Function("c_order", [b1, b2], [b2 - b1])
+
+    def _objective_functions(self):
+        """The objective terms (penalties), built once per system; scales are element arguments."""
+        sym, c = ca.SX.sym, self.c
+        rho, sp, sm, scale = sym("rho"), sym("sp", c), sym("sm", c), sym("scale")
+        q, lam = sym("q", self.n), sym("lam", c)
+        #: ``ρ Σ_j φ_j(q) λ_j / scale`` for a gap and its impulse (or force)
+        self.product_penalty = ca.Function("c_pen", [q, lam, rho, scale],
+                                           [rho * ca.dot(self.system.gap(q)[0], lam) / scale])
+        #: ``ρ Σ (s⁺ + s⁻)``
+        self.slack_penalty = ca.Function("c_slack_pen", [sp, sm, rho], [rho * ca.sum1(sp + sm)])
+
+
+def _sub_node_kinematics(D1, D2, J, Mf, e, xp, x, xn, tau_m, tau_p):
+    """Momenta on both sides of a sub-node ``x`` between ``xp`` and ``xn`` (sub-intervals ``tau_m``,
+    ``tau_p``), ``p̃⁻ = D₂L_d(xp, x)`` and ``p̃⁺ = −D₁L_d(x, xn)``, and Newton's law residual
+    ``r = ∇φ(x) M(x)⁻¹ (p̃⁺ + e p̃⁻)`` (zero for every contact that obeys the law)."""
+    pm = D2(xp, x, tau_m)
+    pp = -D1(x, xn, tau_p)
+    return pm, pp, ca.mtimes(J(x), ca.solve(Mf(x), pp + e * pm))

@@ -1,0 +1,256 @@
+"""The droplet's discretisations: the polyline ``curve`` and the height ``graph``, as element families.
+
+* :class:`Curve`: polyline ``(x_i, y_i)`` with equal segments, every contact angle in ``(0, pi)``;
+* :class:`Graph`: heights ``y(x_i)`` on a uniform grid, contact angles below 90°.
+
+Each writes its unknowns and rows (surface length, equal chords, the area) into a
+:class:`~castrajectory.discretise.program.Program` in scaled units (``A = 1``,
+``gamma_gl = 1``) and returns the :class:`Geometry` that reads the vertices back.
+:func:`contact_angle_estimate` reads the contact angle off the vertices to second order.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Dict, Optional
+
+import casadi as ca
+import numpy as np
+
+from ..models.droplet import arc_points, segment_area_factor
+from .program import Constraint, Program, X
+
+#: The discretisations by name (:data:`DISCRETISATIONS` holds their classes).
+FORMULATIONS = ("curve", "graph")
+
+#: Smallest number of segments: the contact-angle estimator needs two chords per end.
+MIN_N = 3
+
+# ---------------------------------------------------------------------------- discretise
+@dataclass
+class Geometry:
+    """What a discretisation leaves in the NLP: where the vertices are, and how to read them back.
+
+    ``x_index``/``y_index`` are the positions of the ``n + 1`` vertex coordinates in
+    the decision vector (the contact points, and a pinned span, are unknowns fixed
+    by their bounds; Ipopt removes fixed unknowns, so the problem it solves has
+    only the free ones).  ``span_index`` is the position of the span ``a``.
+    """
+
+    x_index: Optional[np.ndarray]
+    y_index: np.ndarray
+    span_index: int
+    span: object  # the span's symbol (for the wetting term of the energy)
+    graph_n: Optional[int] = None  # graph form: x_i = i a / n (x is not stored)
+
+    def vertices(self, res):
+        """``(x, y, span)`` in scaled units from a result of this NLP."""
+        x = res.x[self.x_index] if self.graph_n is None else \
+            res.x[self.span_index] * np.arange(self.graph_n + 1) / self.graph_n
+        return x, res.x[self.y_index], float(res.x[self.span_index])
+
+
+#: Scene-independent element functions (built once; the same functions serve every size, so their
+#: compiled code, see :mod:`castrajectory.solve.jit`, is cached once).
+_ELEMENTS: Dict[str, ca.Function] = {}
+
+
+def _element(name: str) -> ca.Function:
+    if name not in _ELEMENTS:
+        p0, p1, p2 = ca.SX.sym("p0", 2), ca.SX.sym("p1", 2), ca.SX.sym("p2", 2)
+        y0, y1, a, n = ca.SX.sym("y0"), ca.SX.sym("y1"), ca.SX.sym("a"), ca.SX.sym("n")
+        c0, c1, s = ca.SX.sym("c0"), ca.SX.sym("c1"), ca.SX.sym("s")
+        sq = lambda u, v: ca.sumsqr(v - u)  # noqa: E731
+        tri = 0.5 * (p1[0] * p0[1] - p0[0] * p1[1])  # shoelace piece of the chord p0 -> p1
+        trap = 0.5 * (a / n) * (y0 + y1)  # trapezoid piece of the cell [y0, y1]
+        fns = {
+            # curve: chord length, equal consecutive chords (scaled by s), area link, shoelace piece
+            "chord": ([p0, p1], ca.sqrt(sq(p0, p1))),
+            "equal_chords": ([p0, p1, p2, s], s * (sq(p1, p2) - sq(p0, p1))),
+            "curve_link": ([c0, c1, p0, p1, n], n * (c1 - c0 - tri)),
+            "curve_last": ([c0, p0, p1, n], c0 + tri),
+            # graph: cell length, area link, trapezoid piece
+            "cell": ([y0, y1, a, n], ca.sqrt((a / n) ** 2 + (y1 - y0) ** 2)),
+            "graph_link": ([c0, c1, y0, y1, a, n], n * (c1 - c0 - trap)),
+            "graph_last": ([c0, y0, y1, a, n], c0 + trap),
+        }
+        for key, (args, out) in fns.items():
+            _ELEMENTS[key] = ca.Function(key, args, [out])
+    return _ELEMENTS[name]
+
+
+def _cumulative_area(nlp: Program, link: str, last: str, args, init_pieces) -> Constraint:
+    """Area as a running sum ``c_k = c_{k-1} + t_k`` with ``c`` as unknowns, ending in the ``area`` row.
+
+    Summing all ``n`` pieces into one constraint would give the Jacobian a dense
+    row; the running sum keeps every row local (a banded KKT matrix), and the
+    multiplier of the last link (the ``area`` constraint) is still ``dE*/dA``.
+    ``args(rows)`` returns the element arguments of the pieces ``rows``; the links
+    are ``n (c_k - c_{k-1} - t_{k-1}) = 0`` for ``k = 1..n-1`` with ``c_0 = 0``.
+    """
+    n = init_pieces.size
+    init = np.concatenate([[0.0], np.cumsum(init_pieces)[:-1]])
+    lb = np.full(n, -np.inf)
+    lb[0] = 0.0
+    nlp.variable("partial_area", n, lb=lb, ub=-lb, init=init)  # c_0 fixed at 0 by its bounds
+    c = nlp.index("partial_area")
+    k = np.arange(1, n)
+    nn = np.array([float(n)])
+    nlp.equal_elements("area_links", _element(link), [X(c[k - 1, None]), X(c[k, None]), *args(k - 1), nn])
+    return nlp.equal_elements("area", _element(last), [X(c[n - 1:]), *args(np.array([n - 1])), nn], 1.0)
+
+
+def _fixed(values, free):
+    """Bounds that fix every entry where ``free`` is False at ``values``."""
+    values = np.asarray(values, dtype=float)
+    lb = np.where(free, -np.inf, values)
+    return lb, np.where(free, np.inf, values)
+
+
+class Curve:
+    """Polyline ``(x_i, y_i)``, ``i = 0..n``, from contact point to contact point.
+
+    Unknowns: the ``n - 1`` interior vertices and the span ``a = x_n`` (unless
+    pinned).  Constraints: consecutive segments have equal length,
+    ``(|p_{i+1} - p_i|² - |p_i - p_{i-1}|²) / (2 l_ref²) = 0`` (a gauge
+    condition that removes the tangential sliding of vertices; stationarity
+    alone already makes the chords equal, so its multipliers are zero at the
+    optimum and it only conditions the Newton systems), and the shoelace area.  The length is the sum of
+    the segment lengths.  No graph assumption is made, so overhanging drops
+    (``theta > 90°``) are fine.
+
+    Every piece is an element family of :class:`~castrajectory.nlp.NLP` (one chord,
+    one pair of chords, one area link), differentiated once per element type.
+
+    Default initial guess: the half-disc (``theta = 90°``) of the given area,
+    or the half-ellipse of the given area over a pinned span; neither uses the
+    answer (Young's angle or the pinned arc).
+    """
+
+    name = "curve"
+
+    def __init__(self, n: int, guess: Optional[np.ndarray] = None):
+        self.n = n
+        self.guess = guess  # (n + 1, 2) vertices in scaled units, or None for the default
+
+    def build(self, nlp: Program, span: Optional[float]) -> Geometry:
+        n = self.n
+        if self.guess is not None:
+            guess = np.array(self.guess, dtype=float)
+        elif span is None:
+            guess = arc_points(0.5 * math.pi, math.sqrt(1.0 / segment_area_factor(0.5 * math.pi)), n)
+        else:  # half-ellipse of area 1 over the pinned span, resampled to equal arc length
+            phi = np.linspace(math.pi, 0.0, 64 * n + 1)
+            ell = np.column_stack([0.5 * span * (1.0 + np.cos(phi)), 4.0 / (math.pi * span) * np.sin(phi)])
+            s = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(ell, axis=0).T))])
+            t = np.linspace(0.0, s[-1], n + 1)
+            guess = np.column_stack([np.interp(t, s, ell[:, 0]), np.interp(t, s, ell[:, 1])])
+        guess[0] = 0.0
+        guess[-1, 1] = 0.0
+        if span is not None:
+            guess[-1, 0] = span
+        seg0 = float(np.hypot(*np.diff(guess, axis=0).T).mean())
+        free = np.ones(n + 1, dtype=bool)
+        free[0] = False
+        free_x = free.copy()
+        free[-1] = False
+        if span is not None:
+            free_x[-1] = False
+        lbx, ubx = _fixed(guess[:, 0], free_x)
+        if span is None:
+            lbx[-1] = 1e-8
+        xs = nlp.variable("x", n + 1, lb=lbx, ub=ubx, init=guess[:, 0])
+        nlp.variable("y", n + 1, *_fixed(guess[:, 1], free), init=guess[:, 1])
+        P = np.column_stack([nlp.index("x"), nlp.index("y")])  # (n + 1, 2) positions of the vertices
+        k = np.arange(n)
+        nlp.minimize_elements("length", _element("chord"), [X(P[k]), X(P[k + 1])])
+        j = np.arange(n - 1)
+        nlp.equal_elements("equal_segments", _element("equal_chords"),
+                           [X(P[j]), X(P[j + 1]), X(P[j + 2]), np.array([1.0 / (2.0 * seg0 ** 2)])])
+        gx, gy = guess[:, 0], guess[:, 1]
+        _cumulative_area(nlp, "curve_link", "curve_last", lambda r: [X(P[r]), X(P[r + 1])],
+                         0.5 * (gx[1:] * gy[:-1] - gx[:-1] * gy[1:]))
+        return Geometry(P[:, 0], P[:, 1], int(P[-1, 0]), xs[n])
+
+
+class Graph:
+    """Graph ``y(x_i)`` on the uniform grid ``x_i = i h``, ``h = a / n``, of ``[0, a]``.
+
+    Unknowns: the ``n - 1`` interior heights and the span ``a`` (unless pinned).  Length
+    ``sum sqrt(h² + (y_{i+1} - y_i)²)``, area by the trapezoid rule.  A graph
+    cannot overhang: contact angles of 90° or more are refused.
+
+    Default initial guess: the cap of contact angle 45° and the given area, or
+    the parabola of the given area over a pinned span; neither uses the answer.
+    """
+
+    name = "graph"
+    guess_angle = 0.25 * math.pi
+
+    def __init__(self, n: int):
+        self.n = n
+
+    def build(self, nlp: Program, span: Optional[float]) -> Geometry:
+        n = self.n
+        if span is None:
+            t = self.guess_angle
+            radius = math.sqrt(1.0 / segment_area_factor(t))
+            a0 = 2.0 * radius * math.sin(t)
+            xs = a0 * np.arange(n + 1) / n
+            ys = np.sqrt(np.maximum(radius ** 2 - (xs - 0.5 * a0) ** 2, 0.0)) - radius * math.cos(t)
+        else:  # parabola over the pinned span with area 1
+            a0 = span
+            xs = a0 * np.arange(n + 1) / n
+            ys = 6.0 / a0 ** 3 * xs * (a0 - xs)
+        ys = np.maximum(ys, 0.0)
+        ys[[0, -1]] = 0.0
+        free = np.ones(n + 1, dtype=bool)
+        free[[0, -1]] = False
+        nlp.variable("y", n + 1, *_fixed(ys, free), init=ys)
+        if span is None:
+            a = nlp.variable("span", 1, lb=1e-8, init=a0)
+        else:
+            a = nlp.variable("span", 1, lb=span, ub=span, init=span)
+        Y, A = nlp.index("y")[:, None], nlp.index("span")
+        nn = np.array([float(n)])
+        k = np.arange(n)
+        nlp.minimize_elements("length", _element("cell"), [X(Y[k]), X(Y[k + 1]), X(A), nn])
+        _cumulative_area(nlp, "graph_link", "graph_last", lambda r: [X(Y[r]), X(Y[r + 1]), X(A)],
+                         0.5 * (a0 / n) * (ys[:-1] + ys[1:]))
+        return Geometry(None, Y[:, 0], int(A[0]), a, graph_n=n)
+
+
+DISCRETISATIONS = {"curve": Curve, "graph": Graph}
+
+
+# ---------------------------------------------------------------------------- inspect helpers
+def contact_angle_estimate(x, y) -> float:
+    """Contact angle from the vertices, second-order accurate in 1/N.
+
+    The first chord's angle ``phi_0`` is the tangent angle at the chord's
+    middle, half a segment inside the contact point, so it lags the contact
+    angle by half the turning per segment (about ``theta / N``).  Extrapolating
+    the chord angles ``phi_0, phi_1`` linearly in arc length to the contact
+    point removes that lag; the estimate is exact for vertices on a circle with
+    equal chords.  Both ends are estimated (the right end mirrored) and
+    averaged.
+    """
+    x, y = np.asarray(x, float), np.asarray(y, float)
+
+    def one_end(px, py):
+        dx, dy = np.diff(px[:3]), np.diff(py[:3])
+        phi = np.arctan2(dy, dx)
+        l0, l1 = np.hypot(dx[0], dy[0]), np.hypot(dx[1], dy[1])
+        return phi[0] + (phi[0] - phi[1]) * l0 / (l0 + l1)
+
+    left = one_end(x, y)
+    right = one_end(-(x[::-1] - x[-1]), y[::-1])
+    return 0.5 * (left + right)
+
+
+
+def resample_polyline(x: np.ndarray, y: np.ndarray, n: int) -> np.ndarray:
+    """``n + 1`` points equally spaced in arclength along the polyline ``(x, y)`` (ends kept)."""
+    s = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(x), np.diff(y)))])
+    t = np.linspace(0.0, s[-1], n + 1)
+    return np.column_stack([np.interp(t, s, x), np.interp(t, s, y)])
