@@ -16,7 +16,7 @@ from castrajectory import cli
 from castrajectory.models import collision
 from castrajectory.solve import trajectory
 from castrajectory.problems.rectangle_drop import add_body_flags, initial_state
-from castrajectory.validation import positive
+from castrajectory.validation import finite, positive
 
 
 def parser():
@@ -29,7 +29,8 @@ def parser():
 def run(args):
     cli.check_animation_path(args.animate)
     R = positive("radius", args.radius)
-    system = collision.bowl(args.mass, args.width, args.height, args.g, args.restitution, R)
+    body = collision.Body(args.mass, args.width, args.height)
+    system = collision.rectangle_contact_system(body, finite("g", args.g), args.restitution, collision.bowl_ground(R))
     q0, qd0 = initial_state(args)
     tr = trajectory.solve_initial_value(system, q0, qd0, args.T, args.n, options=cli.ipopt_options(args),
                                         verbose=args.verbose)

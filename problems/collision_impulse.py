@@ -16,7 +16,7 @@ import numpy as np
 
 from castrajectory import cli
 from castrajectory.models import collision
-from castrajectory.validation import finite, positive
+from castrajectory.validation import finite
 
 
 def parser():
@@ -35,7 +35,8 @@ def parser():
 
 
 def run(args):
-    m, w, h = positive("mass", args.mass), positive("width", args.width), positive("height", args.height)
+    body = collision.Body(args.mass, args.width, args.height)
+    m, w, h = body.mass, body.width, body.height
     theta = finite("angle", args.angle)
     v = [finite("vx", args.vx), finite("vy", args.vy), finite("omega", args.omega)]
     corner = None if args.corner is None else [finite("corner DX", args.corner[0]),
@@ -46,7 +47,7 @@ def run(args):
     fn = collision.admissible_direction_function()
     build = time.perf_counter() - t0
     t0 = time.perf_counter()
-    imp = collision.rectangle_impact(m, w, h, theta, v, e, corner)
+    imp = collision.corner_impact(body, theta, np.array(v), e, None if corner is None else np.array(corner))
     solve = time.perf_counter() - t0
     derived = np.asarray(fn([0.0, 0.0, theta], imp.corner, m, imp.inertia)).reshape(-1)
     mismatch = float(np.max(np.abs(derived - imp.direction)))

@@ -52,7 +52,7 @@ def initial_state(args):
     return q0, qd0
 
 
-def impact_table(tr, args, e):
+def impact_table(tr, body, e):
     """Impacts with the closed-form corner law's post-impact velocity (rectangle on flat ground).
 
     Corners hitting at the same sub-node (a flat landing) are compared with the simultaneous law
@@ -61,8 +61,7 @@ def impact_table(tr, args, e):
     listed without a comparison.
     """
     rows, worst = [], 0.0
-    cs = collision.corners(args.width, args.height)
-    M = collision.rectangle_mass_matrix(args.mass, args.width, args.height)
+    cs, M = body.corners, body.mass_matrix
     for imp in tr.impacts:
         if imp.caught:
             rows.append({"t": imp.t, "corner": cs[imp.contact], "corner_name": CORNER_NAMES[imp.contact],
@@ -72,11 +71,10 @@ def impact_table(tr, args, e):
             continue
         same = [i for i in tr.impacts if i.step == imp.step and i.sub == imp.sub and not i.caught]
         if len(same) == 1:
-            exact = collision.rectangle_impact(args.mass, args.width, args.height, imp.q[2], imp.v_before, e,
-                                               cs[imp.contact])
+            exact = collision.corner_impact(body, imp.q[2], imp.v_before, e, cs[imp.contact])
             mu_exact, v_exact = exact.mu, exact.v_after
         else:
-            J = np.array([collision.corner_jacobian(imp.q[2], cs[i.contact]) for i in same])
+            J = np.array([body.corner_jacobian(imp.q[2], cs[i.contact]) for i in same])
             mus, v_exact = simultaneous_impact(M, J, imp.v_before, e)
             mu_exact = float(mus[[i.contact for i in same].index(imp.contact)])
         err = float(np.max(np.abs(v_exact - imp.v_after)))
@@ -90,12 +88,13 @@ def impact_table(tr, args, e):
 
 def run(args):
     cli.check_animation_path(args.animate)
-    system = collision.rectangle_drop(args.mass, args.width, args.height, args.g, args.restitution)
-    e = collision.restitution(args.restitution)
+    body = collision.Body(args.mass, args.width, args.height)
+    system = collision.rectangle_contact_system(body, finite("g", args.g), args.restitution, collision.flat_ground)
+    e = system.contact.restitution
     q0, qd0 = initial_state(args)
     tr = trajectory.solve_initial_value(system, q0, qd0, args.T, args.n, options=cli.ipopt_options(args),
                                         verbose=args.verbose)
-    rows, worst = impact_table(tr, args, e)
+    rows, worst = impact_table(tr, body, e)
     lines = [f"rectangle drop: {args.width:g} x {args.height:g}, m = {args.mass:g}, e = {e:g}, "
              f"N = {args.n}, T = {args.T:g} s",
              f"{len(rows)} impacts ({sum(r['caught'] for r in rows)} caught, plastic); "
@@ -105,7 +104,7 @@ def run(args):
         lines.append(f"  t = {r['t']:.5f} s  {r['corner_name']:11s} θ = {r['angle']:+.4f}  μ = {r['mu']:.6g} "
                      f"({law})  v⁺ = {np.round(r['v_after'], 5).tolist()}")
     data = {"t": tr.t, "q": tr.q, "mu": tr.node_impulse, "mu_sub": tr.mu, "t_sub": tr.t_sub, "nu": tr.nu,
-            "mass": args.mass, "width": args.width, "height": args.height, "restitution": e,
+            "mass": body.mass, "width": body.width, "height": body.height, "restitution": e,
             "impacts": rows, "impact_law_error": worst, "energy": tr.energy, "gap": tr.gap.min(axis=1)}
     return cli.contact_outcome("rectangle drop", system, tr, data, lines,
                                ground=np.array([[-1e3, 0.0], [1e3, 0.0]]),

@@ -1,8 +1,21 @@
-"""Input checks shared by the physics modules.
+"""Bad input: :class:`InputError` and the checks that raise it.
 
 Every refusal raises :class:`InputError` with one sentence that names the
 offending quantity; problem scripts turn it into one line on stderr and exit
-code 2.
+code 2, before any solve.
+
+Where values are checked (once, where they enter):
+
+* a model's parameter object or factory checks the parameters a user gives it
+  (:class:`~castrajectory.models.droplet.Droplet`, :class:`~castrajectory.models.collision.Body`,
+  :class:`~castrajectory.models.mechanics.Contact`, the pendulum factories, ...);
+* the solve and baseline entry points check the run's own arguments (``q0``, ``q̇0``,
+  ``T``, ``N``, scheme, method);
+* a problem script checks only what its scene adds (a start above the ground, ``g ≥ 0``).
+
+Code below those edges trusts what it receives: a :class:`Body` is not re-checked by the
+functions that take one, and the contact solver applies the impact law
+(:func:`~castrajectory.models.collision.impact_law`) to computed values without checks.
 """
 from __future__ import annotations
 

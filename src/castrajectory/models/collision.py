@@ -63,15 +63,15 @@ from typing import Optional, Sequence
 import casadi as ca
 import numpy as np
 
-from .mechanics import Atoms, LagrangianSystem, MassMatrix
+from .mechanics import Atoms, Contact, Gravity, LagrangianSystem, MassMatrix, Potential
 from ..validation import InputError, finite, integer_at_least, positive
 
 NAMES = ["cx", "cy", "theta"]
 
 
-# ----------------------------------------------------------------------------- checks
+# ----------------------------------------------------------------------------- parameters, checked once
 def restitution(value) -> float:
-    """Restitution coefficient ``e ∈ [0, 1]``."""
+    """Restitution coefficient ``e ∈ [0, 1]`` (checked; the one check of a user's ``e``)."""
     e = finite("restitution", value)
     if not 0.0 <= e <= 1.0:
         raise InputError(f"restitution must be between 0 and 1 (got {value})")
@@ -90,8 +90,39 @@ def _finite_vector(name: str, value, n: Optional[int] = None) -> np.ndarray:
     return v
 
 
-def _body(mass, width, height):
-    return positive("mass", mass), positive("width", width), positive("height", height)
+@dataclass(frozen=True)
+class Body:
+    """A uniform ``width × height`` rectangle of mass ``mass``: the parameters of every rectangle scene.
+
+    Checked once, when it is made; everything that receives a :class:`Body` trusts it.
+    """
+
+    mass: float
+    width: float
+    height: float
+
+    def __post_init__(self):
+        for name in ("mass", "width", "height"):
+            object.__setattr__(self, name, positive(name, getattr(self, name)))
+
+    @property
+    def inertia(self) -> float:
+        """``I = m (w² + h²)/12 = m|d|²/3`` (corner ``d = (w/2, h/2)``) about the centroid."""
+        return self.mass * (self.width ** 2 + self.height ** 2) / 12.0
+
+    @property
+    def mass_matrix(self) -> np.ndarray:
+        """Closed form ``M = diag(m, m, I)``."""
+        return np.diag([self.mass, self.mass, self.inertia])
+
+    @property
+    def corners(self) -> np.ndarray:
+        """The four body-frame corners, counter-clockwise from the lower left."""
+        return corners(self.width, self.height)
+
+    def corner_jacobian(self, angle: float, corner) -> np.ndarray:
+        """``J = ∂y/∂q = (0, 1, d_x cos θ − d_y sin θ)`` of the body point ``corner`` at ``angle``."""
+        return _corner_jacobian(angle, corner)
 
 
 def default_corner(width: float, height: float) -> np.ndarray:
@@ -119,20 +150,18 @@ def point_height(q, d):
 # ----------------------------------------------------------------------------- mass matrix, two ways
 def rectangle_inertia(mass: float, width: float, height: float) -> float:
     """``I = m (w² + h²)/12 = m|d|²/3`` (corner ``d = (w/2, h/2)``) about the centroid."""
-    m, w, h = _body(mass, width, height)
-    return m * (w * w + h * h) / 12.0
+    return Body(mass, width, height).inertia
 
 
 def rectangle_mass_matrix(mass: float, width: float, height: float) -> np.ndarray:
     """Closed form ``M = diag(m, m, I)``."""
-    m = positive("mass", mass)
-    return np.diag([m, m, rectangle_inertia(mass, width, height)])
+    return Body(mass, width, height).mass_matrix
 
 
 def rectangle(mass: float, width: float, height: float) -> LagrangianSystem:
     """Free planar rectangle with the closed-form mass matrix (no potential terms)."""
     q = ca.SX.sym("q", 3)
-    return LagrangianSystem(q, MassMatrix(ca.SX(rectangle_mass_matrix(mass, width, height))), names=NAMES)
+    return LagrangianSystem(q, MassMatrix(ca.SX(Body(mass, width, height).mass_matrix)), names=NAMES)
 
 
 def rectangle_atoms(mass: float, width: float, height: float, points: int = 2) -> LagrangianSystem:
@@ -142,7 +171,8 @@ def rectangle_atoms(mass: float, width: float, height: float, points: int = 2) -
     ``(i, j)`` sits at body offset ``d = (w ξ_i/2, h ξ_j/2)`` with mass
     ``m ω_i ω_j / 4``.  Any ``points ≥ 2`` is exact for this quadratic integrand.
     """
-    m, w, h = _body(mass, width, height)
+    b = Body(mass, width, height)
+    m, w, h = b.mass, b.width, b.height
     n = integer_at_least("quadrature points", points, 2)
     xi, wt = np.polynomial.legendre.leggauss(n)
     q = ca.SX.sym("q", 3)
@@ -170,11 +200,13 @@ def admissible_direction_function() -> ca.Function:
                        ["q", "d", "m", "I"], ["direction"])
 
 
+def _corner_jacobian(th: float, d) -> np.ndarray:
+    return np.array([0.0, 1.0, d[0] * np.cos(th) - d[1] * np.sin(th)])
+
+
 def corner_jacobian(theta: float, corner: Sequence[float]) -> np.ndarray:
     """Closed form ``J = ∂y/∂q = (0, 1, d_x cos θ − d_y sin θ)``."""
-    th = finite("angle", theta)
-    dx, dy = _finite_vector("corner", corner, 2)
-    return np.array([0.0, 1.0, dx * np.cos(th) - dy * np.sin(th)])
+    return _corner_jacobian(finite("angle", theta), _finite_vector("corner", corner, 2))
 
 
 def admissible_direction(mass: float, inertia: float, theta: float, corner: Sequence[float]) -> np.ndarray:
@@ -213,7 +245,8 @@ def resolve_impact(M, J, v_before, e: float) -> Impact:
     numbers, for example ``LagrangianSystem.mass_matrix(q)`` and the Jacobian
     of a gap at ``q`` (see :func:`system_impact`).  The impulse acts along
     ``M⁻¹Jᵀ`` with ``μ = −(1 + e) J v⁻ / (J M⁻¹ Jᵀ)`` when the contact is
-    approaching (``J v⁻ < 0``), and ``μ = 0`` otherwise.
+    approaching (``J v⁻ < 0``), and ``μ = 0`` otherwise.  Checks its arguments once and
+    applies :func:`impact_law`.
     """
     e = restitution(e)
     v = _finite_vector("velocity", v_before)
@@ -229,14 +262,21 @@ def resolve_impact(M, J, v_before, e: float) -> Impact:
     if not np.allclose(M, M.T, rtol=1e-12, atol=0.0):
         raise InputError("mass matrix must be symmetric")
     try:
-        chol = np.linalg.cholesky(M)
+        np.linalg.cholesky(M)
     except np.linalg.LinAlgError:
         raise InputError("mass matrix must be positive definite") from None
     J = _finite_vector("contact Jacobian", J, n)
+    if not np.any(J != 0.0):
+        raise InputError("contact Jacobian must be nonzero")
+    return impact_law(M, J, v, e)
+
+
+def impact_law(M: np.ndarray, J: np.ndarray, v: np.ndarray, e: float) -> Impact:
+    """Newton's law for one contact, on values already checked (``M`` SPD, ``J ≠ 0``, ``e ∈ [0, 1]``):
+    ``μ = −(1 + e) J v⁻ / (J M⁻¹ Jᵀ)`` when approaching, ``v⁺ = v⁻ + μ M⁻¹Jᵀ``."""
+    chol = np.linalg.cholesky(M)
     direction = np.linalg.solve(chol.T, np.linalg.solve(chol, J))   # M⁻¹Jᵀ
     a = float(J @ direction)                                         # J M⁻¹ Jᵀ
-    if not a > 0.0:
-        raise InputError("contact Jacobian must be nonzero")
     vn = float(J @ v)
     mu = -(1.0 + e) * vn / a if vn < 0.0 else 0.0
     v_after = v + mu * direction if mu > 0.0 else v.copy()
@@ -289,14 +329,19 @@ def rectangle_impact(mass: float, width: float, height: float, angle: float, v_b
 
     ``v_before = (v_x, v_y, ω)``; closed-form ``M`` and ``J``, general law :func:`resolve_impact`.
     """
-    m, w, h = _body(mass, width, height)
+    body = Body(mass, width, height)
     th = finite("angle", angle)
-    d = default_corner(w, h) if corner is None else _finite_vector("corner", corner, 2)
-    v = _finite_vector("velocity", v_before, 3)
-    e = restitution(e)
-    r = resolve_impact(rectangle_mass_matrix(m, w, h), corner_jacobian(th, d), v, e)
-    return CornerImpact(**vars(r), mass=m, width=w, height=h, inertia=rectangle_inertia(m, w, h),
-                        angle=th, corner=d)
+    d = None if corner is None else _finite_vector("corner", corner, 2)
+    return corner_impact(body, th, _finite_vector("velocity", v_before, 3), restitution(e), d)
+
+
+def corner_impact(body: Body, angle: float, v_before: np.ndarray, e: float,
+                  corner: Optional[np.ndarray] = None) -> CornerImpact:
+    """:func:`rectangle_impact` on checked values (a :class:`Body`, a finite angle and velocity, ``e ∈ [0, 1]``)."""
+    d = default_corner(body.width, body.height) if corner is None else np.asarray(corner, float)
+    r = impact_law(body.mass_matrix, _corner_jacobian(angle, d), np.asarray(v_before, float), e)
+    return CornerImpact(**vars(r), mass=body.mass, width=body.width, height=body.height, inertia=body.inertia,
+                        angle=float(angle), corner=d)
 
 
 # ----------------------------------------------------------------------------- contact scenes
@@ -316,10 +361,8 @@ def bouncing_ball(mass: float = 1.0, g: float = 9.81, restitution_coefficient: f
     the scene for convergence orders).  The :class:`~castrajectory.mechanics.Contact`
     term is the only contact machinery.
     """
-    from .mechanics import Contact, Gravity, Potential
     m = positive("mass", mass)
     g = finite("g", g)
-    e = restitution(restitution_coefficient)
     k = finite("stiffness", stiffness)
     if k < 0:
         raise InputError(f"stiffness must be >= 0 (got {stiffness})")
@@ -329,7 +372,7 @@ def bouncing_ball(mass: float = 1.0, g: float = 9.81, restitution_coefficient: f
     if k > 0:
         terms.append(Potential(0.5 * k * (y[0] - finite("anchor", anchor)) ** 2, "spring"))
     return LagrangianSystem(y, Atoms([point], [m]), terms, names=["y"],
-                            contact=Contact([y[0]], e, ["ball"]))
+                            contact=Contact([y[0]], restitution_coefficient, ["ball"]))
 
 
 def ball_oracle(height: float, velocity: float, g: float, e: float, T: float):
@@ -402,24 +445,36 @@ def ball_height(height: float, velocity: float, g: float, e: float, t) -> np.nda
     return np.maximum(y, 0.0)
 
 
-def _rectangle_contact_system(mass, width, height, g, e, ground):
-    from .mechanics import Contact, Gravity
-    m, w, h = _body(mass, width, height)
-    g = finite("g", g)
-    e = restitution(e)
+#: Names of the rectangle's corners, in the order of :func:`corners`.
+CORNER_NAMES = ["lower left", "lower right", "upper right", "upper left"]
+
+
+def rectangle_contact_system(body: Body, g: float, e, ground) -> LagrangianSystem:
+    """A :class:`Body` (checked) under gravity ``g`` (finite; 0 drops the term) over the ground whose gap
+    at a world point ``p`` is ``ground(p)``; ``e`` is checked by the :class:`Contact` term it builds."""
     q = ca.SX.sym("q", 3)
-    pts = [body_point(q, d) for d in corners(w, h)]
+    pts = [body_point(q, d) for d in body.corners]
     gaps = [ground(p) for p in pts]
-    terms = [Gravity(g, heights=[q[1]], masses=[m])] if g != 0.0 else []
-    names = ["lower left", "lower right", "upper right", "upper left"]
-    return LagrangianSystem(q, MassMatrix(ca.SX(rectangle_mass_matrix(m, w, h))), terms, names=NAMES,
-                            points_expr=pts + [pts[0]], contact=Contact(gaps, e, names))
+    terms = [Gravity(g, heights=[q[1]], masses=[body.mass])] if g != 0.0 else []
+    return LagrangianSystem(q, MassMatrix(ca.SX(body.mass_matrix)), terms, names=NAMES,
+                            points_expr=pts + [pts[0]], contact=Contact(gaps, e, CORNER_NAMES))
+
+
+def flat_ground(p):
+    """Gap of a world point ``p`` above the ground ``y = 0``."""
+    return p[1]
+
+
+def bowl_ground(radius: float):
+    """Gap ``φ = y − x²/(2R)`` of a world point above the parabolic bowl ``y = x²/(2R)`` (``R`` checked)."""
+    return lambda p: p[1] - p[0] ** 2 / (2 * radius)
 
 
 def rectangle_drop(mass: float = 1.0, width: float = 2.0, height: float = 1.0, g: float = 9.81,
                    restitution_coefficient: float = 1.0) -> LagrangianSystem:
     """Rigid ``w × h`` rectangle over the ground ``y = 0``: four corner gaps ``y_j(q) ≥ 0``."""
-    return _rectangle_contact_system(mass, width, height, g, restitution_coefficient, lambda p: p[1])
+    return rectangle_contact_system(Body(mass, width, height), finite("g", g), restitution_coefficient,
+                                    flat_ground)
 
 
 def bowl(mass: float = 1.0, width: float = 0.4, height: float = 0.2, g: float = 9.81,
@@ -430,5 +485,5 @@ def bowl(mass: float = 1.0, width: float = 0.4, height: float = 0.2, g: float = 
     bowl's level set ``y − x²/2R = 0``: the impulse acts along ``M⁻¹∇φᵀ``.
     """
     R = positive("bowl radius", radius)
-    return _rectangle_contact_system(mass, width, height, g, restitution_coefficient,
-                                     lambda p: p[1] - p[0] ** 2 / (2 * R))
+    return rectangle_contact_system(Body(mass, width, height), finite("g", g), restitution_coefficient,
+                                    bowl_ground(R))

@@ -39,6 +39,8 @@ from typing import Optional, Sequence
 import casadi as ca
 import numpy as np
 
+from ..validation import InputError, finite
+
 
 # ----------------------------------------------------------------------------- kinetic energy
 @dataclass
@@ -137,7 +139,6 @@ class Contact:
     names: Optional[Sequence[str]] = None
 
     def __post_init__(self):
-        from ..validation import InputError, finite
         e = finite("restitution", self.restitution)
         if not 0.0 <= e <= 1.0:
             raise InputError(f"restitution must be between 0 and 1 (got {self.restitution})")

@@ -9,7 +9,7 @@ Solution strategy (chosen by the library)
 -----------------------------------------
 1. **Event-located guess.**  The smooth equations of motion are integrated
    (RK4) from the start; every gap crossing is located by bisection, the
-   impact law of :func:`castrajectory.collision.resolve_impact` is applied
+   impact law of :func:`castrajectory.models.collision.impact_law` is applied
    there and the flight continues.  The sub-node of that step is placed at the
    crossing with the impact's ``μ``; a second crossing in the rest of that step gets a second
    impact and sub-node (whole solve only).  A slow arrival (normal speed below
@@ -43,7 +43,7 @@ from typing import Dict, List, Optional
 
 import numpy as np
 
-from ..models.collision import resolve_impact
+from ..models.collision import impact_law
 from ..models.mechanics import LagrangianSystem
 from ..result import HomotopyStep, NLPResult, Result
 from ..validation import InputError
@@ -360,7 +360,7 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
             if not slow and e < 1.0:
                 # a rocking accumulation: the bounce would barely lift the contact (below v_z h) before
                 # another contact closes within LOOKAHEAD_CATCH steps
-                bounce = resolve_impact(Mc, Jc, vc, e)
+                bounce = impact_law(Mc, Jc, vc, e)
                 _, _, Pf = (np.asarray(x) for x in cm.flights(LOOKAHEAD_CATCH)(qc, bounce.v_after, h))
                 others = np.arange(c) != j
                 slow = bool(np.any(Pf[others] < -tol)) and float(np.max(Pf[j])) <= v_zeno * h
@@ -379,7 +379,7 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
                 Q[k + 1] = q
                 k += 1
                 continue
-            imp = resolve_impact(Mc, Jc, vc, e)
+            imp = impact_law(Mc, Jc, vc, e)
             MU[k, j] = imp.mu
             BOUNCED[k, j] = True
             together = np.where(crossing & (phc <= phc[j] + SIMULTANEOUS_TOL * length))[0]
@@ -399,7 +399,7 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
                 j2 = int(np.argmin(np.where(crossing2, phc2, np.inf)))
                 Jall2 = np.asarray(gapf(qc2)[1])
                 Mc2 = np.asarray(Mf(qc2))
-                imp2 = resolve_impact(Mc2, Jall2[j2], vc2, e)
+                imp2 = impact_law(Mc2, Jall2[j2], vc2, e)
                 mu2, b2 = np.zeros(c), np.zeros(c, dtype=bool)
                 mu2[j2], b2[j2] = imp2.mu, True
                 together = np.where(crossing2 & (phc2 <= phc2[j2] + SIMULTANEOUS_TOL * length))[0]
