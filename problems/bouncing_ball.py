@@ -1,7 +1,7 @@
 """Bouncing ball: contact as a complementarity-constrained discrete action (whole trajectory).
 
 A point mass falls from --height onto the ground y = 0 and bounces with Newton
-restitution e.  The whole trajectory is one NLP (castrajectory.contact): every
+restitution e.  The whole trajectory is one NLP (castrajectory.solve.contact): every
 step has a collision sub-node whose time is an unknown, the gap and the
 impulse are complementary, and the impact law acts on the exact discrete
 momenta.  Compared with the analytic bounce times t_k, apex heights e^(2k) H

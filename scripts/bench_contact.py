@@ -16,7 +16,7 @@ Goals:
 Also reported: the bowl, the Zeno ball (e = 0.3), the rocking block (e = 0.5), and the Moreau–Jean
 baseline's time at the same N with its bounce-time error, as a ratio from this
 run.  One untimed warm-up per scene compiles the element functions
-(castrajectory.jit's disk cache makes later runs load them).
+(castrajectory.solve.jit's disk cache makes later runs load them).
 
     python scripts/bench_contact.py
     python scripts/bench_contact.py --repeats 1

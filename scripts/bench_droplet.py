@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Benchmark of the droplet solver (``castrajectory.droplet``) and an SLSQP baseline.
+"""Benchmark of the droplet solver (``castrajectory.solve.droplet``) and an SLSQP baseline.
 
 This is a benchmark, not a test: it measures and reports, and always exits
 with status 0 (2 for bad command-line flags, as argparse does).  PASS/MISS
@@ -56,7 +56,7 @@ What is measured
 An untimed warm-up solve at small ``N`` runs first, so that loading the Ipopt
 plugin is not billed to the first size.
 
-Compiled element functions (``castrajectory.jit``).  Families of at least
+Compiled element functions (``castrajectory.solve.jit``).  Families of at least
 ``nlp.JIT_MIN_ELEMENTS`` elements are compiled to machine code once per machine
 and then loaded from a per-user disk cache.  A second untimed warm-up at that
 size does any compiling before the timings; the script prints how many

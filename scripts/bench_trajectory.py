@@ -34,7 +34,7 @@ Scene: double pendulum (unit masses and lengths, g = 9.81) from rest at
 One untimed warm-up solve runs first (loading the Ipopt plugin).  BLAS
 threads are pinned to 1 unless the caller set them (see bench_droplet.py).
 
-Compiled element functions (``castrajectory.jit``): element families of at
+Compiled element functions (``castrajectory.solve.jit``): element families of at
 least ``nlp.JIT_MIN_ELEMENTS`` elements run compiled code, built once per
 machine and loaded from a per-user disk cache afterwards.  A second untimed
 warm-up (both schemes at N = 4 ``JIT_MIN_ELEMENTS``) does any compiling before

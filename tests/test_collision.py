@@ -1,4 +1,4 @@
-"""Tests of castrajectory.collision and problems/collision_impulse.py.
+"""Tests of castrajectory.models.collision and problems/collision_impulse.py.
 
 * mass matrix of the uniform rectangle: atom quadrature (the seed's definition)
   == diag(m, m, m(w²+h²)/12), independent of θ and c;

@@ -1,4 +1,4 @@
-"""Tests of contact trajectories (castrajectory.contact) against independent oracles.
+"""Tests of contact trajectories (castrajectory.solve.contact) against independent oracles.
 
 * bouncing ball: bounce times, impulses 2mV / (1+e)mV, apex heights e^(2k) H (re-derived below, not
   taken from the library), kinetic energy across an elastic impact, total energy between impacts;

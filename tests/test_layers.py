@@ -98,7 +98,7 @@ def _room(module: str) -> str:
 def test_every_module_has_a_layer():
     rooms = {_room(m) for m in MODULES} - {""}
     assert rooms <= set(LAYERS), f"modules outside the layers: {sorted(rooms - set(LAYERS))}"
-    # the package keeps its shape: four layers of DESIGN.md (and their neighbours) as folders
+    # the package keeps its shape: the layers as folders
     for room in ("models", "discretise", "baselines", "solve", "inspect", "cli"):
         assert (PACKAGE / room / "__init__.py").is_file()
 

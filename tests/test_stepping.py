@@ -1,4 +1,4 @@
-"""Tests of the time-stepping baselines (castrajectory.stepping).
+"""Tests of the time-stepping baselines (castrajectory.baselines.stepping).
 
 * observed order of every stepper against the CVODES reference (log-log slope);
 * the reference itself against the double pendulum's slow normal mode;

@@ -1,4 +1,4 @@
-"""Tests of the whole-trajectory solves (castrajectory.trajectory) and the element NLP families.
+"""Tests of the whole-trajectory solves (castrajectory.solve.trajectory) and the element NLP families.
 
 * observed order of the whole-trajectory initial-value solve against CVODES (log-log slope);
 * small-oscillation normal modes of the equal double pendulum (frequencies derived here);
@@ -8,7 +8,7 @@
 * holonomic constraints: Cartesian pendulum against the angle form, the multiplier is the rod force;
 * energy bounded over hundreds of periods (RK4 at the same step drifts);
 * refused input, honest failure reporting and a complete record of the solves;
-* element families of castrajectory.nlp against the same NLP written with plain expressions.
+* element families of castrajectory.solve.nlp against the same NLP written with plain expressions.
 """
 from __future__ import annotations
 

@@ -1,7 +1,7 @@
 """Time-stepping baselines and a reference solution.
 
 The library's own method solves for a whole trajectory at once
-(:mod:`castrajectory.trajectory`).  The steppers here exist only to compare
+(:mod:`castrajectory.solve.trajectory`).  The steppers here exist only to compare
 against: they march one step after another, the way a user would otherwise
 integrate the Euler–Lagrange equations.
 
@@ -9,7 +9,7 @@ integrate the Euler–Lagrange equations.
   ``x = (q, q̇)``, ``ẋ = (q̇, q̈(q, q̇))`` (order 4, not symplectic: energy drifts);
 * :func:`implicit_euler` — backward Euler on the same first-order form, one
   Newton solve per step (order 1, dissipative);
-* :func:`march` — the variational integrator of :mod:`castrajectory.discrete`
+* :func:`march` — the variational integrator of :mod:`castrajectory.discretise.lagrangians`
   (midpoint, trapezoid: order 2; galerkin4: order 4) marched step by step:
   the discrete Legendre condition gives ``q_1``, then each DEL equation gives
   the next node (energy stays bounded);
@@ -81,7 +81,7 @@ class Stepped(Result):
     holds the nodal momenta.  ``lam`` (N, nc), constrained marches only: row 0
     is the multiplier of ``initial_residual``, row k ≥ 1 that of
     ``del_residual`` at node k; both are the physical multipliers
-    (see :class:`~castrajectory.discrete.DiscreteMechanics`).  ``newton_error`` is the largest remaining
+    (see :class:`~castrajectory.discretise.lagrangians.DiscreteMechanics`).  ``newton_error`` is the largest remaining
     Newton correction ``‖J⁻¹ r‖∞`` over all steps of an implicit method — the
     solve error of the step unknowns (NaN for RK4 and for non-finite runs).
     """
@@ -273,7 +273,7 @@ def implicit_euler(system: LagrangianSystem, q0, qd0, T: float, N: int) -> Stepp
 
 # ----------------------------------------------------------------------------- variational integrator
 def march(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str = "midpoint") -> Stepped:
-    """The variational integrator of ``scheme`` (see :mod:`castrajectory.discrete`) marched step by step.
+    """The variational integrator of ``scheme`` (see :mod:`castrajectory.discretise.lagrangians`) marched step by step.
 
     Step 0 solves the discrete Legendre condition
     ``p0 + D₁L_d(q0, Z0, q1) = 0`` (with ``p0 = ∂L/∂q̇(q0, q̇0)``) for ``(Z0, q1)``;

@@ -119,7 +119,7 @@ class Curve:
     the segment lengths.  No graph assumption is made, so overhanging drops
     (``theta > 90°``) are fine.
 
-    Every piece is an element family of :class:`~castrajectory.nlp.NLP` (one chord,
+    Every piece is an element family of :class:`~castrajectory.solve.nlp.NLP` (one chord,
     one pair of chords, one area link), differentiated once per element type.
 
     Default initial guess: the half-disc (``theta = 90°``) of the given area,

@@ -91,7 +91,7 @@ def sweep_sizes(n_max: int = 100_000, n_min: int = 8) -> List[int]:
 
 
 # ----------------------------------------------------------------------------- trajectories
-# Work–precision of the trajectory methods (:func:`castrajectory.simulate.simulate`) against
+# Work–precision of the trajectory methods (:func:`castrajectory.solve.simulate.simulate`) against
 # the CVODES reference, and long-horizon energy behaviour.
 
 #: Methods whose runs do not depend on a discrete-Lagrangian scheme.
@@ -197,7 +197,7 @@ def work_precision_sweep(system, q0, qd0, T: float, methods_schemes: Sequence[tu
     status, success, iterations, levels, build_time_s, solve_time_s, time_s``
     (build + solve), ``wall_time_s`` (the whole ``simulate`` call),
     ``error_final`` = max-abs error of ``q(T)`` against CVODES (computed once,
-    :func:`castrajectory.stepping.reference` at ``reference_rtol``;
+    :func:`castrajectory.baselines.stepping.reference` at ``reference_rtol``;
     ``reference_atol`` defaults to the same) and ``energy_error_max`` =
     ``max_k |E_k − E(q0, q̇0)|``.  Failed runs keep their row with
     ``status != "ok"``, ``success = False`` and NaN errors.
@@ -328,7 +328,7 @@ def long_horizon_run(system, q0, qd0, T: float, n: int, method: str, scheme: Opt
     ``row`` holds ``label, method, scheme, n, h, T, status, success,
     iterations, build_time_s, solve_time_s, time_s, wall_time_s, E0`` and the
     fields of :func:`energy_drift_summary` (NaN if the run failed); ``run`` is
-    the :class:`~castrajectory.simulate.Run`.
+    the :class:`~castrajectory.solve.simulate.Run`.
     ``E0`` is the exact initial energy ``E(q0, q̇0)``.
     """
     import time
@@ -384,22 +384,18 @@ def contact_run(case: str, n: int, method: str) -> dict:
     t_ex, v_ex = _contact_oracle(c)
     K = min(c["impacts"], len(t_ex))
     if method == "whole":
-        tr = trajectory.solve_initial_value(system, [c["height"]], [c["velocity"]], c["T"], n)
-        ok, status, iters = tr.success, tr.status, tr.iterations
+        res = tr = trajectory.solve_initial_value(system, [c["height"]], [c["velocity"]], c["T"], n)
         ti = np.array([i.t for i in tr.impacts])
         vi = np.array([-float(i.v_before[0]) for i in tr.impacts])
         yo = np.array([float(i.q[0]) for i in tr.impacts])          # state leaving each impact
         vo = np.array([float(i.v_after[0]) for i in tr.impacts])
-        build, solve = tr.build_time_s, tr.solve_time_s
     else:
-        st = stepping.moreau_jean(system, [c["height"]], [c["velocity"]], c["T"], n)
-        ok, status, iters = st.success, "ok" if st.success else "failed", 0
+        res = st = stepping.moreau_jean(system, [c["height"]], [c["velocity"]], c["T"], n)
         v = st.qd[:, 0]
         jump = np.where((v[:-1] < 0) & (v[1:] > 0))[0]
         ti = st.t[jump] + 0.5 * st.h
         vi = -v[jump]
         yo, vo = st.q[jump + 1, 0], v[jump + 1]
-        build, solve = st.build_time_s, st.solve_time_s
     k = min(K, len(ti))
     t_err = float(np.max(np.abs(ti[:k] - t_ex[:k]))) if k == K else float("nan")
     v_err = float(np.max(np.abs(vi[:k] - v_ex[:k]) / v_ex[:k])) if k == K else float("nan")
@@ -408,8 +404,8 @@ def contact_run(case: str, n: int, method: str) -> dict:
     apex = _flight_apex(c, yo[:k], vo[:k])
     apex_ex = _flight_apex(c, np.zeros(k), c["e"] * v_ex[:k])
     a_err = float(np.max(np.abs(apex - apex_ex))) if k == K else float("nan")
-    return {"case": case, "method": method, "n": n, "status": "ok" if ok else status, "iterations": iters,
-            "build_time_s": build, "solve_time_s": solve, "impact_time_error": t_err,
+    return {"case": case, "method": method, "n": n, "status": res.status, "iterations": res.iterations,
+            "build_time_s": res.build_time_s, "solve_time_s": res.solve_time_s, "impact_time_error": t_err,
             "impact_speed_error": v_err, "apex_error": a_err, "impacts": int(len(ti))}
 
 

@@ -358,7 +358,7 @@ def bouncing_ball(mass: float = 1.0, g: float = 9.81, restitution_coefficient: f
     Gravity is omitted when ``g = 0``; with ``stiffness = k > 0`` a linear spring
     ``½ k (y − anchor)²`` pulls the ball towards the height ``anchor`` (then the
     free flight is harmonic, which the midpoint rule does not integrate exactly:
-    the scene for convergence orders).  The :class:`~castrajectory.mechanics.Contact`
+    the scene for convergence orders).  The :class:`~castrajectory.models.mechanics.Contact`
     term is the only contact machinery.
     """
     m = positive("mass", mass)

@@ -1,8 +1,8 @@
 """Lagrangian systems: coordinates, kinetic energy, potential terms, holonomic constraints.
 
 A :class:`LagrangianSystem` describes the physics only; how it is discretised
-(:mod:`castrajectory.discrete`) and solved (:mod:`castrajectory.trajectory`,
-:mod:`castrajectory.stepping`) lives elsewhere.
+(:mod:`castrajectory.discretise.lagrangians`) and solved (:mod:`castrajectory.solve.trajectory`,
+:mod:`castrajectory.baselines.stepping`) lives elsewhere.
 
 Kinetic energy comes in one of two forms:
 
@@ -23,7 +23,7 @@ multipliers are unknowns of the trajectory NLP.
 Unilateral contact is one more term, :class:`Contact`: gap expressions
 ``φ_j(q) ≥ 0`` (one per contact point) and a restitution coefficient.  A
 system without it builds no contact variables anywhere
-(:mod:`castrajectory.contact` transcribes it).
+(:mod:`castrajectory.solve.contact` transcribes it).
 
 Example (planar pendulum, one atom)::
 

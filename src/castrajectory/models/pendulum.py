@@ -1,6 +1,6 @@
 """Pendulum-type systems (factories) and their analytic facts.
 
-Each factory returns a :class:`~castrajectory.mechanics.LagrangianSystem`
+Each factory returns a :class:`~castrajectory.models.mechanics.LagrangianSystem`
 holding only the terms the scene needs (no :class:`Gravity` when ``g == 0``).
 
 * :func:`double_pendulum` — two point masses on massless rods, angles from the

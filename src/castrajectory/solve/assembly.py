@@ -10,7 +10,7 @@ unknowns; the element derivatives are evaluated for all elements with one
 constant 0/1 matrix computed with numpy.  The cost of building is then a few
 array operations per nonzero.
 
-This module only deals with patterns and scatter matrices; :mod:`castrajectory.nlp`
+This module only deals with patterns and scatter matrices; :mod:`castrajectory.solve.nlp`
 decides what is an element.
 """
 from __future__ import annotations

@@ -429,7 +429,7 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
     # steps that start and end on the ground (a resting body): the sub-node rests too, carrying its
     # share of the weight (least squares on the sub-node equation, clipped at 0), rather than
     # hopping to the apex of a free midpoint flight: both are exact discrete solutions, and this
-    # one has no motion at all between the nodes (docs/derivations.md, "Resting contact")
+    # one has no motion at all between the nodes (docs/derivations.md, "Contact trajectories", §2, "A resting ball")
     for k in np.where(~event & (np.min(gq[:-1], axis=1) <= tol) & (np.min(gq[1:], axis=1) <= tol))[0]:
         S[k] = 0.5 * (Q[k] + Q[k + 1])
         r = np.asarray(cm.sub(Q[k], S[k], Q[k + 1], B[k], np.zeros(c), h)).reshape(-1) * h

@@ -2,7 +2,7 @@
 
 CasADi evaluates an SX function in a virtual machine: one interpreted
 instruction per scalar operation.  For the element functions of
-:mod:`castrajectory.nlp` (one discrete Euler–Lagrange residual, its Jacobian,
+:mod:`castrajectory.solve.nlp` (one discrete Euler–Lagrange residual, its Jacobian,
 one polyline segment ...) evaluated tens of thousands of times per Ipopt
 iteration, that interpreter is the bulk of the function-evaluation time.
 :func:`compiled` turns such a function into C with CasADi's code generator,

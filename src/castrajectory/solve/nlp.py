@@ -60,7 +60,7 @@ DEFAULT_IPOPT_OPTIONS: Dict[str, object] = {
 #: How element families are evaluated: CasADi ``map`` parallelization and thread count.
 MAP_PARALLELIZATION = "serial"
 MAP_THREADS = 1
-#: Compile element functions to machine code (:mod:`castrajectory.jit`: disk-cached, falls back to
+#: Compile element functions to machine code (:mod:`castrajectory.solve.jit`: disk-cached, falls back to
 #: CasADi's virtual machine when no C compiler works; ``CASTRAJECTORY_JIT=0`` also switches it off).
 JIT = True
 #: Families with at least this many elements compile their element functions (about 0.1-0.5 s
@@ -257,7 +257,7 @@ class NLP(Program):
         return self._solver
 
     def _build_assembled(self, options, verbose, key):
-        """Build the solver from element derivatives (see :mod:`castrajectory.assembly`)."""
+        """Build the solver from element derivatives (see :mod:`castrajectory.solve.assembly`)."""
         t = time.perf_counter()
         nx = sum(b.init.size for b in self._vars)
         npar = sum(b.init.size for b in self._params)

@@ -1,8 +1,8 @@
 """One entry point for every way of computing a trajectory, with one result shape.
 
-``method="whole"`` is the library's method (:mod:`castrajectory.trajectory`);
+``method="whole"`` is the library's method (:mod:`castrajectory.solve.trajectory`);
 ``"march"``, ``"rk4"`` and ``"implicit-euler"`` are the time-stepping
-baselines of :mod:`castrajectory.stepping`, kept for comparison.
+baselines of :mod:`castrajectory.baselines.stepping`, kept for comparison.
 """
 from __future__ import annotations
 

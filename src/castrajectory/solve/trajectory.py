@@ -3,23 +3,10 @@
 The rows are written by :class:`castrajectory.discretise.trajectory.TrajectoryTranscription`;
 this module solves them.
 
-Two modes on a uniform grid ``t_k = k h``, ``h = T/N``:
-
-* **initial value** (:func:`solve_initial_value`): ``q_0`` and ``q̇_0`` given.
-  Unknowns ``q_1..q_N`` (plus stages and multipliers); equations: the initial
-  discrete Legendre condition ``p_0 + D₁L_d(q_0, q_1) = 0``, the DEL equation
-  at every interior node, stage equations and constraint rows.  The system is
-  square (as many equations as unknowns) and handed to Ipopt with a zero
-  objective: Ipopt then performs a globalised Newton method on it.
-* **two-point boundary** (:func:`solve_boundary`): ``q_0`` and ``q_N`` given.
-  Ipopt *minimises* the discrete action ``S_d/h`` over the interior nodes —
-  least action proper; its stationarity conditions are the DEL equations and
-  the constraint multipliers are Ipopt's.
-
-Every family of equations is added as one element family
-(:meth:`castrajectory.nlp.NLP.equal_elements`), so building is vectorised
-(one ``map`` per family, element-wise derivatives) rather than a Python loop
-of symbolic calls.
+Two modes: **initial value** (:func:`solve_initial_value`: ``q_0`` and ``q̇_0`` given, a square
+system of DEL equations with a zero objective, on which Ipopt performs a globalised Newton
+method) and **two-point boundary** (:func:`solve_boundary`: ``q_0`` and ``q_N`` given; Ipopt
+*minimises* the discrete action — least action proper).
 
 Robust strategy (initial value), chosen by the library:
 
@@ -394,9 +381,9 @@ def solve_initial_value(system: LagrangianSystem, q0, qd0, T: float, N: int, sch
                         coarsest: int = 32) -> Trajectory:
     """Solve the initial-value problem as one whole-trajectory NLP (robust strategy in the module doc).
 
-    A system with a :class:`~castrajectory.mechanics.Contact` term is transcribed by
-    :func:`castrajectory.contact.solve_contact` (collision sub-nodes and complementarity)
-    and returns a :class:`~castrajectory.contact.ContactTrajectory`.
+    A system with a :class:`~castrajectory.models.mechanics.Contact` term is transcribed by
+    :func:`castrajectory.solve.contact.solve_contact` (collision sub-nodes and complementarity)
+    and returns a :class:`~castrajectory.solve.contact.ContactTrajectory`.
     """
     T, N = _validate(system, T, N)
     if system.contact is not None:
