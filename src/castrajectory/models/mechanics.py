@@ -271,24 +271,32 @@ class LagrangianSystem:
 
         Unconstrained: ``M q̈ = ∂L/∂q − (∂²L/∂q̇∂q) q̇``.  With holonomic
         constraints the index-1 system ``[M Cᵀ; C 0] [q̈; λ] = [f; −(∂(C q̇)/∂q) q̇]``
-        is solved (used only by the time-stepping baselines).
+        is solved (used by the time-stepping baselines and the integrated guesses).
         """
-        def build():
-            L = self.lagrangian_expr()
-            dLdqd = ca.gradient(L, self.qd)
-            M = ca.hessian(L, self.qd)[0]
-            f = ca.gradient(L, self.q) - ca.mtimes(ca.jacobian(dLdqd, self.q), self.qd)
-            if self.nc:
-                c = self.constraint_expr()
-                C = ca.jacobian(c, self.q)
-                gamma = -ca.mtimes(ca.jacobian(ca.mtimes(C, self.qd), self.q), self.qd)
-                K = ca.blockcat([[M, C.T], [C, ca.SX(self.nc, self.nc)]])
-                sol = ca.solve(K, ca.vertcat(f, gamma))
-                qdd = sol[:self.nq]
-            else:
-                qdd = ca.solve(M, f)
-            return ca.Function("qdd", [self.q, self.qd], [qdd])
-        return self._get("qdd", build)
+        return self._get("qdd", lambda: self._index1()[0])
+
+    @property
+    def multiplier(self) -> ca.Function:
+        """The constraint multipliers ``λ(q, q̇)`` of the index-1 system (``M q̈ + Cᵀλ = f``): the
+        same sign and scale as the discrete multipliers of the trajectory NLP.  Empty without constraints."""
+        return self._get("lam", lambda: self._index1()[1])
+
+    def _index1(self):
+        L = self.lagrangian_expr()
+        dLdqd = ca.gradient(L, self.qd)
+        M = ca.hessian(L, self.qd)[0]
+        f = ca.gradient(L, self.q) - ca.mtimes(ca.jacobian(dLdqd, self.q), self.qd)
+        if self.nc:
+            c = self.constraint_expr()
+            C = ca.jacobian(c, self.q)
+            gamma = -ca.mtimes(ca.jacobian(ca.mtimes(C, self.qd), self.q), self.qd)
+            K = ca.blockcat([[M, C.T], [C, ca.SX(self.nc, self.nc)]])
+            sol = ca.solve(K, ca.vertcat(f, gamma))
+            qdd, lam = sol[:self.nq], sol[self.nq:]
+        else:
+            qdd, lam = ca.solve(M, f), ca.SX(0, 1)
+        return (ca.Function("qdd", [self.q, self.qd], [qdd]),
+                ca.Function("lam", [self.q, self.qd], [lam]))
 
     @property
     def points(self) -> Optional[ca.Function]:

@@ -48,7 +48,8 @@ from ..validation import InputError, integer_at_least, positive
 #: ``min_refinement_steps 0``: no forced iterative-refinement solve per KKT solve (Ipopt still
 #: refines when the residual ratio asks for it); measured 0.17 -> 0.145 s for the 1-iteration
 #: final solve of the double pendulum at N = 32000 (midpoint), 0.33 -> 0.28 s (galerkin4).
-TRAJECTORY_IPOPT = {"tol": 1e-12, "max_iter": 100, "constr_mult_init_max": 0, "min_refinement_steps": 0}
+TRAJECTORY_IPOPT = {"tol": 1e-12, "max_iter": 100, "constr_mult_init_max": 0, "min_refinement_steps": 0,
+                    "mumps_pivtol": 1e-8}
 
 
 @dataclass
@@ -209,6 +210,69 @@ def _extrapolate(coarse, fine, nxt: TrajectoryNLP) -> Dict[str, np.ndarray]:
     return _refine(tf, ext, nxt, EXTRAPOLATION_POINTS)
 
 
+#: RK4 substeps per step of the integrated guesses (:func:`_flow_guess`).
+GUESS_SUBSTEPS = 4
+#: The integrated guess is used where ``h ω / GUESS_SUBSTEPS`` is at most this (RK4 is then far
+#: inside its stability interval, |hλ| < 2.78); otherwise a stiff step falls back to the
+#: straight line (coarsest level) or the shifted level guess (windows).
+GUESS_H_OMEGA = 1.0
+_FLOWS: Dict[tuple, ca.Function] = {}
+
+
+def _flow(dm: DiscreteMechanics, h: float, steps: int) -> ca.Function:
+    """RK4 (``GUESS_SUBSTEPS`` substeps per step) of the Euler–Lagrange equations over ``steps`` steps:
+    ``x₀ = (q, q̇) ↦`` columns per step of the state at its end node, the configurations at the
+    scheme's stage times, the constraint multipliers at its start node and at the stage times."""
+    key = (id(dm), float(h), int(steps))
+    fn = _FLOWS.get(key)
+    if fn is not None:
+        return fn
+    n, st = dm.n, dm.scheme.stages
+    acc, lamf = dm.system.acceleration, dm.system.multiplier
+    x = ca.SX.sym("x", 2 * n)
+    f = lambda y: ca.vertcat(y[n:], acc(y[:n], y[n:]))  # noqa: E731
+    dt, y, stage, stage_lam = h / GUESS_SUBSTEPS, x, [], []
+    marks = {round((j + 1) * GUESS_SUBSTEPS / (st + 1)) - 1 for j in range(st)}
+    for j in range(GUESS_SUBSTEPS):
+        k1 = f(y)
+        k2 = f(y + dt / 2 * k1)
+        k3 = f(y + dt / 2 * k2)
+        k4 = f(y + dt * k3)
+        y = y + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        if j in marks:
+            stage.append(y[:n])
+            stage_lam.append(lamf(y[:n], y[n:]))
+    empty = ca.SX(0, 1)
+    step = ca.Function("guess_step", [x], [y, ca.vertcat(*stage) if stage else empty, lamf(x[:n], x[n:]),
+                                           ca.vertcat(*stage_lam) if stage_lam else empty])
+    fn = step.mapaccum("guess_flow", int(steps))
+    if len(_FLOWS) > 64:
+        _FLOWS.clear()
+    _FLOWS[key] = fn
+    return fn
+
+
+def _flow_guess(dm: DiscreteMechanics, q0, qd0, h: float, steps: int) -> Optional[Dict[str, np.ndarray]]:
+    """Guess of ``steps`` steps from ``(q₀, q̇₀)`` by integrating the motion (RK4, substeps): the
+    configuration at the nodes and stage times and the constraint multipliers of the motion
+    (``λ`` of the index-1 equations, the discrete multipliers' sign and scale).  ``None`` if the
+    integration leaves the finite numbers (then the caller keeps its own guess)."""
+    n, s, m = dm.n, dm.s, dm.m
+    out_f = _flow(dm, h, steps)(np.concatenate([q0, qd0]))
+    X, S, Lam, Nu = (np.asarray(v) for v in out_f)
+    if not all(np.all(np.isfinite(v)) for v in (X, S, Lam, Nu)):
+        return None
+    q = np.vstack([np.asarray(q0, float)[None, :], X[:n].T])
+    out = {"q": q.reshape(-1)}
+    if s:
+        out["Z"] = S.T.reshape(-1)
+    if m:
+        out["lam"] = Lam.T.reshape(-1)
+        if s:
+            out["nu"] = Nu.T.reshape(-1)
+    return out
+
+
 def _initial_guess(tn: TrajectoryNLP, qd0: np.ndarray) -> Dict[str, np.ndarray]:
     """Straight-line guess ``q(t) = q0 + t q̇0`` (boundary mode: the chord from q0 to qT)."""
     dm, N = tn.dm, tn.N
@@ -267,7 +331,7 @@ WINDOW_MAX_ITER = 10
 
 
 def _solve_level(tn: TrajectoryNLP, guess, options, verbose, log: List[Level], allow_windows: bool,
-                 final: bool = True):
+                 final: bool = True, omega: float = math.inf):
     first = dict(options or {})
     window_opts = dict(first)
     if allow_windows:
@@ -302,15 +366,20 @@ def _solve_level(tn: TrajectoryNLP, guess, options, verbose, log: List[Level], a
             new_build = False
         w = cache[L]
         w.set_start(Qc[K], pK)
-        shift = Qc[K] - np.asarray(guess["q"]).reshape(N + 1, n)[K]
-        wg = {"q": (np.asarray(guess["q"]).reshape(N + 1, n)[K:K + L + 1] + shift).reshape(-1)}
-        wg["q"][:n] = Qc[K]
-        if s:
-            wg["Z"] = (np.asarray(guess["Z"]).reshape(N, s)[K:K + L] + np.tile(shift, st)).reshape(-1)
-        if m:
-            wg["lam"] = Lc[K:K + L].reshape(-1).copy()
+        wg = None
+        if h * omega <= GUESS_SUBSTEPS * GUESS_H_OMEGA:  # the motion from the window's start state
+            vK = dm.velocities(Qc[K][None, :], pK[None, :])[0]
+            wg = _flow_guess(dm, Qc[K], vK, h, L)
+        if wg is None:  # the level's guess, shifted to the window's start
+            shift = Qc[K] - np.asarray(guess["q"]).reshape(N + 1, n)[K]
+            wg = {"q": (np.asarray(guess["q"]).reshape(N + 1, n)[K:K + L + 1] + shift).reshape(-1)}
+            wg["q"][:n] = Qc[K]
             if s:
-                wg["nu"] = Nc[K:K + L].reshape(-1).copy()
+                wg["Z"] = (np.asarray(guess["Z"]).reshape(N, s)[K:K + L] + np.tile(shift, st)).reshape(-1)
+            if m:
+                wg["lam"] = Lc[K:K + L].reshape(-1).copy()
+                if s:
+                    wg["nu"] = Nc[K:K + L].reshape(-1).copy()
         r = w.solve(wg, options=window_opts, verbose=verbose)
         log.append(Level(N, K + L, r.solver_status, r.iterations, r.build_time_s if new_build else 0.0, r.solve_time_s,
                          w.function_time_s))
@@ -407,7 +476,10 @@ def solve_initial_value(system: LagrangianSystem, q0, qd0, T: float, N: int, sch
     while i < len(levels):
         tn = TrajectoryNLP(dm, levels[i], T, "initial_value", q0, p0)
         if not solved:
-            guess = _initial_guess(tn, qd0)
+            guess = None
+            if tn.h * omega <= GUESS_SUBSTEPS * GUESS_H_OMEGA:
+                guess = _flow_guess(dm, q0, qd0, tn.h, tn.N)
+            guess = guess or _initial_guess(tn, qd0)
         elif len(solved) == 1:
             guess = _refine(*solved[-1], tn)
         else:
@@ -416,7 +488,7 @@ def solve_initial_value(system: LagrangianSystem, q0, qd0, T: float, N: int, sch
         n_log = len(log)
         final = i == len(levels) - 1
         level_options = options if final else {"tol": COARSE_TOL, **(options or {})}
-        res = _solve_level(tn, guess, level_options, verbose, log, allow_windows=True, final=final)
+        res = _solve_level(tn, guess, level_options, verbose, log, allow_windows=True, final=final, omega=omega)
         i += 1
         if res.success:
             solved.append((tn, res.values))
