@@ -41,6 +41,8 @@ SCENES = {
     "bouncing_ball": "castrajectory.problems.bouncing_ball",
     "rectangle_drop": "castrajectory.problems.rectangle_drop",
     "bowl": "castrajectory.problems.bowl",
+    "dzhanibekov": "castrajectory.problems.dzhanibekov",
+    "heavy_top": "castrajectory.problems.heavy_top",
 }
 
 

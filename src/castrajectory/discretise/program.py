@@ -324,6 +324,15 @@ class Program:
     def constraint_names(self) -> List[str]:
         return list(self._cons)
 
+    def sizes(self) -> Dict[str, int]:
+        """What the program carries: decision variables, parameters, equality and inequality rows."""
+        rows = {"equality": 0, "inequality": 0}
+        for c in self._cons.values():
+            rows[c.kind] += c.size
+        return {"variables": int(sum(b.init.size for b in self._vars)),
+                "parameters": int(sum(b.init.size for b in self._params)),
+                "equality_rows": rows["equality"], "inequality_rows": rows["inequality"]}
+
     def _check_new(self, name: str) -> None:
         if self._solver is not None:
             raise RuntimeError("the NLP cannot change after its solver was built")

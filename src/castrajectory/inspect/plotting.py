@@ -212,6 +212,7 @@ _WP_X = {"time": "wall time, build + solve (s)", "solve_time_s": "solve time (s)
          "build_time_s": "build time (s)", "n": "N (steps)"}
 _WP_Y_ALIAS = {"error": "error_final", "energy": "energy_error_max"}
 _WP_Y_LABEL = {"error_final": "final-state error", "energy_error_max": "max |E − E₀|",
+               "flip_interval_error": "|flip interval − 2K(m)/s| (s)",
                "impact_time_error": "max |t_impact − exact| (s)", "apex_error": "max |apex − exact| (m)"}
 _WP_MARKERS = "os^vD<>pPX*h"
 
@@ -277,13 +278,14 @@ def work_precision(rows: List[dict], x: str = "time", y: str = "error",
 
 def work_precision_panels(rows: List[dict], x: str = "time",
                           group: Sequence[str] = ("method", "scheme"),
-                          title: Optional[str] = None) -> Figure:
-    """Two work–precision panels side by side: final error and max energy error against ``x``."""
+                          title: Optional[str] = None, error: str = "error_final") -> Figure:
+    """Two work–precision panels side by side: ``error`` (final-state error by default) and max
+    energy error against ``x``."""
     fig = Figure(figsize=(11.0, 4.6), layout="constrained")
     ax_err, ax_en = fig.subplots(1, 2)
-    _work_precision_axes(ax_err, rows, x, "error_final", group)
+    _work_precision_axes(ax_err, rows, x, error, group)
     _work_precision_axes(ax_en, rows, x, "energy_error_max", group)
-    ax_err.set_title("final-state error", fontsize=10)
+    ax_err.set_title(_WP_Y_LABEL.get(error, error) if error != "error_final" else "final-state error", fontsize=10)
     ax_en.set_title("max energy error", fontsize=10)
     if title:
         fig.suptitle(title, fontsize=11)
@@ -345,6 +347,25 @@ class _SharedPaletteGifWriter(animation.PillowWriter):
                           duration=int(1000 / self.fps), loop=0)
 
 
+def _writer(path, fps: int):
+    """The animation writer for ``path``: a GIF (Pillow) or an MP4 (ffmpeg); ``ValueError`` otherwise."""
+    ext = str(path).lower().rsplit(".", 1)[-1] if "." in str(path) else ""
+    if ext == "gif":
+        return _SharedPaletteGifWriter(fps=fps)
+    if ext == "mp4":
+        if not animation.FFMpegWriter.isAvailable():
+            raise ValueError(f"cannot write {path}: MP4 needs ffmpeg, which was not found; "
+                             "install ffmpeg or ask for a .gif")
+        return animation.FFMpegWriter(fps=fps)
+    raise ValueError(f"cannot write {path}: the animation path must end in .gif or .mp4")
+
+
+def _frames(t: np.ndarray, max_frames: int) -> np.ndarray:
+    """Frame indices evenly in time: the last sample at or before each of ``max_frames`` target times."""
+    targets = np.linspace(t[0], t[-1], min(t.size, int(max_frames)))
+    return np.unique(np.clip(np.searchsorted(t, targets, side="right") - 1, 0, t.size - 1))
+
+
 def animate_points(positions, t, path: str, trail: bool = True, fps: int = 30, max_frames: int = 300,
                    links: bool = True, pivot=(0.0, 0.0), title: Optional[str] = None,
                    trail_time: float = 1.0, dpi: int = 80, ground=None) -> str:
@@ -364,16 +385,7 @@ def animate_points(positions, t, path: str, trail: bool = True, fps: int = 30, m
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.collections import LineCollection
 
-    ext = str(path).lower().rsplit(".", 1)[-1] if "." in str(path) else ""
-    if ext == "gif":
-        writer = _SharedPaletteGifWriter(fps=fps)
-    elif ext == "mp4":
-        if not animation.FFMpegWriter.isAvailable():
-            raise ValueError(f"cannot write {path}: MP4 needs ffmpeg, which was not found; "
-                             "install ffmpeg or ask for a .gif")
-        writer = animation.FFMpegWriter(fps=fps)
-    else:
-        raise ValueError(f"cannot write {path}: the animation path must end in .gif or .mp4")
+    writer = _writer(path, fps)
     P = np.asarray(positions, dtype=float)
     if P.ndim == 2 and P.shape[-1] == 2:
         P = P[:, None, :]
@@ -388,10 +400,7 @@ def animate_points(positions, t, path: str, trail: bool = True, fps: int = 30, m
         raise ValueError("animate_points: positions contain non-finite values")
     if int(max_frames) < 1 or fps <= 0:
         raise ValueError("animate_points: max_frames and fps must be positive")
-    K = t.size
-    # frames evenly in time: the last sample at or before each target time
-    targets = np.linspace(t[0], t[-1], min(K, int(max_frames)))
-    frames = np.unique(np.clip(np.searchsorted(t, targets, side="right") - 1, 0, K - 1))
+    frames = _frames(t, max_frames)
     has_pivot = pivot is not None
     pivot = np.asarray(pivot if has_pivot else (0.0, 0.0), dtype=float).reshape(2)
 
@@ -508,3 +517,100 @@ def contact_plot(t, series: Dict[str, np.ndarray], t_impulse, impulses, referenc
     bx.set_xlabel("t")
     bx.grid(True, alpha=0.3)
     return fig
+
+
+# ----------------------------------------------------------------------------- rigid bodies in 3-D
+def rigid_body_rates(t, omega, flips=(), labels=("ω₁", "ω₂", "ω₃"), title: Optional[str] = None,
+                     flip_interval_exact: Optional[float] = None) -> Figure:
+    """Body angular velocity components against time, the located flips marked."""
+    t = _as_time(t, "rigid_body_rates")
+    w = np.asarray(omega, float).reshape(t.size, 3)
+    fig = Figure(figsize=(7.0, 3.8), layout="constrained")
+    ax = fig.subplots()
+    for i in range(3):
+        ax.plot(t, w[:, i], lw=1.2, label=labels[i])
+    for k, tf in enumerate(np.asarray(flips, float).reshape(-1)):
+        ax.axvline(tf, color="0.4", lw=0.8, ls="--", label="flips" if k == 0 else None)
+    ax.axhline(0.0, color="0.6", lw=0.6)
+    ax.set_xlabel("t")
+    ax.set_ylabel("body angular velocity")
+    txt = title or "rigid body: body angular velocity"
+    if flip_interval_exact is not None and np.isfinite(flip_interval_exact):
+        txt += f" (analytic flip interval {flip_interval_exact:.6g})"
+    ax.set_title(txt, fontsize=10)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8, loc="upper right")
+    return fig
+
+
+def heavy_top_angles(t, tilt, precession, title: Optional[str] = None) -> Figure:
+    """Tilt (nutation) and precession angle of a top against time."""
+    t = _as_time(t, "heavy_top_angles")
+    fig = Figure(figsize=(6.4, 4.6), layout="constrained")
+    ax, bx = fig.subplots(2, 1, sharex=True)
+    ax.plot(t, np.asarray(tilt, float), lw=1.2, color="C0")
+    ax.set_ylabel("tilt θ (rad)")
+    ax.grid(True, alpha=0.3)
+    ax.set_title(title or "heavy top", fontsize=10)
+    bx.plot(t, np.asarray(precession, float), lw=1.2, color="C1")
+    bx.set_ylabel("precession φ (rad)")
+    bx.set_xlabel("t")
+    bx.grid(True, alpha=0.3)
+    return fig
+
+
+_BOX_EDGES = [(0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4), (0, 4), (1, 5), (2, 6), (3, 7)]
+
+
+def animate_rigid_body(t, rotations, path: str, size, momentum=None, center=None, fps: int = 30,
+                       max_frames: int = 150, title: Optional[str] = None, dpi: int = 80) -> str:
+    """Animate a box tumbling in 3-D (matplotlib's mplot3d) and write a GIF or an MP4.
+
+    ``rotations`` (K, 3, 3) are the body-to-space rotations at times ``t``; the box has edges
+    ``size`` along the body axes, centred at ``center`` (K, 3; the origin by default).  The body
+    axes are drawn from the centre (red, green, blue for 1, 2, 3) and ``momentum`` (a fixed
+    spatial vector, e.g. the angular momentum) as a black arrow.  Frames are subsampled evenly
+    in time to at most ``max_frames``.  Returns ``path``.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    writer = _writer(path, fps)
+    t = _as_time(t, "animate_rigid_body")
+    R = np.asarray(rotations, float)
+    if R.shape != (t.size, 3, 3) or not np.all(np.isfinite(R)):
+        raise ValueError(f"animate_rigid_body: rotations must be finite with shape ({t.size}, 3, 3)")
+    C = np.zeros((t.size, 3)) if center is None else np.asarray(center, float).reshape(t.size, 3)
+    half = 0.5 * np.asarray(size, float).reshape(3)
+    signs = np.array([(-1, -1, -1), (1, -1, -1), (1, 1, -1), (-1, 1, -1),
+                      (-1, -1, 1), (1, -1, 1), (1, 1, 1), (-1, 1, 1)], float)
+    corners = signs * half
+    reach = float(np.linalg.norm(half)) * 1.15 + float(np.max(np.abs(C))) if C.size else 1.0
+    fig = Figure(figsize=(4.4, 4.4), dpi=dpi)
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot(projection="3d")
+    ax.set_xlim(-reach, reach)
+    ax.set_ylim(-reach, reach)
+    ax.set_zlim(-reach, reach)
+    ax.set_box_aspect((1, 1, 1))
+    ax.tick_params(labelsize=6)
+    if title:
+        ax.set_title(title, fontsize=9)
+    edge_lines = [ax.plot([], [], [], "-", color="0.25", lw=1.2)[0] for _ in _BOX_EDGES]
+    axis_lines = [ax.plot([], [], [], "-", color=c, lw=2.0)[0] for c in ("C3", "C2", "C0")]
+    if momentum is not None:
+        Lv = np.asarray(momentum, float).reshape(3)
+        Lv = Lv / max(float(np.linalg.norm(Lv)), 1e-300) * reach * 0.9
+        ax.plot([0, Lv[0]], [0, Lv[1]], [0, Lv[2]], "-", color="k", lw=1.5)
+        ax.text(Lv[0], Lv[1], Lv[2], "L", fontsize=8)
+    stamp = ax.text2D(0.02, 0.95, "", transform=ax.transAxes, fontsize=8)
+    with writer.saving(fig, str(path), dpi=dpi):
+        for i in _frames(t, max_frames):
+            P = C[i] + corners @ R[i].T
+            for line, (a, b) in zip(edge_lines, _BOX_EDGES):
+                line.set_data_3d([P[a, 0], P[b, 0]], [P[a, 1], P[b, 1]], [P[a, 2], P[b, 2]])
+            for k, line in enumerate(axis_lines):
+                tip = C[i] + R[i][:, k] * half[k] * 1.4
+                line.set_data_3d([C[i, 0], tip[0]], [C[i, 1], tip[1]], [C[i, 2], tip[2]])
+            stamp.set_text(f"t = {t[i]:.2f}")
+            writer.grab_frame()
+    return str(path)

@@ -216,7 +216,7 @@ GUESS_SUBSTEPS = 4
 #: inside its stability interval, |hλ| < 2.78); otherwise a stiff step falls back to the
 #: straight line (coarsest level) or the shifted level guess (windows).
 GUESS_H_OMEGA = 1.0
-_FLOWS: Dict[tuple, ca.Function] = {}
+_FLOWS: Dict[tuple, tuple] = {}  # (id(dm), h, steps) -> (dm, flow function)
 
 
 def _flow(dm: DiscreteMechanics, h: float, steps: int) -> ca.Function:
@@ -224,9 +224,9 @@ def _flow(dm: DiscreteMechanics, h: float, steps: int) -> ca.Function:
     ``x₀ = (q, q̇) ↦`` columns per step of the state at its end node, the configurations at the
     scheme's stage times, the constraint multipliers at its start node and at the stage times."""
     key = (id(dm), float(h), int(steps))
-    fn = _FLOWS.get(key)
-    if fn is not None:
-        return fn
+    hit = _FLOWS.get(key)
+    if hit is not None and hit[0] is dm:  # the same object, not a new one at a reused id
+        return hit[1]
     n, st = dm.n, dm.scheme.stages
     acc, lamf = dm.system.acceleration, dm.system.multiplier
     x = ca.SX.sym("x", 2 * n)
@@ -248,7 +248,7 @@ def _flow(dm: DiscreteMechanics, h: float, steps: int) -> ca.Function:
     fn = step.mapaccum("guess_flow", int(steps))
     if len(_FLOWS) > 64:
         _FLOWS.clear()
-    _FLOWS[key] = fn
+    _FLOWS[key] = (dm, fn)
     return fn
 
 
@@ -472,6 +472,7 @@ def solve_initial_value(system: LagrangianSystem, q0, qd0, T: float, N: int, sch
     omega = _fastest_frequency(system, q0, qd0)
     coarsest = max(coarsest, int(math.ceil(T * omega / COARSE_H_OMEGA)))
     levels = _levels(N, coarsest)
+    windowed: List[bool] = []  # per level solved: did it need horizon windows?
     i = 0
     while i < len(levels):
         tn = TrajectoryNLP(dm, levels[i], T, "initial_value", q0, p0)
@@ -497,7 +498,19 @@ def solve_initial_value(system: LagrangianSystem, q0, qd0, T: float, N: int, sch
             # is no worse than this level's was.
             if extrapolated and len(log) == n_log + 1 and res.iterations <= FINAL_JUMP_ITERATIONS:
                 i = max(i, len(levels) - 1)
+        windowed.append(len(log) > n_log + 1)
+        if windowed[-2:] == [True, True]:
+            # Two levels in a row needed horizon windows (the guess from the coarser level was too
+            # far for one Newton solve: chaotic or near-separatrix motion, not a coarse grid's
+            # passing trouble).  Finer levels would need them again, and their windows start from
+            # the integrated motion, not from the levels: go to N itself.
+            i = max(i, len(levels) - 1)
         # A coarse level that fails is too coarse to resolve the motion: drop it and go finer.
+    if not res.success and T / N * omega > COARSE_H_OMEGA:
+        # the motion is not resolved by the grid (e.g. a fast spin at a coarse N): say so
+        res.message += (f"; the grid does not resolve the motion (h ω = {T / N * omega:.3g} at the start, "
+                        f"where ω is the fastest linearised frequency or coordinate rate): "
+                        f"N >= {int(math.ceil(T * omega / COARSE_H_OMEGA))} resolves it")
     return _finish(tn, res, log, "initial_value")
 
 

@@ -1,0 +1,198 @@
+#!/usr/bin/env python
+"""Benchmark of the rigid-body scenes (issue 12's goals), measured in one run.
+
+This is a benchmark, not a test: it measures and reports, and exits with status 0 (2 for bad
+flags).  PASS/MISS lines say whether a goal was met in *this* run on *this* machine.
+
+Scene: the free body I = (1, 2, 3), ω₀ = (1e-3, 1, 1e-3) near the intermediate axis, flip
+interval 27.530841 s (2K(m)/s).
+
+(a) 20 flips (T = 560 s, N = --n-flips20): the whole-trajectory solve against marching the same
+    discrete equations (stepping.march), midpoint and galerkin4.  Goal: whole within 1.0x the march.
+(b) 4 flips (T = 100 s): flip-interval error against wall time (build + solve) for every
+    whole-trajectory scheme, the march, RK4 on Euler's equations (no renormalisation) and scipy's
+    DOP853 (events on the intermediate rate; skipped with a message without scipy); the time to
+    reach 1e-6 and 1e-9, interpolated in log-log between the bracketing runs; the drift of |L|
+    (relative) of each run.  Goal: the fastest whole-trajectory scheme within 5x DOP853 at 1e-9,
+    conserving |L| to 1e-12 at every N.
+(c) the NLP's size per node: variables and rows of the whole-trajectory program (no contact, no
+    gravity: the free body carries only its rotation and the unit-norm constraint).
+
+    python scripts/bench_rigidbody.py
+    python scripts/bench_rigidbody.py --quick
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+import time
+
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import numpy as np  # noqa: E402
+
+from castrajectory.baselines import rigidbody as euler  # noqa: E402
+from castrajectory.discretise.lagrangians import DiscreteMechanics  # noqa: E402
+from castrajectory.inspect import rigidbody as readings  # noqa: E402
+from castrajectory.inspect.study import time_to_error  # noqa: E402
+from castrajectory.models import rigidbody as rb  # noqa: E402
+from castrajectory.solve import simulate  # noqa: E402
+from castrajectory.solve.trajectory import TrajectoryNLP  # noqa: E402
+
+I = rb.Inertia(1.0, 2.0, 3.0)
+W0 = np.array([1e-3, 1.0, 1e-3])
+Q0 = np.array([1.0, 0.0, 0.0, 0.0])
+EXACT = rb.flip_interval(I, W0)
+
+
+def lagrangian_run(system, T, n, scheme, method):
+    t0 = time.perf_counter()
+    run = simulate.simulate(system, Q0, rb.quaternion_rate(Q0, W0), T, n, scheme, method)
+    wall = time.perf_counter() - t0
+    r = readings.free_body(system, run, I, W0)
+    return {"label": f"{method} {scheme}", "n": n, "status": run.status, "time_s": wall,
+            "iterations": run.iterations, "error": r["flip_interval_error"], "flips": r["flip_times"].size,
+            "L_drift": r["angular_momentum_norm_drift"]}
+
+
+def rk4_run(system, T, n):
+    t0 = time.perf_counter()
+    st = euler.euler_rk4(system, I.moments, Q0, W0, T, n)
+    wall = time.perf_counter() - t0
+    run = simulate.Run(t=st.t, q=st.q, v=st.qd, energy=st.energy, scheme=None, method="rk4-euler", detail=st,
+                       **st.contract())
+    r = readings.free_body(system, run, I, W0)
+    return {"label": "rk4 (Euler's equations)", "n": n, "status": run.status, "time_s": wall, "iterations": 0,
+            "error": r["flip_interval_error"], "flips": r["flip_times"].size,
+            "L_drift": r["angular_momentum_norm_drift"]}
+
+
+def dop853_runs(T, rtols):
+    try:
+        from scipy.integrate import solve_ivp
+    except ImportError:
+        print("  DOP853: skipped (scipy is not installed: pip install '.[bench]')")
+        return []
+    Im = I.moments
+
+    def f(t, w):
+        return np.cross(Im * w, w) / Im
+
+    def flip(t, w):
+        return w[1]
+
+    rows = []
+    for rtol in rtols:
+        best, out = math.inf, None
+        for _ in range(3):
+            t0 = time.perf_counter()
+            sol = solve_ivp(f, (0.0, T), W0, method="DOP853", rtol=rtol, atol=rtol * 1e-2, events=flip,
+                            dense_output=False)
+            best = min(best, time.perf_counter() - t0)
+            out = sol
+        ft = out.t_events[0]
+        slope = float(np.polyfit(np.arange(ft.size), ft, 1)[0]) if ft.size >= 2 else math.nan
+        w = out.y[:, -1]
+        L_drift = abs(np.linalg.norm(Im * w) - np.linalg.norm(Im * W0)) / np.linalg.norm(Im * W0)
+        rows.append({"label": "DOP853 (scipy)", "n": 1.0 / rtol, "status": "ok" if out.success else "failed",
+                     "time_s": best, "iterations": 0, "error": abs(slope - EXACT), "flips": ft.size,
+                     "L_drift": float(L_drift)})
+    return rows
+
+
+def row_line(r):
+    err = "-" if r["error"] is None else f"{r['error']:.2e}"
+    return (f"  {r['label']:24s} {r['n']:>9.3g} {r['status']:>4s} {r['iterations']:6d} {r['time_s']:9.4f} "
+            f"{r['flips']:5d} {err:>9s} {r['L_drift']:9.1e}")
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--quick", action="store_true", help="smaller sweeps (about a minute)")
+    p.add_argument("--n-flips20", type=int, default=11200, help="N of the 20-flip scene (T = 560 s)")
+    args = p.parse_args(argv)
+    system = rb.free_body(I)
+    print(f"castrajectory rigid-body benchmark: I = {I.moments.tolist()}, omega0 = {W0.tolist()}, "
+          f"flip interval 2K(m)/s = {EXACT:.9f} s")
+    lagrangian_run(system, 20.0, 400, "galerkin4", "whole")  # warm-up: compiles and loads Ipopt
+    ratios = {}
+    # (a)
+    print(f"\n(a) 20 flips, T = 560 s, N = {args.n_flips20}: whole trajectory vs march of the same scheme")
+    print("  method/scheme               N status  iter   wall s flips flip err    |L| drift")
+    for scheme in ("midpoint", "galerkin4"):
+        w = lagrangian_run(system, 560.0, args.n_flips20, scheme, "whole")
+        m = lagrangian_run(system, 560.0, args.n_flips20, scheme, "march")
+        print(row_line(w))
+        print(row_line(m))
+        ratios[f"whole/march {scheme}, 20 flips"] = w["time_s"] / m["time_s"]
+    # (b)
+    print("\n(b) 4 flips, T = 100 s: flip-interval error against wall time (build + solve)")
+    print("  method/scheme               N status  iter   wall s flips flip err    |L| drift")
+    sweeps = {("whole", "midpoint"): [2000, 4000, 8000, 16000] if args.quick else [2000, 4000, 8000, 16000, 32000],
+              ("whole", "trapezoid"): [2000, 4000, 8000] if args.quick else [2000, 4000, 8000, 16000, 32000],
+              ("whole", "galerkin4"): [1000, 2000, 4000, 8000] if args.quick else [1000, 2000, 4000, 8000, 16000],
+              ("march", "galerkin4"): [1000, 2000, 4000, 8000] if args.quick else [1000, 2000, 4000, 8000, 16000]}
+    rows = []
+    for (method, scheme), ns in sweeps.items():
+        for n in ns:
+            r = lagrangian_run(system, 100.0, n, scheme, method)
+            rows.append(r)
+            print(row_line(r))
+    for n in ([1000, 2000, 4000, 8000] if args.quick else [1000, 2000, 4000, 8000, 16000, 32000]):
+        r = rk4_run(system, 100.0, n)
+        rows.append(r)
+        print(row_line(r))
+    for r in dop853_runs(100.0, [1e-6, 1e-8, 1e-10, 1e-11, 1e-12, 1e-13]):
+        rows.append(r)
+        print(row_line(r))
+    for r in rows:  # time_to_error reads "error" and "time_s"
+        r["success"] = r["status"] == "ok" and r["error"] is not None
+        r["error"] = math.nan if r["error"] is None else r["error"]
+    labels = list(dict.fromkeys(r["label"] for r in rows))
+    print("\n  time to a flip-interval error of 1e-6 and 1e-9 (interpolated in log-log; max |L| drift of the sweep)")
+    reached = {}
+    for lab in labels:
+        cells = []
+        for target in (1e-6, 1e-9):
+            t = time_to_error(rows, lab, target, key="error", cost="time_s")
+            reached[(lab, target)] = t["cost"]
+            cells.append(f"{t['cost']:.4f} s ({t['note']})" if math.isfinite(t["cost"]) else f"{t['note']}")
+        drift = max(r["L_drift"] for r in rows if r["label"] == lab)
+        print(f"  {lab:24s} 1e-6: {cells[0]:32s} 1e-9: {cells[1]:32s} |L| drift <= {drift:.1e}")
+    whole = [lab for lab in labels if lab.startswith("whole")]
+    best = min(whole, key=lambda lab: reached.get((lab, 1e-9), math.inf))
+    dop = reached.get(("DOP853 (scipy)", 1e-9), math.nan)
+    tw = reached.get((best, 1e-9), math.nan)
+    if math.isfinite(dop) and math.isfinite(tw):
+        ratios[f"time to 1e-9: {best} / DOP853"] = tw / dop
+    # (c)
+    print("\n(c) the whole-trajectory NLP per node (free body; no contact, no gravity)")
+    for scheme in ("midpoint", "galerkin4"):
+        dm = DiscreteMechanics(system, scheme)
+        n = 1000
+        tn = TrajectoryNLP(dm, n, 10.0, "initial_value", Q0, np.zeros(4))
+        sz = tn.nlp.sizes()
+        print(f"  {scheme:9s} variables {sz['variables'] / n:.2f}/node, equality rows {sz['equality_rows'] / n:.2f}/node, "
+              f"inequality rows {sz['inequality_rows']}, parameters {sz['parameters']} (N = {n})")
+    print("\nratios measured in this run:")
+    for k, v in ratios.items():
+        print(f"  {k}: {v:.2f}")
+    print("goals:")
+    for scheme in ("midpoint", "galerkin4"):
+        v = ratios[f"whole/march {scheme}, 20 flips"]
+        print(f"  {'PASS' if v <= 1.0 else 'MISS'}  (a) whole {scheme} within 1.0x the march over 20 flips: ratio {v:.2f}")
+    drift_whole = max(r["L_drift"] for r in rows if r["label"].startswith("whole"))
+    if math.isfinite(dop) and math.isfinite(tw):
+        ok = tw <= 5 * dop and drift_whole <= 1e-12
+        print(f"  {'PASS' if ok else 'MISS'}  (b) fastest whole ({best}) within 5x DOP853 at 1e-9: "
+              f"{tw:.4f} s vs {dop:.4f} s, ratio {tw / dop:.1f}; |L| drift of every whole run <= {drift_whole:.1e}")
+    else:
+        print("  (b) not measured: DOP853 or the whole-trajectory sweep did not reach 1e-9")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

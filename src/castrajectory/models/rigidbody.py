@@ -1,0 +1,338 @@
+"""Rigid bodies in 3-D: orientation as a unit quaternion, the inertia, the free body and the heavy top.
+
+Representation
+--------------
+The orientation is a quaternion ``q = (w, x, y, z)`` with the holonomic constraint
+``(qᵀq − 1)/2 = 0``, and the body-to-space rotation is the *quadratic* map
+
+    R(q) v = q ⊗ v ⊗ q̄,      R(q) = |q|² × (the rotation by q/|q|),
+
+so every configuration space of the package (flat coordinates plus holonomic constraints)
+carries it unchanged: atoms ``x_a = R(q) d_a + c`` and gravity, springs and potentials on
+body points are ordinary expressions of ``q``, and the midpoint, trapezoid and galerkin4
+discrete Lagrangians apply as they are, the constraint rows keeping ``|q| = 1`` at every
+node (and galerkin4 stage) to solver tolerance.  ``R`` is a group homomorphism,
+``R(p ⊗ q) = R(p) R(q)``, and left and right multiplication by a unit quaternion are linear
+isometries of ℝ⁴: a rotation-invariant Lagrangian gives a rotation-invariant discrete
+Lagrangian for every scheme, and the discrete Noether theorem conserves the matching
+momentum exactly (``docs/derivations.md``, "Rigid bodies in 3-D").
+
+Kinetic energy from an inertia
+------------------------------
+With principal moments ``I = (I₁, I₂, I₃)`` about the reference point and second moments
+``J_i = ∫ d_i² dm = (I_j + I_k − I_i)/2`` (≥ 0 exactly when the triangle inequality holds),
+
+    K_rot = ½ Σ_i J_i |Ṙ(q) e_i|²        (= ½ ωᵀ I ω on |q| = 1),
+
+the atoms' formula ``Σ ½ m_a |ẋ_a|²`` summed over the body.  Off the sphere ``|q| = 1`` this
+quadratic form stays positive definite (a radial velocity scales ``R``), so the mass matrix
+in ℝ⁴ is regular and the constraint removes the radial direction.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Optional, Sequence
+
+import casadi as ca
+import numpy as np
+
+from ..validation import InputError, finite, positive
+from .mechanics import Gravity, LagrangianSystem
+
+AXES = np.eye(3)
+
+
+# ----------------------------------------------------------------------------- quaternion algebra
+def quat_multiply(p, q):
+    """Hamilton product ``p ⊗ q`` of quaternions ``(w, x, y, z)`` (CasADi or numpy, last axis 4)."""
+    if isinstance(p, (ca.SX, ca.MX, ca.DM)) or isinstance(q, (ca.SX, ca.MX, ca.DM)):
+        pw, pv, qw, qv = p[0], p[1:4], q[0], q[1:4]
+        return ca.vertcat(pw * qw - ca.dot(pv, qv), pw * qv + qw * pv + ca.cross(pv, qv))
+    p, q = np.asarray(p, float), np.asarray(q, float)
+    pw, pv, qw, qv = p[..., :1], p[..., 1:], q[..., :1], q[..., 1:]
+    return np.concatenate([pw * qw - np.sum(pv * qv, axis=-1, keepdims=True),
+                           pw * qv + qw * pv + np.cross(pv, qv)], axis=-1)
+
+
+def quat_conjugate(q):
+    """``q̄ = (w, −x, −y, −z)``."""
+    if isinstance(q, (ca.SX, ca.MX, ca.DM)):
+        return ca.vertcat(q[0], -q[1:4])
+    q = np.asarray(q, float)
+    return np.concatenate([q[..., :1], -q[..., 1:]], axis=-1)
+
+
+def rotation(q):
+    """The quadratic rotation map ``R(q)`` (3 × 3), ``R(q) v = q ⊗ v ⊗ q̄``; CasADi or numpy (…, 4)."""
+    sym = isinstance(q, (ca.SX, ca.MX, ca.DM))
+    w, x, y, z = (q[0], q[1], q[2], q[3]) if sym else np.moveaxis(np.asarray(q, float), -1, 0)
+    rows = [[w * w + x * x - y * y - z * z, 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), w * w - x * x + y * y - z * z, 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), w * w - x * x - y * y + z * z]]
+    if sym:
+        return ca.vertcat(*[ca.horzcat(*r) for r in rows])
+    return np.stack([np.stack(r, axis=-1) for r in rows], axis=-2)
+
+
+def axis_angle(axis: Sequence[float], angle: float) -> np.ndarray:
+    """The unit quaternion of a rotation by ``angle`` about ``axis``."""
+    a = np.asarray(axis, float)
+    a = a / np.linalg.norm(a)
+    return np.concatenate([[math.cos(angle / 2)], math.sin(angle / 2) * a])
+
+
+def body_rates(q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+    """Body angular velocity ``ω = 2 Im(q̄ ⊗ q̇)`` for rows of unit quaternions and their rates."""
+    return 2.0 * quat_multiply(quat_conjugate(q), qd)[..., 1:]
+
+
+def quaternion_rate(q: np.ndarray, omega_body: np.ndarray) -> np.ndarray:
+    """``q̇ = ½ q ⊗ (0, ω)`` for a body angular velocity ``ω``."""
+    q = np.asarray(q, float)
+    w = np.concatenate([np.zeros(q.shape[:-1] + (1,)), np.asarray(omega_body, float)], axis=-1)
+    return 0.5 * quat_multiply(q, w)
+
+
+def _momentum_map(q, p, side: str) -> np.ndarray:
+    """``J_i = pᵀ(½ ê_i ⊗ q)`` (``side = "left"``: spatial rotations) or ``pᵀ(½ q ⊗ ê_i)`` ("right": body)."""
+    q, p = np.atleast_2d(q), np.atleast_2d(p)
+    out = np.empty(q.shape[:-1] + (3,))
+    for i in range(3):
+        xi = np.zeros(4)
+        xi[i + 1] = 1.0
+        gen = quat_multiply(xi, q) if side == "left" else quat_multiply(q, xi)
+        out[..., i] = 0.5 * np.sum(p * gen, axis=-1)
+    return out
+
+
+def spatial_momentum(q: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """Spatial angular momentum from quaternion momenta: the momentum map of ``q ↦ u ⊗ q``.
+
+    The generator of a spatial rotation ``ξ`` is ``δq = ½ ξ̂ ⊗ q``, so ``L·ξ = pᵀ(½ ξ̂ ⊗ q)``.
+    A radial momentum (the constraint force ``λ q``) contributes nothing.
+    """
+    return _momentum_map(q, p, "left")
+
+
+def body_momentum(q: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """Body angular momentum ``Π = pᵀ(½ q ⊗ ê_i)``: the momentum map of ``q ↦ q ⊗ u`` (body rotations)."""
+    return _momentum_map(q, p, "right")
+
+
+# ----------------------------------------------------------------------------- inertia
+@dataclass(frozen=True)
+class Inertia:
+    """Principal moments of inertia ``(I₁, I₂, I₃)`` about the body's reference point, checked once.
+
+    Refused: a non-finite or non-positive moment, and a moment larger than the sum of the
+    other two (the triangle inequality ``I_i ≤ I_j + I_k``: a real mass distribution has
+    non-negative second moments ``J_i = (I_j + I_k − I_i)/2``).
+    """
+
+    I1: float
+    I2: float
+    I3: float
+
+    def __post_init__(self):
+        for k, name in enumerate(("I1", "I2", "I3")):
+            object.__setattr__(self, name, positive(f"inertia {name}", getattr(self, name)))
+        m = self.moments
+        for i in range(3):
+            j, k = (i + 1) % 3, (i + 2) % 3
+            if m[j] + m[k] < m[i] * (1.0 - 1e-12):
+                raise InputError(f"inertia I{j + 1} + I{k + 1} < I{i + 1} ({m[j]:g} + {m[k]:g} < {m[i]:g}): "
+                                 f"no mass distribution has these moments (triangle inequality)")
+
+    @classmethod
+    def box(cls, width: float, height: float, depth: float, mass: float) -> "Inertia":
+        """Uniform box with edges ``width``, ``height``, ``depth`` along the body axes x, y, z."""
+        w, h, d = positive("box width", width), positive("box height", height), positive("box depth", depth)
+        m = positive("mass", mass)
+        return cls(m * (h * h + d * d) / 12.0, m * (w * w + d * d) / 12.0, m * (w * w + h * h) / 12.0)
+
+    @property
+    def moments(self) -> np.ndarray:
+        return np.array([self.I1, self.I2, self.I3])
+
+    @property
+    def second_moments(self) -> np.ndarray:
+        """``J_i = ∫ d_i² dm = (I_j + I_k − I_i)/2`` (non-negative by the triangle inequality)."""
+        m = self.moments
+        return np.maximum(0.5 * (m.sum() - 2.0 * m), 0.0)
+
+    def shifted(self, mass: float, offset: Sequence[float]) -> "Inertia":
+        """Moments about a point ``offset`` along a principal axis from the centre of mass (Steiner)."""
+        d = np.asarray(offset, float)
+        extra = mass * (float(d @ d) - d * d)
+        m = self.moments + extra
+        return Inertia(*m)
+
+
+# ----------------------------------------------------------------------------- the kinetic term
+@dataclass
+class RigidBody:
+    """Kinetic energy of a rigid body with orientation quaternion ``quat`` (4 SX symbols of q).
+
+    ``K = ½ Σ_i J_i |Ṙ(quat) e_i|² + ½ mass |ċ|²`` with ``J`` the :attr:`Inertia.second_moments`
+    (about the reference point) and, when ``center`` (3 SX expressions of q) and ``mass`` are
+    given, the translation of the reference point.  Composes with other kinetic terms in a
+    :class:`~castrajectory.models.mechanics.LagrangianSystem` (a list of terms).
+    """
+
+    quat: object
+    inertia: Inertia
+    center: Optional[object] = None
+    mass: Optional[float] = None
+
+    def energy(self, q, qd):
+        Rq = rotation(self.quat)
+        K = ca.SX(0)
+        for i, Ji in enumerate(self.inertia.second_moments):
+            if Ji > 0.0:
+                v = ca.mtimes(ca.jacobian(Rq[:, i], q), qd)
+                K += 0.5 * float(Ji) * ca.dot(v, v)
+        if self.center is not None:
+            v = ca.mtimes(ca.jacobian(self.center, q), qd)
+            K += 0.5 * float(self.mass) * ca.dot(v, v)
+        return K
+
+
+def unit_norm(quat):
+    """The holonomic constraint ``(qᵀq − 1)/2 = 0`` of an orientation quaternion."""
+    return (ca.dot(quat, quat) - 1.0) / 2.0
+
+
+def box_points(quat, size: Sequence[float], center=None):
+    """World positions of a box's 8 corners and the body axes' tips, for pictures (SX expressions)."""
+    R = rotation(quat)
+    c = ca.SX.zeros(3) if center is None else center
+    half = 0.5 * np.asarray(size, float)
+    pts = [c + ca.mtimes(R, ca.DM(half * np.array(s))) for s in
+           [(-1, -1, -1), (1, -1, -1), (1, 1, -1), (-1, 1, -1), (-1, -1, 1), (1, -1, 1), (1, 1, 1), (-1, 1, 1)]]
+    return pts
+
+
+QUAT_NAMES = ["qw", "qx", "qy", "qz"]
+
+
+def free_body(inertia: Inertia, size: Optional[Sequence[float]] = None) -> LagrangianSystem:
+    """A torque-free rigid body (orientation only): ``L = ½ ωᵀ I ω``, constraint ``|q| = 1``.
+
+    ``size`` (box edges along the body axes) gives the points drawn in pictures; by default a
+    box with the same principal moments (unit mass).
+    """
+    q = ca.SX.sym("q", 4)
+    if size is None:
+        size = equivalent_box(inertia)
+    return LagrangianSystem(q, RigidBody(q, inertia), constraints=[unit_norm(q)], names=QUAT_NAMES,
+                            points_expr=box_points(q, size))
+
+
+def equivalent_box(inertia: Inertia, mass: float = 1.0) -> np.ndarray:
+    """Edges of the uniform box of ``mass`` with these principal moments (for pictures)."""
+    J = inertia.second_moments / mass  # = edge²/12
+    return np.sqrt(np.maximum(12.0 * J, 1e-6 * max(12.0 * J.max(), 1e-300)))
+
+
+def heavy_top(mass: float, inertia: Inertia, distance: float, g: float = 9.81) -> LagrangianSystem:
+    """A symmetric top with its pivot fixed at the origin, the centre of mass at ``distance``
+    along the body axis ``e₃``, gravity ``g`` along ``−e_z`` (z up).
+
+    ``inertia`` is about the centre of mass (``I₁ = I₂``); the kinetic term uses the moments
+    about the pivot (Steiner).  Gravity is the ordinary :class:`~castrajectory.models.mechanics.Gravity`
+    term on the centre of mass's height ``(R(q) l e₃)_z``; with ``g = 0`` it is left out.
+    """
+    m = positive("mass", mass)
+    ell = positive("distance", distance)
+    g = finite("g", g)
+    if abs(inertia.I1 - inertia.I2) > 1e-12 * max(inertia.I1, inertia.I2):
+        raise InputError(f"a symmetric top needs I1 = I2 (got {inertia.I1:g}, {inertia.I2:g})")
+    q = ca.SX.sym("q", 4)
+    pivot_inertia = inertia.shifted(m, [0.0, 0.0, ell])
+    com = ca.mtimes(rotation(q), ca.DM([0.0, 0.0, ell]))
+    terms = [Gravity(g, heights=[com[2]], masses=[m])] if g != 0.0 else []
+    r = 0.5 * np.sqrt(max(inertia.I1, 1e-300) / m)
+    points = [ca.SX.zeros(3), com] + [com + ca.mtimes(rotation(q), ca.DM(r * np.array(d)))
+                                      for d in [(1, 0, 0), (0, 1, 0), (-1, 0, 0), (0, -1, 0), (1, 0, 0)]]
+    return LagrangianSystem(q, RigidBody(q, pivot_inertia), terms, [unit_norm(q)], names=QUAT_NAMES,
+                            points_expr=points)
+
+
+# ----------------------------------------------------------------------------- oracles
+def elliptic_k(m: float) -> float:
+    """Complete elliptic integral of the first kind ``K(m) = ∫₀^{π/2} dθ/√(1 − m sin²θ)`` (AGM)."""
+    if not 0.0 <= m < 1.0:
+        raise ValueError("K(m) needs 0 <= m < 1")
+    a, b = 1.0, math.sqrt(1.0 - m)
+    for _ in range(100):
+        if abs(a - b) <= 1e-16 * a:
+            break
+        a, b = 0.5 * (a + b), math.sqrt(a * b)
+    return math.pi / (2.0 * a)
+
+
+def flip_interval(inertia: Inertia, omega0: Sequence[float]) -> float:
+    """Time between two sign changes of the intermediate-axis rate (Landau–Lifshitz §37): ``2K(m)/s``.
+
+    With the moments sorted ``I_a < I_b < I_c`` (``I_b`` the intermediate one), energy ``2E = Σ I_i ω_i²``
+    and ``L² = Σ I_i² ω_i²``: for ``L² > 2E I_b``
+    ``m = (I_b − I_a)(2E I_c − L²)/((I_c − I_b)(L² − 2E I_a))``,
+    ``s = √((I_c − I_b)(L² − 2E I_a)/(I_a I_b I_c))``; otherwise the roles of ``I_a`` and ``I_c`` swap.
+    ``inf`` on the separatrix or for an intermediate rate that never changes sign (a spin near
+    the major or minor axis).
+    """
+    I = inertia.moments
+    w = np.asarray(omega0, float)
+    order = np.argsort(I)
+    Ia, Ib, Ic = I[order]
+    if not (Ia < Ib < Ic):
+        return math.inf
+    E2 = float(np.sum(I * w * w))
+    L2 = float(np.sum((I * w) ** 2))
+    if L2 > E2 * Ib:
+        m = (Ib - Ia) * (E2 * Ic - L2) / ((Ic - Ib) * (L2 - E2 * Ia))
+        s = math.sqrt((Ic - Ib) * (L2 - E2 * Ia) / (Ia * Ib * Ic))
+    elif L2 < E2 * Ib:
+        m = (Ic - Ib) * (L2 - E2 * Ia) / ((Ib - Ia) * (E2 * Ic - L2))
+        s = math.sqrt((Ib - Ia) * (E2 * Ic - L2) / (Ia * Ib * Ic))
+    else:
+        return math.inf
+    if not 0.0 <= m < 1.0 or s == 0.0:
+        return math.inf
+    # the intermediate rate changes sign only when it oscillates about zero (cn-type): near the
+    # major or minor axis it is the major (or minor) rate that oscillates, the intermediate one too
+    # (sn-type); both types change sign every 2K/s, except the dn-type component
+    return 2.0 * elliptic_k(m) / s
+
+
+def intermediate_axis(inertia: Inertia) -> int:
+    """Index of the intermediate principal axis (0, 1 or 2)."""
+    return int(np.argsort(inertia.moments)[1])
+
+
+def sign_changes(t: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Times where ``y`` changes sign, located between nodes by cubic interpolation through the
+    four nearest nodes (second-order root of the local cubic; fourth-order accurate in ``h``)."""
+    t, y = np.asarray(t, float), np.asarray(y, float)
+    idx = np.where(np.sign(y[:-1]) * np.sign(y[1:]) < 0)[0]
+    out = []
+    for k in idx:
+        lo = min(max(k - 1, 0), len(t) - 4) if len(t) >= 4 else 0
+        ts, ys = t[lo:lo + 4], y[lo:lo + 4]
+        a, b = t[k], t[k + 1]
+        # the linear root, then Newton on the cubic through the four nodes
+        x = a - y[k] * (b - a) / (y[k + 1] - y[k])
+        if len(ts) == 4:
+            c = np.polyfit(ts - a, ys, 3)
+            dc = np.polyder(c)
+            for _ in range(20):
+                f, df = np.polyval(c, x - a), np.polyval(dc, x - a)
+                if df == 0:
+                    break
+                step = f / df
+                x = min(max(x - step, a), b)
+                if abs(step) <= 1e-15 * max(1.0, abs(x)):
+                    break
+        out.append(x)
+    return np.array(out)
