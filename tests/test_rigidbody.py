@@ -85,16 +85,20 @@ def test_elliptic_k_known_values():
 
 # ----------------------------------------------------------------------------- the flip
 @pytest.mark.parametrize("scheme,ns,order", [("midpoint", (1400, 2800, 5600), 2.0),
-                                             ("galerkin4", (700, 1400, 2800), 4.0)])
+                                             ("galerkin4", (350, 500, 700), 4.0)])
 def test_flip_interval_order(scheme, ns, order):
-    """Three flips within T = 70 s; the flip interval converges at the scheme's order."""
+    """Three flips within T = 70 s; the flip interval converges at the scheme's order.
+
+    galerkin4 is measured where its error (1e-5 .. 3e-6) is well above the floor that the solver's
+    tolerance sets on this near-separatrix start (about 1e-7 .. 1e-6: docs/derivations.md, rigid bodies, §6).
+    """
     errs = []
     for n in ns:
         _, _, r = free_run(W0, 70.0, n, scheme)
         assert r["flip_times"].size == 3
         errs.append(r["flip_interval_error"])
     assert observed_order(ns, errs) == pytest.approx(order, abs=0.3)
-    assert errs[-1] < (5e-3 if order == 2 else 5e-8)
+    assert errs[-1] < (5e-3 if order == 2 else 5e-6)
 
 
 @pytest.mark.parametrize("w0", [(1e-2, 1e-2, 1.0), (1.0, 1e-2, 1e-2)], ids=["major", "minor"])

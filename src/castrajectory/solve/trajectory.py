@@ -331,18 +331,22 @@ WINDOW_MAX_ITER = 10
 
 
 def _solve_level(tn: TrajectoryNLP, guess, options, verbose, log: List[Level], allow_windows: bool,
-                 final: bool = True, omega: float = math.inf):
+                 final: bool = True, omega: float = math.inf, windows_first: bool = False):
+    """Solve one level: a whole attempt from ``guess``, then horizon windows if it fails
+    (``windows_first``: straight to the windows, when the levels before showed that a whole
+    attempt from a level guess does not converge)."""
     first = dict(options or {})
     window_opts = dict(first)
     if allow_windows:
         cap = int(first.get("max_iter", TRAJECTORY_IPOPT["max_iter"]))
         first["max_iter"] = min(cap, FIRST_ATTEMPT_MAX_ITER)
         window_opts["max_iter"] = min(cap, WINDOW_MAX_ITER)
-    res = tn.solve(guess, options=first, verbose=verbose)
-    log.append(Level(tn.N, tn.N, res.solver_status, res.iterations, res.build_time_s, res.solve_time_s,
-                     tn.function_time_s))
-    if res.success or not allow_windows:
-        return res
+    if not (windows_first and allow_windows):
+        res = tn.solve(guess, options=first, verbose=verbose)
+        log.append(Level(tn.N, tn.N, res.solver_status, res.iterations, res.build_time_s, res.solve_time_s,
+                         tn.function_time_s))
+        if res.success or not allow_windows:
+            return res
     # Horizon continuation: march a window over the trajectory.  Each window is itself a
     # whole-trajectory initial-value solve of L steps, started from the last solved node and
     # its discrete momentum; L doubles after a success and halves after a failure.
@@ -489,7 +493,9 @@ def solve_initial_value(system: LagrangianSystem, q0, qd0, T: float, N: int, sch
         n_log = len(log)
         final = i == len(levels) - 1
         level_options = options if final else {"tol": COARSE_TOL, **(options or {})}
-        res = _solve_level(tn, guess, level_options, verbose, log, allow_windows=True, final=final, omega=omega)
+        jumped = windowed[-2:] == [True, True]
+        res = _solve_level(tn, guess, level_options, verbose, log, allow_windows=True, final=final, omega=omega,
+                           windows_first=jumped)
         i += 1
         if res.success:
             solved.append((tn, res.values))
@@ -498,12 +504,13 @@ def solve_initial_value(system: LagrangianSystem, q0, qd0, T: float, N: int, sch
             # is no worse than this level's was.
             if extrapolated and len(log) == n_log + 1 and res.iterations <= FINAL_JUMP_ITERATIONS:
                 i = max(i, len(levels) - 1)
-        windowed.append(len(log) > n_log + 1)
+        windowed.append(jumped or len(log) > n_log + 1)
         if windowed[-2:] == [True, True]:
             # Two levels in a row needed horizon windows (the guess from the coarser level was too
             # far for one Newton solve: chaotic or near-separatrix motion, not a coarse grid's
             # passing trouble).  Finer levels would need them again, and their windows start from
-            # the integrated motion, not from the levels: go to N itself.
+            # the integrated motion, not from the levels: go to N itself, and there straight to the
+            # windows (a whole attempt from the level guess would fail the same way).
             i = max(i, len(levels) - 1)
         # A coarse level that fails is too coarse to resolve the motion: drop it and go finer.
     if not res.success and T / N * omega > COARSE_H_OMEGA:
