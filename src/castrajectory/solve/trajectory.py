@@ -331,10 +331,12 @@ WINDOW_MAX_ITER = 10
 
 
 def _solve_level(tn: TrajectoryNLP, guess, options, verbose, log: List[Level], allow_windows: bool,
-                 final: bool = True, omega: float = math.inf, windows_first: bool = False):
+                 final: bool = True, omega: float = math.inf, windows_first: bool = False,
+                 windows_after_failure: bool = True):
     """Solve one level: a whole attempt from ``guess``, then horizon windows if it fails
     (``windows_first``: straight to the windows, when the levels before showed that a whole
-    attempt from a level guess does not converge)."""
+    attempt from a level guess does not converge; ``windows_after_failure = False``: return the
+    failed attempt instead, for the caller to go to N)."""
     first = dict(options or {})
     window_opts = dict(first)
     if allow_windows:
@@ -345,7 +347,7 @@ def _solve_level(tn: TrajectoryNLP, guess, options, verbose, log: List[Level], a
         res = tn.solve(guess, options=first, verbose=verbose)
         log.append(Level(tn.N, tn.N, res.solver_status, res.iterations, res.build_time_s, res.solve_time_s,
                          tn.function_time_s))
-        if res.success or not allow_windows:
+        if res.success or not allow_windows or not windows_after_failure:
             return res
     # Horizon continuation: march a window over the trajectory.  Each window is itself a
     # whole-trajectory initial-value solve of L steps, started from the last solved node and
@@ -494,8 +496,11 @@ def solve_initial_value(system: LagrangianSystem, q0, qd0, T: float, N: int, sch
         final = i == len(levels) - 1
         level_options = options if final else {"tol": COARSE_TOL, **(options or {})}
         jumped = windowed[-2:] == [True, True]
+        after_windows = bool(windowed) and windowed[-1] and not jumped
+        # after a windowed level, a coarse level whose whole attempt fails is not windowed itself:
+        # two such levels in a row send the ladder to N (below), where the windows are worth it
         res = _solve_level(tn, guess, level_options, verbose, log, allow_windows=True, final=final, omega=omega,
-                           windows_first=jumped)
+                           windows_first=jumped, windows_after_failure=final or not after_windows)
         i += 1
         if res.success:
             solved.append((tn, res.values))
@@ -504,7 +509,7 @@ def solve_initial_value(system: LagrangianSystem, q0, qd0, T: float, N: int, sch
             # is no worse than this level's was.
             if extrapolated and len(log) == n_log + 1 and res.iterations <= FINAL_JUMP_ITERATIONS:
                 i = max(i, len(levels) - 1)
-        windowed.append(jumped or len(log) > n_log + 1)
+        windowed.append(jumped or len(log) > n_log + 1 or (after_windows and not res.success))
         if windowed[-2:] == [True, True]:
             # Two levels in a row needed horizon windows (the guess from the coarser level was too
             # far for one Newton solve: chaotic or near-separatrix motion, not a coarse grid's
