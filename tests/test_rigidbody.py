@@ -226,6 +226,16 @@ def test_heavy_top_converges_to_euler_poisson(scheme, ns, order):
     assert observed_order(ns, e_tilt) == pytest.approx(order, abs=0.35)
 
 
+def test_heavy_top_energy_bounded():
+    """Over 2 s (about 30 nutations): the energy error oscillates at O(h²) without drift."""
+    system, run, r = _top_run(2.0, 2000, "midpoint")
+    E = np.asarray(run.energy)
+    dE = np.abs(E - E[0])
+    assert np.max(dE) / abs(E[0]) < 1e-4
+    assert np.max(dE[E.size // 2:]) <= 1.5 * np.max(dE[:E.size // 2])
+    assert r["angular_momentum_vertical_drift"] <= 1e-9 and r["angular_momentum_axis_drift"] <= 1e-9
+
+
 def test_heavy_top_without_gravity_is_a_free_symmetric_body():
     system = rb.heavy_top(1.0, rb.Inertia(0.002, 0.002, 0.004), 0.1, g=0.0)
     assert not system.potentials  # no gravity term when g = 0
