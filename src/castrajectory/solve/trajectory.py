@@ -479,6 +479,7 @@ def solve_initial_value(system: LagrangianSystem, q0, qd0, T: float, N: int, sch
     coarsest = max(coarsest, int(math.ceil(T * omega / COARSE_H_OMEGA)))
     levels = _levels(N, coarsest)
     windowed: List[bool] = []  # per level solved: did it need horizon windows?
+    flow_first = False
     i = 0
     while i < len(levels):
         tn = TrajectoryNLP(dm, levels[i], T, "initial_value", q0, p0)
@@ -486,6 +487,7 @@ def solve_initial_value(system: LagrangianSystem, q0, qd0, T: float, N: int, sch
             guess = None
             if tn.h * omega <= GUESS_SUBSTEPS * GUESS_H_OMEGA:
                 guess = _flow_guess(dm, q0, qd0, tn.h, tn.N)
+            flow_first = guess is not None
             guess = guess or _initial_guess(tn, qd0)
         elif len(solved) == 1:
             guess = _refine(*solved[-1], tn)
@@ -496,7 +498,7 @@ def solve_initial_value(system: LagrangianSystem, q0, qd0, T: float, N: int, sch
         final = i == len(levels) - 1
         level_options = options if final else {"tol": COARSE_TOL, **(options or {})}
         jumped = windowed[-2:] == [True, True]
-        after_windows = bool(windowed) and windowed[-1] and not jumped
+        after_windows = (bool(windowed) and windowed[-1] and not jumped) or (not solved and flow_first)
         # after a windowed level, a coarse level whose whole attempt fails is not windowed itself:
         # two such levels in a row send the ladder to N (below), where the windows are worth it
         res = _solve_level(tn, guess, level_options, verbose, log, allow_windows=True, final=final, omega=omega,
