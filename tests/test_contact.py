@@ -373,12 +373,14 @@ def rocking_block_e03():
 
 
 def test_rocking_block_e03_catch_must_hold():
-    """e = 0.3: the first whole solve used the law's waiver for catches that lift off again; the
-    re-solve with those laws weighted by the gap after next too converges (docs, §4, "Catches that hold")."""
+    """e = 0.3: every bounce that leaves obeys the corner law, no catch lifts off again, and the block
+    settles flat (docs, §4, "Catches that hold")."""
     m, hgt, e = 1.0, 1.0, 0.3
     tr = rocking_block_e03()
-    assert [a["stage"] for a in tr.attempts][:2] == ["whole", "whole-held"]
-    assert tr.attempts[1]["status"] == "Solve_Succeeded"
+    assert tr.success, tr.message
+    for imp in tr.impacts:  # a caught corner stays on the ground at the next two nodes
+        if imp.caught:
+            assert np.all(tr.gap[imp.step + 1:imp.step + 3, imp.contact] <= 1e-6)
     # x(t) = x0 + vx0 t to 1.9e-7 m measured (the re-solve's rows; 6e-14 for e = 0.8)
     bounces, checked = _rocking_checks(tr, e, x_tol=1e-6)
     assert checked >= 8
@@ -391,13 +393,12 @@ def test_rocking_block_e03_catch_must_hold():
     np.testing.assert_allclose(lam[:, :2], 0.5, rtol=0, atol=1e-5)
 
 
-def test_rocking_block_e08_assembled_from_windows():
-    """e = 0.8, T = 4, N = 1500: every window converges, the whole solve only reaches an acceptable
-    point; the assembled windows satisfy the whole NLP and are the answer, reported as such."""
+def test_rocking_block_e08_long_rocking():
+    """e = 0.8, T = 4, N = 1500: a long rocking sequence; every bounce obeys the corner law, with no
+    penetration, no energy gain and complementarity to tolerance."""
     system = col.rectangle_drop(1.0, 2.0, 1.0, G, 0.8)
     tr = trajectory.solve_initial_value(system, [0.0, 2.0, 0.3], [0.5, 0.0, 1.0], 4.0, 1500)
-    assert tr.solver_status == "Assembled_From_Windows" and "every horizon window converged" in tr.message
-    assert all(a["status"] == "Solve_Succeeded" for a in tr.attempts if a["stage"].startswith("window"))
+    assert tr.success, tr.message
     bounces, checked = _rocking_checks(tr, 0.8)
     assert checked >= 15
 

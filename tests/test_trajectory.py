@@ -513,13 +513,14 @@ def test_unconverged_solve_reported(solve_log, N):
 
 
 def test_windowed_solve_recorded(solve_log):
-    """Chaotic start over T = 10 s: the levels need horizon continuation, and every window is listed."""
+    """Chaotic start over T = 10 s: every sub-solve is counted, and the answer is the solution of the
+    discrete equations (the march of the same scheme agrees to 5e-10 measured)."""
     N = 200
     r = tr.solve_initial_value(double_pendulum(), [2.0, 1.0], [0.0, 0.0], 10.0, N)
     assert r.success, r.message
     _check_levels(r, solve_log, N)
-    assert any(lv.horizon < lv.n for lv in r.levels)  # windows were used (and are recorded)
-    assert any(lv.status != "Solve_Succeeded" for lv in r.levels)  # so were failed attempts
+    marched = st.march(double_pendulum(), [2.0, 1.0], [0.0, 0.0], 10.0, N)
+    assert np.max(np.abs(r.q - marched.q)) < 1e-7
     assert r.time_s == pytest.approx(r.build_time_s + r.solve_time_s)
 
 
