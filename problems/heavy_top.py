@@ -52,8 +52,7 @@ def reference(args, inertia, t):
     q0, _, w0 = initial_state(args.tilt, args.spin, args.precession)
     q, _ = euler.euler_reference(pivot.moments, q0, w0, t, weight=args.mass * args.g,
                                  com=[0.0, 0.0, args.distance])
-    a = rb.rotation(q)[:, :, 2]
-    return np.arccos(np.clip(a[:, 2], -1, 1)), np.unwrap(np.arctan2(a[:, 0], -a[:, 1]))
+    return rb.tilt_precession(q)
 
 
 def run(args):

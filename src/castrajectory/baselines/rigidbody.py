@@ -18,6 +18,7 @@ from typing import Sequence, Tuple
 import casadi as ca
 import numpy as np
 
+from ..discretise.lagrangians import rk4_step
 from ..models import rigidbody as rb
 from ..validation import InputError, integer_at_least, positive
 from .stepping import Stepped
@@ -72,11 +73,7 @@ def euler_rk4(system, moments, q0, omega0, T: float, N: int, weight: float = 0.0
     t0 = time.perf_counter()
     f = _rhs(moments, weight, com)
     x = ca.SX.sym("x", 7)
-    k1 = f(x)
-    k2 = f(x + h / 2 * k1)
-    k3 = f(x + h / 2 * k2)
-    k4 = f(x + h * k3)
-    march = ca.Function("rk4_step", [x], [x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)]).mapaccum("rk4_euler", N)
+    march = ca.Function("rk4_step", [x], [rk4_step(f, x, h)]).mapaccum("rk4_euler", N)
     build = time.perf_counter() - t0
     t1 = time.perf_counter()
     X = np.asarray(march(np.concatenate([q0, w0])))

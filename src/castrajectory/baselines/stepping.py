@@ -50,7 +50,7 @@ from typing import Optional, Tuple
 import casadi as ca
 import numpy as np
 
-from ..discretise.lagrangians import SCHEMES, DiscreteMechanics
+from ..discretise.lagrangians import SCHEMES, DiscreteMechanics, rk4_step
 from ..models.mechanics import LagrangianSystem
 from ..result import Result
 from ..validation import InputError, integer_at_least, one_of, positive
@@ -232,11 +232,7 @@ def rk4(system: LagrangianSystem, q0, qd0, T: float, N: int) -> Stepped:
     t0 = time.perf_counter()
     x, f = _first_order(system)
     rhs = ca.Function("rhs", [x], [f])
-    k1 = rhs(x)
-    k2 = rhs(x + h / 2 * k1)
-    k3 = rhs(x + h / 2 * k2)
-    k4 = rhs(x + h * k3)
-    step = ca.Function("rk4_step", [x], [x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)])
+    step = ca.Function("rk4_step", [x], [rk4_step(rhs, x, h)])
     march_fn = step.mapaccum("rk4_march", N)
     build = time.perf_counter() - t0
 

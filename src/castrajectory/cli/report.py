@@ -112,10 +112,18 @@ CONTACT_EXTREMES = [
 ]
 
 
-def _contact_stability(out: str):
-    """Stability table: the extreme contact cases, each through its problem script."""
+def _run_case(scene: str, argv):
+    """Run a scene's problem script in process at ``argv``: ``(outcome, wall time)``."""
     import importlib
 
+    mod = importlib.import_module(SCENES[scene])
+    t0 = time.perf_counter()
+    outcome = mod.run(mod.parser().parse_args(argv))
+    return outcome, time.perf_counter() - t0
+
+
+def _contact_stability(out: str):
+    """Stability table: the extreme contact cases, each through its problem script."""
     import numpy as np
 
     lines = ["### Stability on extreme contact cases", "",
@@ -125,10 +133,7 @@ def _contact_stability(out: str):
              "| energy E(0) → E(T) | measured | checked |", "|---|---|---|---|---|---|---|---|---|---|---|"]
     solved = 0
     for title, scene, argv, what in CONTACT_EXTREMES:
-        mod = importlib.import_module(SCENES[scene])
-        t0 = time.perf_counter()
-        outcome = mod.run(mod.parser().parse_args(argv))
-        wall = time.perf_counter() - t0
+        outcome, wall = _run_case(scene, argv)
         solved += outcome.success
         d = outcome.data
         gap = min(np.min(d["gap"]) if "gap" in d else np.inf,
@@ -180,17 +185,12 @@ def _contact_work_precision(out: str, quick: bool):
 
 def _rigid_body_stability(out: str):
     """Stability table of the rigid-body extremes, each through its problem script."""
-    import importlib
-
     lines = ["### Stability on extreme rigid-body cases", "",
              "Each case runs its problem script; a failure is shown as failed, with the solver's message.", "",
              "| case | command | status | iterations | time (s) | flips | flip interval error | max |L − L₀|/|L₀| "
              "| max ||q|| − 1 | max |E − E₀|/|E₀| | checked |", "|---|---|---|---|---|---|---|---|---|---|---|"]
     for title, scene, argv, what in RIGIDBODY_EXTREMES:
-        mod = importlib.import_module(SCENES[scene])
-        t0 = time.perf_counter()
-        outcome = mod.run(mod.parser().parse_args(argv))
-        wall = time.perf_counter() - t0
+        outcome, wall = _run_case(scene, argv)
         d = outcome.data
         fe = d.get("flip_interval_error")
         status = d["status"] if outcome.success else f"failed: {outcome.message}"
@@ -233,13 +233,10 @@ def _mechanics_scenes(out: str):
 
 
 def _script_scenes(out: str, heading: str, intro: str, scenes, plot_name: str = "energy"):
-    import importlib
-
     lines = [heading, "", intro, ""]
     ok = True
     for stem, scene, argv, title, animate in scenes:
-        mod = importlib.import_module(SCENES[scene])
-        outcome = mod.run(mod.parser().parse_args(argv))
+        outcome, _ = _run_case(scene, argv)
         ok &= outcome.success
         with open(os.path.join(out, f"{stem}.json"), "w") as fh:
             json.dump(jsonable(outcome.data), fh, allow_nan=False)

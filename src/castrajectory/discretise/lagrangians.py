@@ -76,6 +76,16 @@ class Scheme:
         raise ValueError(self.name)
 
 
+def rk4_step(f, x, dt):
+    """One classical Runge–Kutta step ``x ↦ x + dt/6 (k₁ + 2k₂ + 2k₃ + k₄)`` of ``ẋ = f(x)`` (CasADi
+    expressions): the integrator of the time-stepping baselines and of the guesses."""
+    k1 = f(x)
+    k2 = f(x + dt / 2 * k1)
+    k3 = f(x + dt / 2 * k2)
+    k4 = f(x + dt * k3)
+    return x + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+
+
 SCHEMES: Dict[str, Scheme] = {
     "midpoint": Scheme("midpoint", 2, 0, 0.5),
     "trapezoid": Scheme("trapezoid", 2, 0, 0.5),

@@ -32,6 +32,13 @@ def drift(x: np.ndarray) -> float:
     return float(np.max(np.abs(d)) / max(abs(float(x[0])), 1e-300))
 
 
+def _invariants(run) -> dict:
+    """What every rigid-body run is checked for: the unit quaternion and the energy."""
+    q = np.asarray(run.q, float)
+    return {"quaternion_norm_error": float(np.max(np.abs(np.linalg.norm(q, axis=1) - 1.0))),
+            "energy_drift": drift(np.asarray(run.energy, float))}
+
+
 def free_body(system, run, inertia: rb.Inertia, omega0) -> dict:
     """Readings of a free rigid body: ω, spatial L, flips and the flip interval against the oracle.
 
@@ -65,24 +72,19 @@ def free_body(system, run, inertia: rb.Inertia, omega0) -> dict:
         "angular_momentum_norm": Lnorm,
         "angular_momentum_drift": drift(L),
         "angular_momentum_norm_drift": drift(Lnorm),
-        "quaternion_norm_error": float(np.max(np.abs(np.linalg.norm(q, axis=1) - 1.0))),
-        "energy_drift": drift(np.asarray(run.energy, float)),
+        **_invariants(run),
     }
 
 
 def heavy_top(system, run) -> dict:
     """Readings of the heavy top: tilt (nutation), precession angle, ``L_z`` and ``L₃``.
 
-    The symmetry axis in space is ``a = R(q) e₃ = (sin φ sin θ, −cos φ sin θ, cos θ)`` (z–x–z
-    Euler angles), so the tilt is ``θ = arccos a_z`` and the precession angle ``φ = atan2(a_x, −a_y)``,
-    unwrapped.  ``L_z`` (vertical, spatial) and ``L₃`` (the body symmetry axis) are the momentum
+    Tilt and precession are those of the symmetry axis (:func:`~castrajectory.models.rigidbody.tilt_precession`).
+    ``L_z`` (vertical, spatial) and ``L₃`` (the body symmetry axis) are the momentum
     maps of rotations about the vertical and about the symmetry axis.
     """
     q = np.asarray(run.q, float)
-    R = rb.rotation(q)
-    a = R[:, :, 2]
-    tilt = np.arccos(np.clip(a[:, 2], -1.0, 1.0))
-    precession = np.unwrap(np.arctan2(a[:, 0], -a[:, 1]))
+    tilt, precession = rb.tilt_precession(q)
     p = momenta(system, run)
     Lz = rb.spatial_momentum(q, p)[:, 2]
     L3 = rb.body_momentum(q, p)[:, 2]
@@ -93,6 +95,5 @@ def heavy_top(system, run) -> dict:
         "angular_momentum_axis": L3,
         "angular_momentum_vertical_drift": drift(Lz),
         "angular_momentum_axis_drift": drift(L3),
-        "quaternion_norm_error": float(np.max(np.abs(np.linalg.norm(q, axis=1) - 1.0))),
-        "energy_drift": drift(np.asarray(run.energy, float)),
+        **_invariants(run),
     }

@@ -273,13 +273,13 @@ class LagrangianSystem:
         constraints the index-1 system ``[M Cᵀ; C 0] [q̈; λ] = [f; −(∂(C q̇)/∂q) q̇]``
         is solved (used by the time-stepping baselines and the integrated guesses).
         """
-        return self._get("qdd", lambda: self._index1()[0])
+        return self._get("index1", self._index1)[0]
 
     @property
     def multiplier(self) -> ca.Function:
         """The constraint multipliers ``λ(q, q̇)`` of the index-1 system (``M q̈ + Cᵀλ = f``): the
         same sign and scale as the discrete multipliers of the trajectory NLP.  Empty without constraints."""
-        return self._get("lam", lambda: self._index1()[1])
+        return self._get("index1", self._index1)[1]
 
     def _index1(self):
         L = self.lagrangian_expr()

@@ -40,8 +40,6 @@ import numpy as np
 from ..validation import InputError, finite, positive
 from .mechanics import Gravity, LagrangianSystem
 
-AXES = np.eye(3)
-
 
 # ----------------------------------------------------------------------------- quaternion algebra
 def quat_multiply(p, q):
@@ -85,6 +83,13 @@ def axis_angle(axis: Sequence[float], angle: float) -> np.ndarray:
 def body_rates(q: np.ndarray, qd: np.ndarray) -> np.ndarray:
     """Body angular velocity ``ω = 2 Im(q̄ ⊗ q̇)`` for rows of unit quaternions and their rates."""
     return 2.0 * quat_multiply(quat_conjugate(q), qd)[..., 1:]
+
+
+def tilt_precession(q: np.ndarray):
+    """Tilt (nutation) ``θ = arccos a_z`` and unwrapped precession ``φ = atan2(a_x, −a_y)`` of the body
+    axis ``a = R(q) e₃ = (sin φ sin θ, −cos φ sin θ, cos θ)`` (z–x–z Euler angles), for rows of ``q``."""
+    a = rotation(q)[..., :, 2]
+    return np.arccos(np.clip(a[..., 2], -1.0, 1.0)), np.unwrap(np.arctan2(a[..., 0], -a[..., 1]))
 
 
 def quaternion_rate(q: np.ndarray, omega_body: np.ndarray) -> np.ndarray:
@@ -135,7 +140,7 @@ class Inertia:
     I3: float
 
     def __post_init__(self):
-        for k, name in enumerate(("I1", "I2", "I3")):
+        for name in ("I1", "I2", "I3"):
             object.__setattr__(self, name, positive(f"inertia {name}", getattr(self, name)))
         m = self.moments
         for i in range(3):
@@ -204,7 +209,7 @@ def unit_norm(quat):
 
 
 def box_points(quat, size: Sequence[float], center=None):
-    """World positions of a box's 8 corners and the body axes' tips, for pictures (SX expressions)."""
+    """World positions of a box's 8 corners, for pictures (SX expressions)."""
     R = rotation(quat)
     c = ca.SX.zeros(3) if center is None else center
     half = 0.5 * np.asarray(size, float)
@@ -279,8 +284,9 @@ def flip_interval(inertia: Inertia, omega0: Sequence[float]) -> float:
     and ``L² = Σ I_i² ω_i²``: for ``L² > 2E I_b``
     ``m = (I_b − I_a)(2E I_c − L²)/((I_c − I_b)(L² − 2E I_a))``,
     ``s = √((I_c − I_b)(L² − 2E I_a)/(I_a I_b I_c))``; otherwise the roles of ``I_a`` and ``I_c`` swap.
-    ``inf`` on the separatrix or for an intermediate rate that never changes sign (a spin near
-    the major or minor axis).
+    ``2K/s`` is the half-period of the two oscillating rates (the intermediate one always); whether
+    their sign changes are flips depends on the axis the spin starts on
+    (:func:`castrajectory.inspect.rigidbody.free_body`).  ``inf`` on the separatrix.
     """
     I = inertia.moments
     w = np.asarray(omega0, float)
@@ -300,9 +306,6 @@ def flip_interval(inertia: Inertia, omega0: Sequence[float]) -> float:
         return math.inf
     if not 0.0 <= m < 1.0 or s == 0.0:
         return math.inf
-    # the intermediate rate changes sign only when it oscillates about zero (cn-type): near the
-    # major or minor axis it is the major (or minor) rate that oscillates, the intermediate one too
-    # (sn-type); both types change sign every 2K/s, except the dn-type component
     return 2.0 * elliptic_k(m) / s
 
 

@@ -37,7 +37,7 @@ from typing import Dict, List, Optional
 import casadi as ca
 import numpy as np
 
-from ..discretise.lagrangians import DiscreteMechanics
+from ..discretise.lagrangians import DiscreteMechanics, rk4_step
 from ..discretise.trajectory import TrajectoryTranscription
 from ..models.mechanics import LagrangianSystem
 from ..result import NLPResult, Result
@@ -234,11 +234,7 @@ def _flow(dm: DiscreteMechanics, h: float, steps: int) -> ca.Function:
     dt, y, stage, stage_lam = h / GUESS_SUBSTEPS, x, [], []
     marks = {round((j + 1) * GUESS_SUBSTEPS / (st + 1)) - 1 for j in range(st)}
     for j in range(GUESS_SUBSTEPS):
-        k1 = f(y)
-        k2 = f(y + dt / 2 * k1)
-        k3 = f(y + dt / 2 * k2)
-        k4 = f(y + dt * k3)
-        y = y + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        y = rk4_step(f, y, dt)
         if j in marks:
             stage.append(y[:n])
             stage_lam.append(lamf(y[:n], y[n:]))

@@ -14,7 +14,7 @@ import casadi as ca
 
 from ...models.mechanics import LagrangianSystem
 from ...validation import InputError
-from ..lagrangians import DiscreteMechanics
+from ..lagrangians import DiscreteMechanics, rk4_step
 
 
 #: Weight of Σβ² (the split of impact-free steps), far below the penalties.
@@ -92,11 +92,7 @@ class ContactMechanics:
         x, dt = ca.vertcat(qk, v), tau / GUESS_SUBSTEPS
         f = lambda x: ca.vertcat(x[n:], acc(x[:n], x[n:]))  # noqa: E731
         for _ in range(GUESS_SUBSTEPS):
-            k1 = f(x)
-            k2 = f(x + dt / 2 * k1)
-            k3 = f(x + dt / 2 * k2)
-            k4 = f(x + dt * k3)
-            x = x + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+            x = rk4_step(f, x, dt)
         self.flow = ca.Function("flow", [qk, v, tau], [x[:n], x[n:], phi(x[:n])])
         self._flights: Dict[int, ca.Function] = {}
         self.acc_normal = ca.Function("acc_normal", [qk, v], [ca.mtimes(J(qk), acc(qk, v))])
