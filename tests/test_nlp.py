@@ -602,3 +602,63 @@ def test_jit_cache_dir_is_per_user_and_overridable(monkeypatch, tmp_path):
     assert jit.cache_dir() == __import__("pathlib").Path.home() / ".cache" / "castrajectory"
     monkeypatch.setenv("CASTRAJECTORY_CACHE_DIR", str(tmp_path / "mine"))
     assert jit.cache_dir() == tmp_path / "mine"
+
+
+# ----------------------------------------------------------------------------- rows and the check of an assembled point
+def _stepping_chain(E: int) -> NLP:
+    """x_{e+1} = x_e + 0.1 sin(x_e) + c_e (element rows), x_0 fixed by its bounds, and one expression row
+    fixing the extra unknown y: a square feasibility problem."""
+    a, b, c = (ca.SX.sym(n) for n in "abc")
+    step = ca.Function("step", [a, b, c], [b - a - 0.1 * ca.sin(a) - c])
+    nlp = NLP(hessian="zero")
+    nlp.variable("x", E + 1, lb=np.r_[0.5, -np.inf * np.ones(E)], ub=np.r_[0.5, np.inf * np.ones(E)], init=0.5)
+    nlp.variable("y", 1, init=0.0)
+    xi, e = nlp.index("x"), np.arange(E)
+    nlp.equal_elements("step", step, [X(xi[e, None]), X(xi[e + 1, None]), np.linspace(0.0, 0.2, E)[:, None]])
+    x = nlp._vars[0].sym
+    nlp.equal("y_row", nlp._vars[1].sym - x[E] ** 2)
+    nlp.minimize(ca.SX(0))
+    return nlp
+
+
+def test_row_values_match_the_rows_handed_to_ipopt():
+    nlp = _element_chain_nlp(300)
+    fns = nlp.functions()
+    x = np.random.default_rng(3).uniform(0.2, 1.2, fns["jac_g"].size1_in(0))
+    g_ipopt = np.asarray(fns["jac_g"](x, np.array([0.4]))[0]).reshape(-1)
+    assert nlp.row_values(x) == pytest.approx(g_ipopt, abs=1e-14)
+    g, grad = nlp._rows_and_gradients(x)
+    assert g == pytest.approx(g_ipopt, abs=1e-14)
+    J = np.abs(np.asarray(ca.DM(fns["jac_g"](x, np.array([0.4]))[1]).full()))
+    # each row's largest derivative (no variable enters an element of this family twice)
+    assert grad == pytest.approx(J.max(axis=1), rel=1e-14)
+
+
+def test_check_verifies_a_solution_and_rejects_a_perturbed_one():
+    nlp = _stepping_chain(400)
+    x0, c = [0.5], np.linspace(0.0, 0.2, 400)
+    for ce in c:
+        x0.append(x0[-1] + 0.1 * np.sin(x0[-1]) + ce)
+    x0 = np.asarray(x0) + 1e-3 * np.sin(np.arange(401))  # near the solution, not on it
+    x0[0] = 0.5
+    sol = nlp.solve({"x": x0}, options={"tol": 1e-12})
+    assert sol.success
+    # the point computed by Ipopt, handed back by name: every row holds
+    chk = nlp.check({"x": sol["x"], "y": sol["y"]}, 1e-10)
+    assert chk.success and chk.solver_status == "Rows_Verified" and chk.iterations == 0
+    assert chk["x"] == pytest.approx(sol["x"], abs=0)
+    assert all(np.all(v == 0) for v in chk.multipliers.values())
+    # one node moved by 1e-6: its two rows miss
+    x = sol["x"].copy()
+    x[200] += 1e-6
+    bad = nlp.check({"x": x, "y": sol["y"]}, 1e-10)
+    assert not bad.success and bad.solver_status == "Rows_Not_Verified" and "1e-10" in bad.message
+    # the fixed unknown off its bound
+    x = sol["x"].copy()
+    x[0] += 1e-6
+    assert not nlp.check({"x": x, "y": sol["y"]}, 1e-10).success
+
+
+def test_check_is_only_for_square_feasibility_problems():
+    with pytest.raises(ValueError, match="square feasibility"):
+        _element_chain_nlp(10).check({}, 1e-10)

@@ -68,6 +68,64 @@ def test_flip_interval_closed_form():
     assert rb.flip_interval(I123, W0) == pytest.approx(27.530841, abs=1e-6)
 
 
+def _naive_interval(I, w):
+    """Landau–Lifshitz's m and s formed from the invariants directly (cancellation near m = 1)."""
+    I, w = np.asarray(I, float), np.asarray(w, float)
+    E2, L2 = np.sum(I * w * w), np.sum((I * w) ** 2)
+    Ia, Ib, Ic = np.sort(I)
+    if L2 > E2 * Ib:
+        m = (Ib - Ia) * (E2 * Ic - L2) / ((Ic - Ib) * (L2 - E2 * Ia))
+        s = math.sqrt((Ic - Ib) * (L2 - E2 * Ia) / (Ia * Ib * Ic))
+    else:
+        m = (Ic - Ib) * (L2 - E2 * Ia) / ((Ib - Ia) * (E2 * Ic - L2))
+        s = math.sqrt((Ib - Ia) * (E2 * Ic - L2) / (Ia * Ib * Ic))
+    # K by its series in m: an independent route to the AGM of the code
+    K, term, k = 0.0, 1.0, 0
+    while term > 1e-17:
+        K += term
+        k += 1
+        term *= ((2 * k - 1) / (2 * k)) ** 2 * m
+    return math.pi * K / s
+
+
+@pytest.mark.parametrize("I,w", [((1.0, 2.0, 3.0), (0.3, 1.0, 0.2)), ((2.0, 3.0, 4.5), (0.4, 0.8, 0.1)),
+                                 ((1.0, 2.0, 3.0), (0.5, 0.2, 0.05))])
+def test_flip_interval_cancellation_free_form_matches_the_naive_one_away_from_the_separatrix(I, w):
+    # away from m = 1 the two forms agree to rounding; near it only the cancellation-free one keeps digits
+    assert rb.flip_interval(rb.Inertia(*I), w) == pytest.approx(_naive_interval(I, w), rel=1e-12)
+
+
+def test_flip_interval_keeps_its_digits_near_the_separatrix():
+    # A relative change of 1e-15 in the large rate hardly moves r = L²/2E: the interval moves by
+    # far less than the 4e-10 of the naive form's rounding.
+    T0 = rb.flip_interval(I123, W0)
+    for k in range(3):
+        w = W0.copy()
+        w[k] *= 1 + 1e-15
+        assert abs(rb.flip_interval(I123, w) - T0) < 1e-12
+
+
+def test_flip_interval_sensitivity_against_a_difference_of_the_closed_form():
+    # d T / d ln r through omega_3 (which moves r = L^2/2E at first order) against the sensitivity
+    for I, w in [((1.0, 2.0, 3.0), (0.3, 1.0, 0.2)), ((1.0, 2.0, 3.0), (1e-3, 1.0, 1e-3))]:
+        inertia, w = rb.Inertia(*I), np.asarray(w)
+        Im = inertia.moments
+
+        def r_of(v):
+            return np.sum((Im * v) ** 2) / np.sum(Im * v * v)
+
+        d = 1e-4 * w[2]
+        wp, wm = w.copy(), w.copy()
+        wp[2] += d
+        wm[2] -= d
+        # the sensitivity is at fixed 2E: rescale the rates (r is invariant under scaling)
+        E0 = np.sum(Im * w * w)
+        wp, wm = (v * math.sqrt(E0 / np.sum(Im * v * v)) for v in (wp, wm))
+        dT = (rb.flip_interval(inertia, wp) - rb.flip_interval(inertia, wm)) / (math.log(r_of(wp)) - math.log(r_of(wm)))
+        assert abs(dT) == pytest.approx(rb.flip_interval_sensitivity(inertia, w), rel=1e-4)
+    assert rb.flip_interval_sensitivity(I123, W0) == pytest.approx(3.46e6, rel=1e-2)
+
+
 @pytest.mark.parametrize("inertia,w0", [((1.0, 2.0, 3.0), (0.05, 1.0, 0.02)),
                                         ((2.0, 3.0, 4.5), (0.1, 0.8, 0.0)),      # L² < 2E I₂ side
                                         ((1.0, 2.0, 3.0), (0.0, 1.0, 0.05))])

@@ -479,16 +479,18 @@ def test_unknown_scheme(solve):
 # ----------------------------------------------------------------------------- 8. honest results
 @pytest.fixture
 def solve_log(monkeypatch):
-    """Every TrajectoryNLP.solve call (levels and windows alike), in order."""
+    """Every TrajectoryNLP.solve and .check call (levels, windows, checks of an assembly), in order."""
     calls = []
-    original = tr.TrajectoryNLP.solve
 
-    def counting(self, *args, **kwargs):
-        res = original(self, *args, **kwargs)
-        calls.append((self.N, res.solver_status, res.iterations))
-        return res
+    def counting(original):
+        def call(self, *args, **kwargs):
+            res = original(self, *args, **kwargs)
+            calls.append((self.N, res.solver_status, res.iterations))
+            return res
+        return call
 
-    monkeypatch.setattr(tr.TrajectoryNLP, "solve", counting)
+    monkeypatch.setattr(tr.TrajectoryNLP, "solve", counting(tr.TrajectoryNLP.solve))
+    monkeypatch.setattr(tr.TrajectoryNLP, "check", counting(tr.TrajectoryNLP.check))
     return calls
 
 

@@ -46,8 +46,10 @@ from typing import Dict, List, Optional
 
 import numpy as np
 
-#: Ipopt return statuses counted as converged.
-SUCCESS_STATUSES = frozenset({"Solve_Succeeded"})
+#: Statuses counted as converged: Ipopt's, and ``Rows_Verified`` (:meth:`NLP.check
+#: <castrajectory.solve.nlp.NLP.check>`: every row of a square feasibility problem holds to the
+#: tolerance at a point computed piecewise, so it is a KKT point with zero multipliers).
+SUCCESS_STATUSES = frozenset({"Solve_Succeeded", "Rows_Verified"})
 
 _ADVICE = {
     "Maximum_Iterations_Exceeded": "raise max_iter or supply a better initial guess",
@@ -165,6 +167,8 @@ class NLPResult(Result):
     @staticmethod
     def describe_status(status: str) -> str:
         """A one-line message for an Ipopt return status, with advice when it failed."""
+        if status == "Rows_Verified":
+            return "every row holds to the requested tolerance at the assembled point (checked, no Ipopt iteration)"
         if status in SUCCESS_STATUSES:
             return "Ipopt converged to the requested tolerance"
         advice = _ADVICE.get(status, "see Ipopt's documentation of this status")

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from typing import Dict, List, Sequence, Union
+from typing import Dict, List, Optional, Sequence, Union
 
 import casadi as ca
 import numpy as np
@@ -365,6 +365,42 @@ class Program:
             out[b.name] = vec[i:i + n].copy()
             i += n
         return out
+
+    def row_values(self, x: np.ndarray, p: Optional[np.ndarray] = None) -> np.ndarray:
+        """Every row ``g(x)`` of the program at the stacked primal ``x`` (numbers, in row order).
+
+        Element families are evaluated element by element (mapped), expressions by one function;
+        nothing is differentiated.
+        """
+        if p is None:
+            p = np.concatenate([b.init for b in self._params]) if self._params else np.zeros(0)
+        x = np.asarray(x, float).reshape(-1)
+        out = np.empty(self._ng)
+        exprs = [(c.slice, g) for c, g in zip(self._cons.values(), self._g) if not isinstance(g, _Group)]
+        if exprs:
+            if getattr(self, "_row_fun", None) is None:
+                self._row_fun = self.evaluator(ca.vertcat(*[g for _, g in exprs]))
+            vals, i = np.asarray(self._row_fun(x, p)).reshape(-1), 0
+            for sl, _ in exprs:
+                out[sl] = vals[i:i + sl.stop - sl.start]
+                i += sl.stop - sl.start
+        for c, g in zip(self._cons.values(), self._g):
+            if isinstance(g, _Group):
+                fn = g.fn.map(g.count) if g.count > 1 else g.fn
+                out[c.slice] = np.asarray(fn(*self._element_values(g, x, p))).reshape(-1, order="F")
+        return out
+
+    @staticmethod
+    def _element_values(g: _Group, x: np.ndarray, p: np.ndarray) -> list:
+        """The arguments of an element family at ``(x, p)``: one column per element (or one shared)."""
+        call = []
+        for a in g.args:
+            if isinstance(a, X):
+                v = (p if isinstance(a, P) else x)[a.index]
+                call.append(v.T if v.ndim == 2 else v.reshape(-1, 1))
+            else:
+                call.append(a.T if a.ndim == 2 else a.reshape(-1, 1))
+        return call
 
     def evaluator(self, *exprs) -> ca.Function:
         """A CasADi function ``(x, p) -> exprs`` of the stacked variables and parameters."""

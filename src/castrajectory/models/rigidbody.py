@@ -265,16 +265,52 @@ def heavy_top(mass: float, inertia: Inertia, distance: float, g: float = 9.81) -
 
 
 # ----------------------------------------------------------------------------- oracles
-def elliptic_k(m: float) -> float:
-    """Complete elliptic integral of the first kind ``K(m) = ∫₀^{π/2} dθ/√(1 − m sin²θ)`` (AGM)."""
-    if not 0.0 <= m < 1.0:
+def elliptic_k(m: float, complement: Optional[float] = None) -> float:
+    """Complete elliptic integral of the first kind ``K(m) = ∫₀^{π/2} dθ/√(1 − m sin²θ)`` (AGM).
+
+    ``complement``: ``1 − m`` given directly, which keeps its relative accuracy near ``m = 1``
+    (where ``K ≈ ln(4/√(1 − m))``); ``m`` is then ignored."""
+    m1 = 1.0 - m if complement is None else float(complement)
+    if not 0.0 < m1 <= 1.0:
         raise ValueError("K(m) needs 0 <= m < 1")
-    a, b = 1.0, math.sqrt(1.0 - m)
+    a, b = 1.0, math.sqrt(m1)
     for _ in range(100):
         if abs(a - b) <= 1e-16 * a:
             break
         a, b = 0.5 * (a + b), math.sqrt(a * b)
     return math.pi / (2.0 * a)
+
+
+def _flip_parameters(inertia: Inertia, omega0: Sequence[float]):
+    """``(1 − m, s, r, I_a, I_b, I_c, 2E)`` of :func:`flip_interval`, or ``None`` (separatrix,
+    symmetric body).  ``1 − m`` is formed without cancellation: with ``r = L²/2E``,
+    ``1 − m = (I_c − I_a)(r − I_b)/((I_c − I_b)(r − I_a))`` for ``r > I_b`` (and the mirror image for
+    ``r < I_b``), where ``2E (r − I_b) = I_c(I_c − I_b)ω_c² − I_a(I_b − I_a)ω_a²`` -- two small terms
+    near the intermediate axis, not a difference of the O(1) invariants."""
+    I = inertia.moments
+    w = np.asarray(omega0, float)
+    order = np.argsort(I)
+    Ia, Ib, Ic = I[order]
+    wa, _, wc = w[order]
+    if not (Ia < Ib < Ic):
+        return None
+    E2 = float(np.sum(I * w * w))
+    L2 = float(np.sum((I * w) ** 2))
+    if E2 <= 0.0:
+        return None
+    d = (Ic * (Ic - Ib) * wc * wc - Ia * (Ib - Ia) * wa * wa) / E2  # r - I_b
+    r = Ib + d
+    if d > 0:
+        m1 = (Ic - Ia) * d / ((Ic - Ib) * (r - Ia))
+        s = math.sqrt((Ic - Ib) * (L2 - E2 * Ia) / (Ia * Ib * Ic))
+    elif d < 0:
+        m1 = (Ic - Ia) * (-d) / ((Ib - Ia) * (Ic - r))
+        s = math.sqrt((Ib - Ia) * (E2 * Ic - L2) / (Ia * Ib * Ic))
+    else:
+        return None
+    if not 0.0 < m1 <= 1.0 or s == 0.0:
+        return None
+    return m1, s, r, Ia, Ib, Ic, E2
 
 
 def flip_interval(inertia: Inertia, omega0: Sequence[float]) -> float:
@@ -286,27 +322,43 @@ def flip_interval(inertia: Inertia, omega0: Sequence[float]) -> float:
     ``s = √((I_c − I_b)(L² − 2E I_a)/(I_a I_b I_c))``; otherwise the roles of ``I_a`` and ``I_c`` swap.
     ``2K/s`` is the half-period of the two oscillating rates (the intermediate one always); whether
     their sign changes are flips depends on the axis the spin starts on
-    (:func:`castrajectory.inspect.rigidbody.free_body`).  ``inf`` on the separatrix.
+    (:func:`castrajectory.inspect.rigidbody.free_body`).  ``inf`` on the separatrix.  ``1 − m`` is
+    computed without cancellation (:func:`_flip_parameters`), so the value keeps its relative
+    accuracy near the separatrix, where ``K`` grows like ``ln(4/√(1 − m))``.
     """
-    I = inertia.moments
-    w = np.asarray(omega0, float)
-    order = np.argsort(I)
-    Ia, Ib, Ic = I[order]
-    if not (Ia < Ib < Ic):
+    par = _flip_parameters(inertia, omega0)
+    if par is None:
         return math.inf
-    E2 = float(np.sum(I * w * w))
-    L2 = float(np.sum((I * w) ** 2))
-    if L2 > E2 * Ib:
-        m = (Ib - Ia) * (E2 * Ic - L2) / ((Ic - Ib) * (L2 - E2 * Ia))
-        s = math.sqrt((Ic - Ib) * (L2 - E2 * Ia) / (Ia * Ib * Ic))
-    elif L2 < E2 * Ib:
-        m = (Ic - Ib) * (L2 - E2 * Ia) / ((Ib - Ia) * (E2 * Ic - L2))
-        s = math.sqrt((Ib - Ia) * (E2 * Ic - L2) / (Ia * Ib * Ic))
-    else:
+    m1, s = par[0], par[1]
+    return 2.0 * elliptic_k(0.0, complement=m1) / s
+
+
+def flip_interval_sensitivity(inertia: Inertia, omega0: Sequence[float]) -> float:
+    """``|∂T/∂ ln(L²/2E)|`` (seconds) of the flip interval ``T`` of :func:`flip_interval`.
+
+    ``m`` depends on the invariants only through ``r = L²/2E``, and near the intermediate axis
+    ``∂T/∂m ≈ 1/(s(1 − m))``: a relative change ``ε`` of ``L²/2E`` -- a solver residual, a drift, one
+    rounding -- moves ``T`` by about this number times ``ε``.  It is the floor of any computed flip
+    interval: for I = (1, 2, 3), ω₀ = (1e-3, 1, 1e-3) it is 3.5e6 s, so one ulp (2.2e-16) of
+    ``L²/2E`` moves ``T`` by 7.7e-10 s.  (Central difference in ``r − I_b``, at fixed ``2E``.)"""
+    par = _flip_parameters(inertia, omega0)
+    if par is None:
         return math.inf
-    if not 0.0 <= m < 1.0 or s == 0.0:
-        return math.inf
-    return 2.0 * elliptic_k(m) / s
+    _, _, r, Ia, Ib, Ic, E2 = par
+
+    def T(d):
+        rr = Ib + d
+        if d > 0:
+            m1 = (Ic - Ia) * d / ((Ic - Ib) * (rr - Ia))
+            s = math.sqrt((Ic - Ib) * E2 * (rr - Ia) / (Ia * Ib * Ic))
+        else:
+            m1 = (Ic - Ia) * (-d) / ((Ib - Ia) * (Ic - rr))
+            s = math.sqrt((Ib - Ia) * E2 * (Ic - rr) / (Ia * Ib * Ic))
+        return 2.0 * elliptic_k(0.0, complement=m1) / s
+
+    d = r - Ib
+    step = 1e-6 * abs(d)
+    return abs(r * (T(d + step) - T(d - step)) / (2 * step))
 
 
 def intermediate_axis(inertia: Inertia) -> int:

@@ -438,26 +438,8 @@ class NLP(Program):
             worst = max(worst, float(vals.max()) if vals.size else 0.0)
         return worst
 
-    def solve(self, init: Optional[Dict[str, object]] = None, *, warm: Optional[NLPResult] = None,
-              options: Optional[dict] = None, verbose: bool = False, expand: bool = False,
-              homotopy: Sequence[float] = (1e-1, 1e-2, 1e-3, 1e-5, 1e-7, 0.0),
-              bounds: Optional[Dict[str, tuple]] = None) -> NLPResult:
-        """Solve and return a :class:`~castrajectory.result.NLPResult` (never raises on non-convergence).
-
-        Parameters
-        ----------
-        init: initial guesses by variable name (defaults: the ``init`` given to :meth:`variable`).
-        warm: a previous result of this NLP; its primal and dual values start the solve.
-        options: Ipopt options overriding :data:`DEFAULT_IPOPT_OPTIONS`.
-        verbose: stream Ipopt's banner and iteration log.
-        homotopy: relaxation values ``sigma`` used when the NLP has complementarity pairs;
-            each step warm-starts from the previous one.
-        bounds: ``{name: (lb, ub)}`` overriding, for this solve only, the bounds of a
-            variable block or a constraint (``(-inf, inf)`` switches a constraint off;
-            ``lb == ub`` fixes variables, which Ipopt then removes).
-        """
-        solver = self.build(options, verbose, expand)
-        build_time = self._build_time
+    def _arguments(self, init, warm, bounds) -> dict:
+        """Ipopt's ``x0, lbx, ubx, lbg, ubg`` from a guess by name, a warm start and bound overrides."""
         x0 = np.concatenate([b.init for b in self._vars])
         if warm is not None and warm.x is not None:
             x0 = warm.x.copy()
@@ -483,7 +465,98 @@ class NLP(Program):
                 else:
                     idx = self.index(name)
                     lbx[idx], ubx[idx] = _column(lo, idx.size, f"{name}.lb"), _column(hi, idx.size, f"{name}.ub")
-        args = dict(x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
+        return dict(x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
+
+    def _rows_and_gradients(self, x: np.ndarray):
+        """Every row ``g(x)`` and each row's largest ``|∂g/∂x|`` (what Ipopt's gradient-based
+        scaling reads), from the compiled element kernels the solver uses.  An element's
+        derivative entries are taken one by one (a variable entering an element twice is not summed)."""
+        p = np.concatenate([b.init for b in self._params]) if self._params else np.zeros(0)
+        g, grad = np.empty(self._ng), np.zeros(self._ng)
+        exprs = [(c.slice, e) for c, e in zip(self._cons.values(), self._g) if not isinstance(e, _Group)]
+        if exprs:
+            if getattr(self, "_row_jac_fun", None) is None:
+                ge = ca.vertcat(*[e for _, e in exprs])
+                self._row_jac_fun = self.evaluator(ge, ca.jacobian(ge, ca.vertcat(*[b.sym for b in self._vars])))
+            vals, jac = self._row_jac_fun(x, p)
+            vals, jmax = np.asarray(vals).reshape(-1), np.abs(np.asarray(jac)).max(axis=1)
+            i = 0
+            for sl, _ in exprs:
+                n = sl.stop - sl.start
+                g[sl], grad[sl] = vals[i:i + n], jmax[i:i + n]
+                i += n
+        for c, grp in zip(self._cons.values(), self._g):
+            if not isinstance(grp, _Group):
+                continue
+            E, r = grp.count, grp.size
+            kinds = tuple("x" if isinstance(a, X) and not isinstance(a, P) else "o" for a in grp.args)
+            kern = _kernels(grp.fn, kinds, False, JIT)
+            call = [ca.DM(v) for v in self._element_values(grp, x, p)]
+            call = [call[i] for i in kern.keep]
+            g[c.slice] = np.asarray(kern.value(E, call)).reshape(-1, order="F")
+            jr, _ = kern.jac_rc
+            if jr.size:
+                jv = np.abs(np.asarray(kern.jac(E, call))).reshape(jr.size, E, order="F")
+                m = np.zeros((r, E))
+                for row in np.unique(jr):
+                    m[row] = jv[jr == row].max(axis=0)
+                grad[c.slice] = m.reshape(-1, order="F")
+        return g, grad
+
+    def check(self, init: Dict[str, object], tol: float, bounds: Optional[Dict[str, tuple]] = None) -> NLPResult:
+        """Check a point computed elsewhere (e.g. piece by piece) against every row, without Ipopt.
+
+        Only for a *square feasibility problem* (constant objective, no complementarity): there a
+        point where every row and bound holds within ``tol`` is a KKT point with zero multipliers
+        (``∇f = 0 = ∇gᵀλ``), and it is returned with status ``Rows_Verified``.  Otherwise the
+        result fails with ``Rows_Not_Verified`` and the caller solves.  Costs one evaluation of
+        the rows, a small fraction of building the solver.
+        """
+        if self._f_groups or self.has_complementarity or (
+                self._f is not None and not ca.SX(self._f).is_constant()):
+            raise ValueError("check() is for square feasibility problems (constant objective, no complementarity)")
+        t = time.perf_counter()
+        a = self._arguments(init, None, bounds)
+        x = a["x0"]
+        g, grad = self._rows_and_gradients(x)
+        # Ipopt's acceptance: rows scaled as its gradient-based scaling does (a row whose largest
+        # derivative exceeds 100 is divided by it / 100), within tol; unscaled within constr_viol_tol.
+        scale = np.minimum(1.0, 100.0 / np.maximum(grad, 1e-300))
+        rows = np.maximum(a["lbg"] - g, g - a["ubg"])
+        viol = max(float(np.max(rows * scale, initial=0.0)),
+                   float(np.max(np.maximum(a["lbx"] - x, x - a["ubx"]), initial=0.0)))
+        ok = bool(np.isfinite(viol) and viol <= tol and np.max(rows, initial=0.0) <= 1e-4)
+        status = "Rows_Verified" if ok else "Rows_Not_Verified"
+        message = NLPResult.describe_status(status) if ok else \
+            f"the assembled point misses a row by {viol:.3g} (tolerance {tol:g}); worst row {int(np.argmax(rows * scale))} of {self._ng}"
+        f = float(ca.evalf(ca.SX(self._f))) if self._f is not None else 0.0
+        return NLPResult(
+            values=self._split(x, self._vars), multipliers={c.name: np.zeros(c.size) for c in self._cons.values()},
+            bound_multipliers=self._split(np.zeros_like(x), self._vars), objective=f, solver_status=status,
+            success=ok, message=message, iterations=0, build_time_s=0.0, solve_time_s=time.perf_counter() - t,
+            x=x, lam_x=np.zeros_like(x), lam_g=np.zeros(self._ng))
+
+    def solve(self, init: Optional[Dict[str, object]] = None, *, warm: Optional[NLPResult] = None,
+              options: Optional[dict] = None, verbose: bool = False, expand: bool = False,
+              homotopy: Sequence[float] = (1e-1, 1e-2, 1e-3, 1e-5, 1e-7, 0.0),
+              bounds: Optional[Dict[str, tuple]] = None) -> NLPResult:
+        """Solve and return a :class:`~castrajectory.result.NLPResult` (never raises on non-convergence).
+
+        Parameters
+        ----------
+        init: initial guesses by variable name (defaults: the ``init`` given to :meth:`variable`).
+        warm: a previous result of this NLP; its primal and dual values start the solve.
+        options: Ipopt options overriding :data:`DEFAULT_IPOPT_OPTIONS`.
+        verbose: stream Ipopt's banner and iteration log.
+        homotopy: relaxation values ``sigma`` used when the NLP has complementarity pairs;
+            each step warm-starts from the previous one.
+        bounds: ``{name: (lb, ub)}`` overriding, for this solve only, the bounds of a
+            variable block or a constraint (``(-inf, inf)`` switches a constraint off;
+            ``lb == ub`` fixes variables, which Ipopt then removes).
+        """
+        solver = self.build(options, verbose, expand)
+        build_time = self._build_time
+        args = self._arguments(init, warm, bounds)
         if warm is not None and warm.lam_g is not None:
             args.update(lam_x0=warm.lam_x, lam_g0=warm.lam_g)
 

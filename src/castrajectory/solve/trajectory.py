@@ -39,8 +39,10 @@ import numpy as np
 
 from ..discretise.lagrangians import DiscreteMechanics, rk4_step
 from ..discretise.trajectory import TrajectoryTranscription
+from . import jit
 from ..models.mechanics import LagrangianSystem
 from ..result import NLPResult, Result
+from . import nlp as _nlp
 from .nlp import NLP
 from ..validation import InputError, integer_at_least, positive
 
@@ -135,6 +137,14 @@ class TrajectoryNLP(TrajectoryTranscription):
         return res
 
 
+    def check(self, values: Dict[str, np.ndarray], options: Optional[dict] = None) -> NLPResult:
+        """Check an assembled trajectory against every row (initial value: a square problem), to the
+        ``tol`` of ``options`` (or :data:`TRAJECTORY_IPOPT`'s); see :meth:`NLP.check`."""
+        tol = float({**TRAJECTORY_IPOPT, **(options or {})}["tol"])
+        init = {k: v for k, v in values.items() if k in self.nlp.variable_names}
+        return self.nlp.check(init, tol, bounds=self.fixed_bounds())
+
+
 # ----------------------------------------------------------------------------- guesses
 def _resample(t_old: np.ndarray, Y: np.ndarray, t_new: np.ndarray, points: int = 4) -> np.ndarray:
     """Lagrange interpolation of rows of ``Y`` on a uniform grid ``t_old`` (``points``-point stencils,
@@ -216,22 +226,24 @@ GUESS_SUBSTEPS = 4
 #: inside its stability interval, |hλ| < 2.78); otherwise a stiff step falls back to the
 #: straight line (coarsest level) or the shifted level guess (windows).
 GUESS_H_OMEGA = 1.0
-_FLOWS: Dict[tuple, tuple] = {}  # (id(dm), h, steps) -> (dm, flow function)
+_FLOWS: Dict[tuple, tuple] = {}  # (id(dm), "step") -> (dm, step, compiled?); (id(step), steps) -> (step, flow)
 
 
-def _flow(dm: DiscreteMechanics, h: float, steps: int) -> ca.Function:
-    """RK4 (``GUESS_SUBSTEPS`` substeps per step) of the Euler–Lagrange equations over ``steps`` steps:
-    ``x₀ = (q, q̇) ↦`` columns per step of the state at its end node, the configurations at the
-    scheme's stage times, the constraint multipliers at its start node and at the stage times."""
-    key = (id(dm), float(h), int(steps))
+def _flow_step(dm: DiscreteMechanics, compile_: bool) -> ca.Function:
+    """One step ``(x₀ = (q, q̇), h) ↦`` (state at its end node, configurations at the scheme's stage
+    times, multipliers at its start node and at the stage times): RK4 with ``GUESS_SUBSTEPS``
+    substeps of the Euler–Lagrange equations.  ``compile_``: compiled (:mod:`~castrajectory.solve.jit`),
+    once per system and scheme (``h`` is an input, so every level and window shares it); otherwise
+    a compiled version is used only if one is cached (as for the NLP's element families)."""
+    key = (id(dm), "step")
     hit = _FLOWS.get(key)
-    if hit is not None and hit[0] is dm:  # the same object, not a new one at a reused id
+    if hit is not None and hit[0] is dm and (hit[2] or not compile_):  # the same object, not a reused id
         return hit[1]
     n, st = dm.n, dm.scheme.stages
     acc, lamf = dm.system.acceleration, dm.system.multiplier
-    x = ca.SX.sym("x", 2 * n)
+    x, hs = ca.SX.sym("x", 2 * n), ca.SX.sym("h")
     f = lambda y: ca.vertcat(y[n:], acc(y[:n], y[n:]))  # noqa: E731
-    dt, y, stage, stage_lam = h / GUESS_SUBSTEPS, x, [], []
+    dt, y, stage, stage_lam = hs / GUESS_SUBSTEPS, x, [], []
     marks = {round((j + 1) * GUESS_SUBSTEPS / (st + 1)) - 1 for j in range(st)}
     for j in range(GUESS_SUBSTEPS):
         y = rk4_step(f, y, dt)
@@ -239,13 +251,28 @@ def _flow(dm: DiscreteMechanics, h: float, steps: int) -> ca.Function:
             stage.append(y[:n])
             stage_lam.append(lamf(y[:n], y[n:]))
     empty = ca.SX(0, 1)
-    step = ca.Function("guess_step", [x], [y, ca.vertcat(*stage) if stage else empty, lamf(x[:n], x[n:]),
-                                           ca.vertcat(*stage_lam) if stage_lam else empty])
-    fn = step.mapaccum("guess_flow", int(steps))
+    step = ca.Function("guess_step", [x, hs], [y, ca.vertcat(*stage) if stage else empty, lamf(x[:n], x[n:]),
+                                               ca.vertcat(*stage_lam) if stage_lam else empty])
+    fast = jit.compiled(step, compile_) if _nlp.JIT else step
     if len(_FLOWS) > 64:
         _FLOWS.clear()
-    _FLOWS[key] = (dm, fn)
-    return fn
+    _FLOWS[key] = (dm, fast, fast is not step)
+    return fast
+
+
+def _flow(dm: DiscreteMechanics, h: float, steps: int) -> ca.Function:
+    """:func:`_flow_step` over ``steps`` steps of length ``h``: ``x₀ ↦`` one column per step."""
+    step = _flow_step(dm, steps >= _nlp.JIT_MIN_ELEMENTS)
+    key = (id(step), int(steps))
+    hit = _FLOWS.get(key)
+    if hit is not None and hit[0] is step:
+        fn = hit[1]
+    else:
+        fn = step.mapaccum("guess_flow", int(steps))
+        if len(_FLOWS) > 64:
+            _FLOWS.clear()
+        _FLOWS[key] = (step, fn)
+    return lambda x0: fn(x0, float(h))
 
 
 def _flow_guess(dm: DiscreteMechanics, q0, qd0, h: float, steps: int) -> Optional[Dict[str, np.ndarray]]:
@@ -358,6 +385,9 @@ def _solve_level(tn: TrajectoryNLP, guess, options, verbose, log: List[Level], a
     Nc = cur["nu"].reshape(N, st * m) if (m and s) else None
     cache: Dict[int, TrajectoryNLP] = {}
     K, L = 0, 1 << max(1, int(math.log2(max(2, N // 32))))  # powers of two: few distinct window NLPs
+    # A window length that failed is not tried again on this level: it measures how far the
+    # integrated motion stays within Newton's reach of the discrete one, a property of the motion.
+    cap = N
     pK = tn.end.copy()
     while K < N:
         L = min(L, N - K)
@@ -401,15 +431,23 @@ def _solve_level(tn: TrajectoryNLP, guess, options, verbose, log: List[Level], a
                     Nc[K:K + L] = r.values["nu"].reshape(L, st * m)
             Zlast = Zc[K + L - 1] if s else np.zeros(0)
             pK = np.asarray(dm.p_minus(Qc[K + L - 1], Zlast, Qc[K + L], h)).reshape(-1)
-            K, L = K + L, 2 * L
+            K, L = K + L, min(2 * L, cap)
         else:
             L //= 2
+            cap = L
             if L == 0:
                 break  # no window converges here; the whole solve below reports the failure honestly
-    # Every row solved window by window (K = N): the whole solve is a check that usually takes
-    # 0 iterations, so it keeps the first attempt's solver (no rebuild).  Otherwise it gets the
+    # Every row solved window by window (K = N): the assembled point is checked against every row
+    # of the whole (square) NLP, which costs one evaluation instead of building its solver.  If a
+    # row misses (or the windows stopped short), the whole solve follows: from the assembly it
+    # usually takes 0 iterations and keeps the first attempt's solver; otherwise it gets the
     # caller's iteration budget to report the failure -- at the requested N only: a coarse level
     # that fails is dropped anyway.
+    if K >= N and tn.mode == "initial_value":
+        res = tn.check(cur, options=first)
+        log.append(Level(N, N, res.solver_status, 0, 0.0, res.solve_time_s, 0.0))
+        if res.success:
+            return res
     solver_before = tn.nlp._solver
     res = tn.solve(cur, options=first if (K >= N or not final) else options, verbose=verbose)
     rebuilt = tn.nlp._solver is not solver_before  # other Ipopt options than the first attempt
@@ -476,6 +514,7 @@ def solve_initial_value(system: LagrangianSystem, q0, qd0, T: float, N: int, sch
     levels = _levels(N, coarsest)
     windowed: List[bool] = []  # per level solved: did it need horizon windows?
     flow_first = False
+    flow_failed = False  # a level that started from the integrated motion did not converge
     i = 0
     while i < len(levels):
         tn = TrajectoryNLP(dm, levels[i], T, "initial_value", q0, p0)
@@ -493,7 +532,7 @@ def solve_initial_value(system: LagrangianSystem, q0, qd0, T: float, N: int, sch
         n_log = len(log)
         final = i == len(levels) - 1
         level_options = options if final else {"tol": COARSE_TOL, **(options or {})}
-        jumped = windowed[-2:] == [True, True]
+        jumped = windowed[-2:] == [True, True] or flow_failed
         after_windows = (bool(windowed) and windowed[-1] and not jumped) or (not solved and flow_first)
         # after a windowed level, a coarse level whose whole attempt fails is not windowed itself:
         # two such levels in a row send the ladder to N (below), where the windows are worth it
@@ -508,6 +547,13 @@ def solve_initial_value(system: LagrangianSystem, q0, qd0, T: float, N: int, sch
             if extrapolated and len(log) == n_log + 1 and res.iterations <= FINAL_JUMP_ITERATIONS:
                 i = max(i, len(levels) - 1)
         windowed.append(jumped or len(log) > n_log + 1 or (after_windows and not res.success))
+        if not res.success and not solved and flow_first:
+            # The integrated motion is also the guess of every finer level until one converges.
+            # It failed here: over this horizon the discrete motion of a grid this coarse parts from
+            # it (near-separatrix or chaotic motion), and refining towards N only narrows the gap.
+            # Go to N, straight to the windows, which start from the integrated motion piece by piece.
+            flow_failed = True
+            i = max(i, len(levels) - 1)
         if windowed[-2:] == [True, True]:
             # Two levels in a row needed horizon windows (the guess from the coarser level was too
             # far for one Newton solve: chaotic or near-separatrix motion, not a coarse grid's
