@@ -16,7 +16,7 @@ import numpy as np
 from castrajectory import cli
 from castrajectory.models import collision
 from castrajectory.solve import trajectory
-from castrajectory.solve.contact import simultaneous_impact
+from castrajectory.models.impact import simultaneous_impact
 from castrajectory.validation import finite
 
 CORNER_NAMES = ["lower left", "lower right", "upper right", "upper left"]

@@ -63,6 +63,8 @@ from typing import Optional, Sequence
 import casadi as ca
 import numpy as np
 
+from .impact import (  # noqa: F401  (the impact law lives in models.impact; these names stay importable here)
+    Impact, _finite_vector, impact_law, resolve_impact, restitution, simultaneous_impact, system_impact)
 from .mechanics import Atoms, Contact, Gravity, LagrangianSystem, MassMatrix, Potential
 from ..validation import InputError, finite, integer_at_least, positive
 
@@ -70,26 +72,6 @@ NAMES = ["cx", "cy", "theta"]
 
 
 # ----------------------------------------------------------------------------- parameters, checked once
-def restitution(value) -> float:
-    """Restitution coefficient ``e ∈ [0, 1]`` (checked; the one check of a user's ``e``)."""
-    e = finite("restitution", value)
-    if not 0.0 <= e <= 1.0:
-        raise InputError(f"restitution must be between 0 and 1 (got {value})")
-    return e
-
-
-def _finite_vector(name: str, value, n: Optional[int] = None) -> np.ndarray:
-    try:
-        v = np.asarray(value, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        raise InputError(f"{name} must be a vector of numbers (got {value!r})") from None
-    if n is not None and v.size != n:
-        raise InputError(f"{name} must have {n} components (got {v.size})")
-    if not np.all(np.isfinite(v)):
-        raise InputError(f"{name} must be finite (got {v.tolist()})")
-    return v
-
-
 @dataclass(frozen=True)
 class Body:
     """A uniform ``width × height`` rectangle of mass ``mass``: the parameters of every rectangle scene.
@@ -216,80 +198,6 @@ def admissible_direction(mass: float, inertia: float, theta: float, corner: Sequ
 
 
 # ----------------------------------------------------------------------------- impact law
-@dataclass
-class Impact:
-    """One resolved impact: ``v⁺ = v⁻ + μ M⁻¹Jᵀ``."""
-
-    mu: float
-    v_before: np.ndarray
-    v_after: np.ndarray
-    direction: np.ndarray          # M⁻¹Jᵀ, the velocity change per unit μ
-    jacobian: np.ndarray           # J = ∂gap/∂q
-    ke_before: float
-    ke_after: float
-    restitution: float
-
-    @property
-    def normal_velocity_before(self) -> float:
-        return float(self.jacobian @ self.v_before)
-
-    @property
-    def normal_velocity_after(self) -> float:
-        return float(self.jacobian @ self.v_after)
-
-
-def resolve_impact(M, J, v_before, e: float) -> Impact:
-    """Impulsive contact of a system with mass matrix ``M`` and contact-gap gradient ``J``.
-
-    ``M`` (n × n, symmetric positive definite) and ``J`` (n, or 1 × n) are
-    numbers, for example ``LagrangianSystem.mass_matrix(q)`` and the Jacobian
-    of a gap at ``q`` (see :func:`system_impact`).  The impulse acts along
-    ``M⁻¹Jᵀ`` with ``μ = −(1 + e) J v⁻ / (J M⁻¹ Jᵀ)`` when the contact is
-    approaching (``J v⁻ < 0``), and ``μ = 0`` otherwise.  Checks its arguments once and
-    applies :func:`impact_law`.
-    """
-    e = restitution(e)
-    v = _finite_vector("velocity", v_before)
-    n = v.size
-    try:
-        M = np.asarray(M, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError("mass matrix must be a matrix of numbers") from None
-    if M.shape != (n, n):
-        raise InputError(f"mass matrix must be {n} x {n} to match the velocity (got shape {M.shape})")
-    if not np.all(np.isfinite(M)):
-        raise InputError("mass matrix must be finite")
-    if not np.allclose(M, M.T, rtol=1e-12, atol=0.0):
-        raise InputError("mass matrix must be symmetric")
-    try:
-        np.linalg.cholesky(M)
-    except np.linalg.LinAlgError:
-        raise InputError("mass matrix must be positive definite") from None
-    J = _finite_vector("contact Jacobian", J, n)
-    if not np.any(J != 0.0):
-        raise InputError("contact Jacobian must be nonzero")
-    return impact_law(M, J, v, e)
-
-
-def impact_law(M: np.ndarray, J: np.ndarray, v: np.ndarray, e: float) -> Impact:
-    """Newton's law for one contact, on values already checked (``M`` SPD, ``J ≠ 0``, ``e ∈ [0, 1]``):
-    ``μ = −(1 + e) J v⁻ / (J M⁻¹ Jᵀ)`` when approaching, ``v⁺ = v⁻ + μ M⁻¹Jᵀ``."""
-    chol = np.linalg.cholesky(M)
-    direction = np.linalg.solve(chol.T, np.linalg.solve(chol, J))   # M⁻¹Jᵀ
-    a = float(J @ direction)                                         # J M⁻¹ Jᵀ
-    vn = float(J @ v)
-    mu = -(1.0 + e) * vn / a if vn < 0.0 else 0.0
-    v_after = v + mu * direction if mu > 0.0 else v.copy()
-    return Impact(mu, v, v_after, direction, J, 0.5 * float(v @ M @ v), 0.5 * float(v_after @ M @ v_after), e)
-
-
-def system_impact(system: LagrangianSystem, gap, q, v_before, e: float) -> Impact:
-    """:func:`resolve_impact` for a :class:`LagrangianSystem` and a gap expression ``gap(system.q) ≥ 0``."""
-    qv = _finite_vector("q", q, system.nq)
-    J = ca.Function("J", [system.q], [ca.densify(ca.jacobian(gap, system.q))])
-    return resolve_impact(np.asarray(system.mass_matrix(qv)), np.asarray(J(qv)).reshape(-1), v_before, e)
-
-
 @dataclass
 class CornerImpact(Impact):
     """:class:`Impact` of a rectangle's body point, with the body data."""

@@ -43,7 +43,7 @@ from typing import Dict, List, Optional
 
 import numpy as np
 
-from ..models.collision import impact_law
+from ..models.impact import impact_law, simultaneous_impact  # noqa: F401  (re-exported)
 from ..models.mechanics import LagrangianSystem
 from ..result import HomotopyStep, NLPResult, Result
 from ..validation import InputError
@@ -256,19 +256,6 @@ def _hold(cm: ContactMechanics, q, v, active, iterations: int = 4):
     MiJt = np.linalg.solve(M, J.T)
     v = v - MiJt @ np.linalg.lstsq(J @ MiJt, J @ v, rcond=None)[0]
     return q, v
-
-
-def simultaneous_impact(M, J, v, e, sweeps: int = 200):
-    """Newton's law at several contacts at once: ``J v⁺ + e J v⁻ ≥ 0 ⟂ μ ≥ 0``, ``v⁺ = v⁻ + M⁻¹Jᵀμ`` (PGS)."""
-    MiJt = np.linalg.solve(M, J.T)
-    W = J @ MiJt
-    target = -e * (J @ v)
-    mu = np.zeros(J.shape[0])
-    for _ in range(sweeps):
-        for i in range(mu.size):
-            r = J[i] @ (v + MiJt @ mu) - target[i]
-            mu[i] = max(0.0, mu[i] - r / W[i, i])
-    return mu, v + MiJt @ mu
 
 
 def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h: float,
