@@ -91,7 +91,7 @@ def check_kkt(tr, gap_tol: float = KKT_TOL):
     assert 1 <= len(tr.homotopy) <= MAX_PENALTY_STEPS
     for step in tr.homotopy:
         assert step.iterations > 0 and isinstance(step.status, str) and step.status
-        assert step.sigma > 0 and step.solve_time_s >= 0 and step.parameter == "rho"
+        assert step.sigma > 0 and step.solve_time_s >= 0 and step.parameter in ("rho", "branch")
     # the reported residual is the last step's; the iteration count covers every attempt
     assert tr.homotopy[-1].complementarity_residual == pytest.approx(tr.complementarity_residual, rel=1e-12)
     assert tr.iterations >= sum(s.iterations for s in tr.homotopy)
@@ -255,7 +255,7 @@ def test_resting_ball_stays_on_the_ground(e):
     # the deviation by 4 m max|q| / h; node 0's dual cell is [0, h/2].
     mgh = m * G * h
     lam = tr.node_impulse[:, 0]
-    bound = 4 * m * np.max(np.abs(tr.q[:, 0])) / h
+    bound = 4 * m * np.max(np.abs(tr.q[:, 0])) / h + 1e-12 * mgh  # (+ rounding, for an exact rest)
     assert abs(lam[0] - mgh / 2) <= bound
     assert np.max(np.abs(lam[1:] - mgh)) <= bound
     assert np.max(np.abs(lam[1:] / mgh - 1)) <= 1e-6, np.max(np.abs(lam[1:] / mgh - 1))
@@ -362,7 +362,17 @@ def _rocking_checks(tr, e, m=1.0, w=2.0, hgt=1.0, vx=0.5, x_tol=1e-10):
             law = col.rectangle_impact(m, w, hgt, imp.q[2], imp.v_before, e, cs[imp.contact])
             np.testing.assert_allclose(imp.v_after, law.v_after, rtol=0, atol=1e-6)
             checked += 1
-    assert np.all(np.diff(tr.energy) <= 1e-7 * tr.energy[0])
+    # no energy gain between nodes (1e-7 E0); next to a catch -- an arrival slower than the grid resolves,
+    # taken plastically -- the gain is bounded by the normal kinetic energy of one step of gravity,
+    # ½ m (g h)² (1.1e-4 J measured at h = 3 ms, e = 0.3, against 4.3e-4 J)
+    h = tr.t[1] - tr.t[0]
+    gain = np.diff(tr.energy)
+    near = np.zeros(gain.size, bool)
+    for imp in tr.impacts:
+        if imp.caught:
+            near[max(imp.step - 1, 0):imp.step + 4] = True
+    assert np.all(gain[~near] <= 1e-7 * tr.energy[0])
+    assert np.all(gain[near] <= 0.5 * m * (G * h) ** 2)
     return bounces, checked
 
 
@@ -658,3 +668,23 @@ def test_spring_ball_bounce_times_converge_at_second_order_and_beat_moreau_jean(
     for w, b in zip(whole, mj):
         assert w["impact_time_error"] < 0.05 * b["impact_time_error"]
         assert w["apex_error"] < 1e-6 < b["apex_error"]
+
+
+# ----------------------------------------------------------------------------- the branch the guess identifies
+@pytest.mark.parametrize("e,H,v0,T,N", [(0.744, 2.8, 1.783, 4.5, 4000),   # failed after 441 iterations before
+                                        (0.855, 1.2, -0.5, 3.0, 600)])
+def test_ball_bounces_exact_against_the_closed_form(e, H, v0, T, N):
+    """Inelastic bounces, a rising start: every impact time and post-impact speed on the closed form, the
+    complementarity recomputed from the returned arrays (gaps times impulses) at rounding."""
+    tr = ball(H, e, T, N, v0)
+    assert tr.success, tr.message
+    times, _, speeds = col.ball_oracle(H, v0, G, e, T)
+    assert len(tr.impacts) == len(times) >= 3
+    for imp, t, s in zip(tr.impacts, times, speeds):
+        # the midpoint flight under gravity is exact: measured 8e-15 s, 1e-15 m/s
+        assert abs(imp.t - t) <= 1e-11
+        assert imp.v_before[0] == pytest.approx(-s, abs=1e-10)
+        assert imp.v_after[0] == pytest.approx(e * s, abs=1e-10)
+    comp = max(np.max(np.abs(tr.gap * tr.nu)), np.max(np.abs(tr.gap_sub * tr.mu)))
+    assert comp <= 1e-12
+    assert min(np.min(tr.gap), np.min(tr.gap_sub)) >= -1e-12

@@ -18,15 +18,20 @@ Solution strategy (chosen by the library)
    accumulation point of Zeno bouncing): a plastic impact, after which the
    caught contacts are *held* (each RK4 step projected back onto ``φ_j = 0``,
    ``J_j v = 0``: the body rests or slides) until the free flight would lift one off.
-2. **Whole solve** of all ``N`` steps from that guess with the penalty ladder.
+2. **The branch the guess identifies** (:meth:`ContactNLP.solve_branch`): every complementarity
+   pair decided by the guess (touching contacts keep their gap rows as equalities, open ones have no
+   force or impulse; Newton's law exact at the guess's bounces), a nearly square NLP whose solution is
+   a solution of the complementarity problem.  From the event-located guess it converges in a few
+   iterations; a wrong decision stops it within :data:`BRANCH_IPOPT`'s budget.
+3. Otherwise the **whole solve** of all ``N`` steps from that guess with the penalty ladder.
    If it fails where the residual's unweighted check of Newton's law rejects
    the last point Ipopt solved (a *loophole*: the law's weight small there, or
    the waiver used for a catch that lifts off again), those laws are weighted
    by ``φ(q_{k+2})/ℓ`` as well (a catch must hold) and the whole solve restarts
    from the guess (at most :data:`HELD_ROUNDS` rounds; :meth:`ContactNLP.loopholes`).
-3. If that fails too, **horizon windows** (small contact NLPs marched over the
-   horizon, each with its own event-located guess and iteration budget) whose
-   assembled solution starts a final whole solve.  If every window converged
+4. If that fails too, **horizon windows** (small contact NLPs marched over the
+   horizon, each with its own event-located guess and iteration budget, its branch first) whose
+   assembled solution starts a final whole solve (its branch first).  If every window converged
    but that final solve does not, the assembled point itself is the answer
    provided it satisfies the whole NLP (scaled rows within
    :data:`ASSEMBLED_ROW_TOL`, residual within :data:`COMPLEMENTARITY_TOL`),
@@ -140,6 +145,13 @@ class ContactTrajectory(Result):
                 "homotopy": [vars(s) for s in self.homotopy], "attempts": self.attempts}
 
 
+#: Options of the branch solve (:meth:`ContactNLP.solve_branch`) on top of CONTACT_IPOPT.  From a guess
+#: that identifies the branch it converges in 6-25 iterations (measured over the battery); a branch that
+#: needs more is a wrong decision, and its iterations grow expensive (restoration on a degenerate KKT
+#: matrix: 2 s each with MUMPS' default pivot tolerance, 0.46 s with 1e-8, on a 4000-step block drop).
+BRANCH_IPOPT = {"max_iter": 30, "mumps_pivtol": 1e-8}
+
+
 class ContactNLP(ContactTranscription):
     """The contact transcription written into an Ipopt :class:`~castrajectory.solve.nlp.NLP`, and its solve."""
 
@@ -151,35 +163,18 @@ class ContactNLP(ContactTranscription):
 
         Returns ``(NLPResult, steps)``; ``NLPResult.build_time_s`` is 0 unless this call (re)built the solver.
         """
-        n, c = self.cm.n, self.cm.c
         before = self.nlp._solver
-        self.nlp.set_parameter("p0", p0)
-        qlo = np.full((self.L + 1, n), -np.inf)
-        qhi = np.full((self.L + 1, n), np.inf)
-        qlo[0] = qhi[0] = q0
+        qlo, qhi = self._q_bounds(q0)
         opts = dict(CONTACT_IPOPT)
         opts.update(options or {})
-        self._law_length = self.law_lengths(guess)
-        self.nlp.set_parameter("law_length", self._law_length.reshape(-1))
-        init = {k: np.asarray(v, float).reshape(-1).copy() for k, v in guess.items()
-                if k in self.nlp.variable_names}
-        init["q"][:n] = q0
-        if "s_plus" not in init:
-            init["s_plus"] = np.zeros(self.L * c)
-            init["s_minus"] = np.zeros(self.L * c)
-        if self.k2.size:
-            self._law_length2 = self.law_lengths2(guess)
-            self.nlp.set_parameter("law_length2", self._law_length2.reshape(-1))
-            if "s_plus2" not in init:
-                init["s_plus2"] = np.zeros(self.k2.size * c)
-                init["s_minus2"] = np.zeros(self.k2.size * c)
+        init = self._start(q0, p0, guess)
         steps: List[HomotopyStep] = []
         res, build = None, 0.0
         self.last_good = None            # (ρ, NLPResult) of the last penalty step Ipopt solved
         for rho in (penalties or PENALTY):
             self.nlp.set_parameter("rho", rho)
             res = self.nlp.solve(init=init if res is None else None, warm=res, options=opts, verbose=verbose,
-                                 bounds={"q": (qlo.reshape(-1), qhi.reshape(-1))})
+                                 bounds={"q": (qlo, qhi)})
             if self.nlp._solver is not before and build == 0.0:
                 build = res.build_time_s
             resid = self.residual(res.values)
@@ -198,6 +193,97 @@ class ContactNLP(ContactTranscription):
                      f"Ipopt converged but the complementarity residual "
                      f"{steps[-1].complementarity_residual:.2e} exceeds {COMPLEMENTARITY_TOL:g}")
         return res
+
+    def solve_branch(self, q0, p0, guess: Dict[str, np.ndarray], options=None, verbose=False) -> NLPResult:
+        """Solve the branch of the complementarity problem that ``guess`` identifies.
+
+        Each pair is decided by the event-located guess: a contact that touches at a node (gap within
+        ``TOUCH_TOL ℓ``) keeps its gap row as an equality and its force free (≥ 0); an open one has its
+        force fixed at 0 and its gap row ≥ 0.  A sub-node with an impulse in the guess sits on the
+        ground (gap row = 0, impulse ≥ 0); the others have no impulse.  Newton's law holds exactly
+        (slacks fixed at 0) at the guess's bounces, and its rows are off elsewhere (no impulse there,
+        or a catch, whose next node is held closed).  Every product of the branch is zero by
+        construction, so a converged branch is a solution of the complementarity problem (gaps ≥ 0,
+        impulses ≥ 0 by the bounds, the law exact at the bounces); the objective left is the selection
+        term.  A wrong decision makes the branch infeasible, and the caller falls back to the penalty
+        continuation (:meth:`solve`).
+        """
+        n, c, L = self.cm.n, self.cm.c, self.L
+        tol = TOUCH_TOL * self.scales_ell
+        Q = np.asarray(guess["q"], float).reshape(L + 1, n)
+        gapf = self.cm.system.gap
+        gq = np.array([np.asarray(gapf(Q[k])[0]).reshape(-1) for k in range(L + 1)])
+        closed = gq <= tol                                   # (L + 1, c)
+        MU = np.asarray(guess["mu"], float).reshape(L, c)
+        hit = MU > 0.0
+        bounced = hit & ~closed[1:]      # an impulse after which the contact is open at the next node
+        zero, inf = np.zeros(L * c), np.full(L * c, np.inf)
+        bounds = {
+            "q": self._q_bounds(q0),
+            "nu": (zero, np.where(closed[:L].reshape(-1), np.inf, 0.0)),
+            "mu": (zero, np.where(hit.reshape(-1), np.inf, 0.0)),
+            "s_plus": (zero, zero), "s_minus": (zero, zero),
+            "node_gap": (zero, np.where(closed[1:].reshape(-1), 0.0, np.inf)),
+            "sub_gap": (zero, np.where(hit.reshape(-1), 0.0, np.inf)),
+        }
+        K2 = self.k2
+        k1 = np.setdiff1d(np.arange(L), np.union1d(K2, self.k_next))
+        on = bounced[k1].reshape(-1)
+        bounds["impact_law"] = (np.where(on, 0.0, -np.inf), np.where(on, 0.0, np.inf))
+        if K2.size:
+            m2 = K2.size
+            MU2 = np.asarray(guess["mu2"], float).reshape(m2, c)
+            hit2 = MU2 > 0.0
+            b2 = hit2 & ~closed[K2 + 1]
+            z2 = np.zeros(m2 * c)
+            bounds.update({"mu2": (z2, np.where(hit2.reshape(-1), np.inf, 0.0)), "s_plus2": (z2, z2),
+                           "s_minus2": (z2, z2), "sub_gap2": (z2, np.where(hit2.reshape(-1), 0.0, np.inf))})
+            on1, on2 = bounced[K2].reshape(-1), b2.reshape(-1)
+            bounds["impact_law_first"] = (np.where(on1, 0.0, -np.inf), np.where(on1, 0.0, np.inf))
+            bounds["impact_law_second"] = (np.where(on2, 0.0, -np.inf), np.where(on2, 0.0, np.inf))
+        init = self._start(q0, p0, guess)
+        self.nlp.set_parameter("rho", PENALTY[0])
+        opts = {**CONTACT_IPOPT, **BRANCH_IPOPT, **(options or {})}
+        opts["max_iter"] = min(int(opts["max_iter"]), BRANCH_IPOPT["max_iter"])
+        before = self.nlp._solver
+        res = self.nlp.solve(init=init, options=opts, verbose=verbose, bounds=bounds)
+        if self.nlp._solver is before:
+            res.build_time_s = 0.0
+        resid = self.residual(res.values)
+        res.homotopy = [HomotopyStep(PENALTY[0], res.solver_status, res.iterations, res.solve_time_s, resid,
+                                     parameter="branch")]
+        res.complementarity_residual = resid
+        if res.success and resid > COMPLEMENTARITY_TOL:
+            res.fail("Complementarity_Not_Reached",
+                     f"the branch converged but the complementarity residual {resid:.2e} exceeds {COMPLEMENTARITY_TOL:g}")
+        return res
+
+    def _q_bounds(self, q0):
+        n = self.cm.n
+        qlo = np.full((self.L + 1, n), -np.inf)
+        qhi = np.full((self.L + 1, n), np.inf)
+        qlo[0] = qhi[0] = q0
+        return qlo.reshape(-1), qhi.reshape(-1)
+
+    def _start(self, q0, p0, guess):
+        """Set ``p0`` and the law lengths from ``guess``; the initial point by name."""
+        n, c = self.cm.n, self.cm.c
+        self.nlp.set_parameter("p0", p0)
+        self._law_length = self.law_lengths(guess)
+        self.nlp.set_parameter("law_length", self._law_length.reshape(-1))
+        init = {k: np.asarray(v, float).reshape(-1).copy() for k, v in guess.items()
+                if k in self.nlp.variable_names}
+        init["q"][:n] = q0
+        if "s_plus" not in init:
+            init["s_plus"] = np.zeros(self.L * c)
+            init["s_minus"] = np.zeros(self.L * c)
+        if self.k2.size:
+            self._law_length2 = self.law_lengths2(guess)
+            self.nlp.set_parameter("law_length2", self._law_length2.reshape(-1))
+            if "s_plus2" not in init:
+                init["s_plus2"] = np.zeros(self.k2.size * c)
+                init["s_minus2"] = np.zeros(self.k2.size * c)
+        return init
 
     def row_violation(self, p0, values) -> float:
         """Largest scaled violation of this NLP's rows at ``values`` (all of its variables, e.g.
@@ -483,8 +569,12 @@ def solve_contact(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: s
     guess_time = time.perf_counter() - t_guess
     # a second sub-node only in the steps where the guess has two impacts (none: the one-sub-node NLP)
     whole = ContactNLP(cm, N + LOOKAHEAD, h, scales, k2=guess.get("k2"))
-    res = whole.solve(q0, p0, guess, penalties, options, verbose)
-    attempts.append(_attempt("whole", res))
+    # the branch of the complementarity problem that the guess identifies, then the penalty continuation
+    res = whole.solve_branch(q0, p0, guess, options, verbose)
+    attempts.append(_attempt("branch", res))
+    if not res.success:
+        res = whole.solve(q0, p0, guess, penalties, options, verbose)
+        attempts.append(_attempt("whole", res))
     held = np.zeros((whole.L, cm.c), dtype=bool)
     for _ in range(HELD_ROUNDS if not res.success else 0):
         # the law used as a loophole at the last point Ipopt solved (ContactNLP.loopholes): there
@@ -506,8 +596,11 @@ def solve_contact(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: s
         if cur is not None:
             # the windows have one sub-node per step: the second sub-nodes start from the guess
             cur.update({key: guess[key] for key in ("k2", "qs2", "beta2", "mu2", "bounced2") if key in guess})
-            res = whole.solve(q0, p0, cur, penalties, options, verbose)
-            attempts.append(_attempt("whole-after-windows", res))
+            res = whole.solve_branch(q0, p0, cur, options, verbose)
+            attempts.append(_attempt("branch-after-windows", res))
+            if not res.success:
+                res = whole.solve(q0, p0, cur, penalties, options, verbose)
+                attempts.append(_attempt("whole-after-windows", res))
             if not res.success:
                 res = _assembled(whole, p0, cur, res)
     return _finish(cm, whole, res, N, h, attempts, guess_time, p0)
@@ -580,11 +673,13 @@ def _windows(cm, q0, p0, N, h, length, scales, penalties, options, verbose, atte
             cache[L] = ContactNLP(cm, L + LOOKAHEAD, h, scales)
         w = cache[L]
         vK = np.linalg.solve(np.asarray(Mf(qK)), pK)
-        r = w.solve(qK, pK, event_guess(cm, qK, vK, L + LOOKAHEAD, h, length, w.v_zeno, two_impacts=False),
-                    penalties,
-                    dict(options or {}, max_iter=min(WINDOW_MAX_ITER, int((options or {}).get(
-                        "max_iter", WINDOW_MAX_ITER)))), verbose)
-        attempts.append(_attempt(f"window {K}:{K + L}", r))
+        wguess = event_guess(cm, qK, vK, L + LOOKAHEAD, h, length, w.v_zeno, two_impacts=False)
+        wopts = dict(options or {}, max_iter=min(WINDOW_MAX_ITER, int((options or {}).get("max_iter", WINDOW_MAX_ITER))))
+        r = w.solve_branch(qK, pK, wguess, wopts, verbose)
+        attempts.append(_attempt(f"window {K}:{K + L} branch", r))
+        if not r.success:
+            r = w.solve(qK, pK, wguess, penalties, wopts, verbose)
+            attempts.append(_attempt(f"window {K}:{K + L}", r))
         if sum(a["iterations"] for a in attempts if a["stage"].startswith("window")) > WINDOWS_MAX_ITER_TOTAL:
             return None
         if r.success:
