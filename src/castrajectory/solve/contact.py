@@ -217,7 +217,7 @@ class ContactNLP(ContactTranscription):
         MU = np.asarray(guess["mu"], float).reshape(L, c)
         hit = MU > 0.0
         bounced = hit & ~closed[1:]      # an impulse after which the contact is open at the next node
-        zero, inf = np.zeros(L * c), np.full(L * c, np.inf)
+        zero = np.zeros(L * c)
         bounds = {
             "q": self._q_bounds(q0),
             "nu": (zero, np.where(closed[:L].reshape(-1), np.inf, 0.0)),
@@ -344,6 +344,34 @@ def _hold(cm: ContactMechanics, q, v, active, iterations: int = 4):
     return q, v
 
 
+def _held_step(cm: ContactMechanics, q, p, active, h, v, iterations: int = 8):
+    """One step of the discrete motion with the ``active`` contacts held closed (``ContactMechanics.held_step``,
+    Newton from the free flight): ``(q̃, q_{k+1}, ν, μ, p_{k+1}⁻)``, or ``None`` if Newton does not converge
+    or a held contact would pull (``ν`` or ``μ`` < 0: it is released, the caller flies freely)."""
+    n, c = cm.n, cm.c
+    mask = active.astype(float)
+    x = np.concatenate([q + 0.5 * h * v, q + h * v, np.zeros(c), np.zeros(c)])
+    scale = 1.0 + float(np.max(np.abs(p)))
+    for _ in range(iterations):
+        r, Jr = cm.held_step(x, q, p, mask, h)
+        r = np.asarray(r).reshape(-1)
+        try:
+            dx = np.linalg.solve(np.asarray(Jr), -r)
+        except np.linalg.LinAlgError:
+            return None
+        x = x + dx
+        if np.max(np.abs(dx)) <= 1e-12 * (1.0 + float(np.max(np.abs(x)))):
+            break
+    r = np.asarray(cm.held_step(x, q, p, mask, h)[0]).reshape(-1)
+    if not np.all(np.isfinite(x)) or np.max(np.abs(r)) > 1e-9 * scale / h:
+        return None
+    qs, qn, nu, mu = x[:n], x[n:2 * n], x[2 * n:2 * n + c], x[2 * n + c:]
+    if np.any(nu[active] < 0) or np.any(mu[active] < 0):
+        return None
+    p_next = np.asarray(cm.p_node_minus(qs, 0.0, qn, h)).reshape(-1)
+    return qs, qn, nu, np.where(active, mu, 0.0), p_next
+
+
 def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h: float,
                 length: float, v_zeno: float, two_impacts: bool = True) -> Dict[str, np.ndarray]:
     """Guess for ``L`` steps from ``(q0, v0)``: RK4 flight with located impacts (see module docstring).
@@ -371,8 +399,32 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
     active = np.zeros(c, dtype=bool)
     tol = TOUCH_TOL * length
     k = 0
+    p_held = None  # discrete momentum at the node, while the guess marches the held contacts
     while k < L:
         if np.any(active):
+            pk = p_held if p_held is not None else np.asarray(Mf(q)) @ v
+            step = _held_step(cm, q, pk, active, h, v)
+            if step is not None:
+                phn = np.asarray(gapf(step[1])[0]).reshape(-1)
+                closing = ~active & (phn < -tol)
+                if np.any(closing):
+                    # another contact closes during the held step: caught too, held from the step's middle
+                    step = _held_step(cm, q, pk, active | closing, h, v)
+                    if step is not None:
+                        phn = np.asarray(gapf(step[1])[0]).reshape(-1)
+                        active = active | closing
+            if step is not None:
+                qs_k, qn, nu_k, mu_k, p_next = step
+                if np.all(phn[~active] >= -tol):
+                    # the discrete motion with the held contacts (it keeps pressing on them)
+                    S[k], B[k], event[k] = qs_k, 0.0, True
+                    MU[k] = mu_k
+                    q, p_held = qn, p_next
+                    v = np.linalg.solve(np.asarray(Mf(q)), p_next)
+                    Q[k + 1] = q
+                    k += 1
+                    continue
+            p_held = None
             qn, vn, ph = (np.asarray(x).reshape(-1) for x in cm.flow(q, v, h))
             active &= ~(ph > tol)                        # the free flight lifts it off: released
             closing = ~active & (ph < -tol)              # crossings while held: caught too (a guess)

@@ -83,6 +83,16 @@ class ContactMechanics:
         self.p_node_plus = ca.Function("p_node_plus", [qk, qs, b, h], [-D1(qk, qs, a * h)])
         self.p_node_minus = ca.Function("p_node_minus", [qsm, bm, qk, h], [D2(qsm, qk, (1 - am) * h)])
         self._generic_functions(J, phi)
+        # a held step of the guess (α = ½): the node row with the incoming momentum p, the sub-node row,
+        # and, for the contacts held (mask 1), both gaps closed; the others' force and impulse pinned
+        # to 0.  Square in (q̃, q_{k+1}, ν, μ): the discrete motion with the held contacts as
+        # constraints (docs/derivations.md, "Contact trajectories", §5, "Held contacts")
+        mask = sym("mask", c)
+        xh = ca.vertcat(qs, qk1, nu, mu)
+        Rh = ca.vertcat((p0 + D1(qk, qs, 0.5 * h)) / h + ca.mtimes(J(qk).T, nu * mask),
+                        self.sub(qk, qs, qk1, 0.0, mu * mask, h),
+                        mask * phi(qs) + (1 - mask) * mu, mask * phi(qk1) + (1 - mask) * nu)
+        self.held_step = ca.Function("held_step", [xh, qk, p0, mask, h], [Rh, ca.jacobian(Rh, xh)])
         # free sub-node (no impact, α = ½): Newton function for the guess
         F = D2(qk, qs, 0.5 * h) + D1(qs, qk1, 0.5 * h)
         self.free_sub = ca.Function("free_sub", [qk, qs, qk1, h], [F, ca.jacobian(F, qs)])

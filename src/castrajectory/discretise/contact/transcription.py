@@ -97,11 +97,14 @@ LOOKAHEAD = 1
 def _v_zeno(cm: ContactMechanics, h: float, scales) -> float:
     """Slow-arrival speed under which the guess lets the body be caught (event_guess).
 
-    v_z = max(2, 1/e) a h, so that above v_z a bounce leaves at e v_z ≥ a h and clears the next
-    node; for e = 0 every arrival is caught (plastic).
+    v_z = a h / e: above it a bounce leaves at e v ≥ a h, so its flight lasts at least two steps and
+    clears the next node (by ½ a h² after one step); below it the bounce would come back within two
+    steps, the grid cannot resolve it, and the arrival is the end of an accumulation.  For e = 0 every
+    arrival is caught (plastic: Newton's law itself).  (A floor of 2 a h, used before, also caught
+    bounces the grid resolves, e.g. an arrival at 0.112 m/s with e = 0.5, h = 3 ms.)
     """
     ell, pref, vref, aref = scales
-    factor = max(REST_SPEED_STEPS, 1.0 / cm.e) if cm.e > 0 else 1e12
+    factor = 1.0 / cm.e if cm.e > 0 else 1e12
     return max(factor * aref * h, 1e-12 * vref)
 
 
