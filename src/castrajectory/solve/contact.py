@@ -212,18 +212,30 @@ class ContactNLP(ContactTranscription):
         tol = TOUCH_TOL * self.scales_ell
         Q = np.asarray(guess["q"], float).reshape(L + 1, n)
         gapf = self.cm.system.gap
-        gq = np.array([np.asarray(gapf(Q[k])[0]).reshape(-1) for k in range(L + 1)])
+        S = np.asarray(guess["qs"], float).reshape(L, n)
+        gq = np.asarray(gapf.map(L + 1)(Q.T)[0]).reshape(c, L + 1).T
+        gs = np.asarray(gapf.map(L)(S.T)[0]).reshape(c, L).T
         closed = gq <= tol                                   # (L + 1, c)
         MU = np.asarray(guess["mu"], float).reshape(L, c)
+        NU = np.asarray(guess["nu"], float).reshape(L, c)
         hit = MU > 0.0
         bounced = hit & ~closed[1:]      # an impulse after which the contact is open at the next node
+        # a pair the guess leaves undecided -- touching, but without force or impulse (a contact being
+        # released, or grazing) -- stays a complementarity pair, penalised in the objective and
+        # checked by the residual below; every other pair is decided
+        press = np.zeros((L + 1, c), bool)
+        press[:L] = NU > 0.0
+        press[L] = closed[L] & closed[L - 1] & press[L - 1]
+        node_closed = closed & press
+        node_free = closed & ~press
+        sub_free = (gs <= tol) & ~hit
         zero = np.zeros(L * c)
         bounds = {
             "q": self._q_bounds(q0),
-            "nu": (zero, np.where(closed[:L].reshape(-1), np.inf, 0.0)),
-            "mu": (zero, np.where(hit.reshape(-1), np.inf, 0.0)),
+            "nu": (zero, np.where((node_closed | node_free)[:L].reshape(-1), np.inf, 0.0)),
+            "mu": (zero, np.where((hit | sub_free).reshape(-1), np.inf, 0.0)),
             "s_plus": (zero, zero), "s_minus": (zero, zero),
-            "node_gap": (zero, np.where(closed[1:].reshape(-1), 0.0, np.inf)),
+            "node_gap": (zero, np.where(node_closed[1:].reshape(-1), 0.0, np.inf)),
             "sub_gap": (zero, np.where(hit.reshape(-1), 0.0, np.inf)),
         }
         K2 = self.k2
@@ -242,17 +254,28 @@ class ContactNLP(ContactTranscription):
             bounds["impact_law_first"] = (np.where(on1, 0.0, -np.inf), np.where(on1, 0.0, np.inf))
             bounds["impact_law_second"] = (np.where(on2, 0.0, -np.inf), np.where(on2, 0.0, np.inf))
         init = self._start(q0, p0, guess)
-        self.nlp.set_parameter("rho", PENALTY[0])
         opts = {**CONTACT_IPOPT, **BRANCH_IPOPT, **(options or {})}
         opts["max_iter"] = min(int(opts["max_iter"]), BRANCH_IPOPT["max_iter"])
         before = self.nlp._solver
-        res = self.nlp.solve(init=init, options=opts, verbose=verbose, bounds=bounds)
-        if self.nlp._solver is before:
-            res.build_time_s = 0.0
-        resid = self.residual(res.values)
-        res.homotopy = [HomotopyStep(PENALTY[0], res.solver_status, res.iterations, res.solve_time_s, resid,
-                                     parameter="branch")]
-        res.complementarity_residual = resid
+        steps: List[HomotopyStep] = []
+        res, build = None, 0.0
+        # the undecided pairs (if any) by the penalty ladder, warm-started; decided ones are exact
+        for rho in PENALTY:
+            self.nlp.set_parameter("rho", rho)
+            res = self.nlp.solve(init=init if res is None else None, warm=res, options=opts, verbose=verbose,
+                                 bounds=bounds)
+            if self.nlp._solver is not before and build == 0.0:
+                build = res.build_time_s
+            resid = self.residual(res.values)
+            steps.append(HomotopyStep(rho, res.solver_status, res.iterations, res.solve_time_s, resid,
+                                      parameter="branch"))
+            if not res.success or resid <= COMPLEMENTARITY_TOL or not (np.any(node_free) or np.any(sub_free)):
+                break
+        res.build_time_s = build
+        res.iterations = sum(st.iterations for st in steps)
+        res.solve_time_s = sum(st.solve_time_s for st in steps)
+        res.homotopy = steps
+        res.complementarity_residual = resid = steps[-1].complementarity_residual
         if res.success and resid > COMPLEMENTARITY_TOL:
             res.fail("Complementarity_Not_Reached",
                      f"the branch converged but the complementarity residual {resid:.2e} exceeds {COMPLEMENTARITY_TOL:g}")
