@@ -294,7 +294,18 @@ class ContactTranscription:
         B = values["beta"].reshape(L)
         raw, nxt = (np.asarray(v).reshape(c, L).T for v in cm.law_check.map(L)(Q[:-1].T, S.T, Q[1:].T, B, MU.T, h))
         nxt2 = np.vstack([nxt[1:], nxt[-1:]])
-        return raw, (nxt > self.open_gap) | (nxt2 > self.open_gap)
+        leaves = (nxt > self.open_gap) | (nxt2 > self.open_gap)
+        # ... if the contact arrived faster than the grid resolves (v_z = a h / e): a slower arrival
+        # would bounce back within two steps, and its plastic catch is the discrete end of an
+        # accumulation even where the contact opens again soon after
+        ks = np.where(np.any(leaves & (MU > 0), axis=1))[0]
+        if ks.size:
+            pm = np.asarray(cm.p_minus.map(ks.size)(Q[ks].T, S[ks].T, B[ks], h)).T
+            for i, k in enumerate(ks):
+                J = np.asarray(cm.system.gap(S[k])[1])
+                vn = J @ np.linalg.solve(np.asarray(cm.system.mass_matrix(S[k])), pm[i])
+                leaves[k] &= -vn > self.v_zeno
+        return raw, leaves
 
     def _second(self, values):
         """The second sub-nodes' arrays (steps ``k2``): x₂, β₂, μ₂ and, per step, x₁, β₁, μ₁, q_k, q_{k+1}."""
