@@ -254,6 +254,8 @@ def summarise(rows, seconds):
              "|---|---|---|---|---|---|---|---|---|---|"]
     for fam in ("ball", "rectangle", "bowl"):
         rs = [r for r in rows if r["family"] == fam]
+        if not rs:
+            continue
         ok = [r for r in rs if r.get("success")]
 
         def worst(key, fn=max):

@@ -347,3 +347,20 @@ def test_resting_ball_reports_m_g_h_per_step():
     d = json.loads(p.stdout)
     assert d["resting_nodes"] >= 190
     assert d["resting_impulse_error"] < 1e-6 and d["max_height_at_rest"] < 1e-9
+
+
+def test_contact_battery_runs_and_checks_against_the_oracle(tmp_path):
+    """The battery from a clone: three ball scenes (with the refinement twin of none), each solved, each
+    checked against the event-driven reference; the CSV and the summary are written."""
+    p = run([str(ROOT / "scripts" / "contact_battery.py"), "--count", "3", "--family", "ball", "--timeout", "60",
+             "--out", str(tmp_path)])
+    assert p.returncode == 0, p.stderr
+    import csv
+    rows = list(csv.DictReader((tmp_path / "battery.csv").open()))
+    assert len(rows) == 1 and rows[0]["family"] == "ball"   # every third scene is a ball
+    assert rows[0]["solved"] == "True"
+    # the ball's flight is exact on the grid: impact times to rounding (measured 1e-14 s)
+    assert float(rows[0]["impact_time_error"]) <= 1e-9
+    assert "solved with every residual check" in (tmp_path / "summary.md").read_text()
+    p = run([str(ROOT / "scripts" / "contact_battery.py"), "--count", "0"])
+    assert p.returncode == 2 and p.stderr.count("\n") == 1
