@@ -1,0 +1,293 @@
+"""The event-located guess of a contact trajectory (see the package docstring, step 1)."""
+from __future__ import annotations
+
+from typing import Dict
+
+import numpy as np
+
+from ...models.impact import impact_law, simultaneous_impact
+from ...discretise.contact.elements import ContactMechanics
+from ...discretise.contact.transcription import ALPHA_MIN, REST_SPEED_STEPS, TOUCH_TOL
+
+
+#: Contacts whose gaps close within this (times the length scale) of each other at a located
+#: crossing take one simultaneous impact in the guess (a flat landing).
+SIMULTANEOUS_TOL = 1e-9
+#: Steps looked ahead after a bounce for the rocking-accumulation catch of the guess.
+LOOKAHEAD_CATCH = 3
+#: Steps of free flight integrated per call in the event-located guess.
+GUESS_CHUNK = 64
+
+
+
+# ----------------------------------------------------------------------------- event-located guess
+def _bisect_crossing(cm: ContactMechanics, q, v, tau_hi, active):
+    """Earliest time in (0, tau_hi] at which an active gap reaches zero (bisection on the RK4 flow)."""
+    lo, hi = 0.0, tau_hi
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        _, _, ph = cm.flow(q, v, mid)
+        if np.min(np.asarray(ph).reshape(-1)[active]) < 0.0:
+            hi = mid
+        else:
+            lo = mid
+        if hi - lo < 1e-14 * max(tau_hi, 1.0):
+            break
+    return hi
+
+
+def _hold(cm: ContactMechanics, q, v, active, iterations: int = 4):
+    """Project ``(q, v)`` onto the held contacts: ``φ_j(q) = 0`` (Newton, M-metric) and ``J_j v = 0``."""
+    M = np.asarray(cm.system.mass_matrix(q))
+    for _ in range(iterations):
+        phi, J = (np.asarray(x) for x in cm.system.gap(q))
+        phi, J = phi.reshape(-1)[active], J[active]
+        MiJt = np.linalg.solve(M, J.T)
+        q = q - MiJt @ np.linalg.lstsq(J @ MiJt, phi, rcond=None)[0]
+    J = np.asarray(cm.system.gap(q)[1])[active]
+    MiJt = np.linalg.solve(M, J.T)
+    v = v - MiJt @ np.linalg.lstsq(J @ MiJt, J @ v, rcond=None)[0]
+    return q, v
+
+
+def _held_step(cm: ContactMechanics, q, p, active, h, v, iterations: int = 8):
+    """One step of the discrete motion with the ``active`` contacts held closed (``ContactMechanics.held_step``,
+    Newton from the free flight): ``(q̃, q_{k+1}, ν, μ, p_{k+1}⁻)``, or ``None`` if Newton does not converge
+    or a held contact would pull (``ν`` or ``μ`` < 0: it is released, the caller flies freely)."""
+    n, c = cm.n, cm.c
+    mask = active.astype(float)
+    x = np.concatenate([q + 0.5 * h * v, q + h * v, np.zeros(c), np.zeros(c)])
+    scale = 1.0 + float(np.max(np.abs(p)))
+    for _ in range(iterations):
+        r, Jr = cm.held_step(x, q, p, mask, h)
+        r = np.asarray(r).reshape(-1)
+        try:
+            dx = np.linalg.solve(np.asarray(Jr), -r)
+        except np.linalg.LinAlgError:
+            return None
+        x = x + dx
+        if np.max(np.abs(dx)) <= 1e-12 * (1.0 + float(np.max(np.abs(x)))):
+            break
+    r = np.asarray(cm.held_step(x, q, p, mask, h)[0]).reshape(-1)
+    if not np.all(np.isfinite(x)) or np.max(np.abs(r)) > 1e-9 * scale / h:
+        return None
+    qs, qn, nu, mu = x[:n], x[n:2 * n], x[2 * n:2 * n + c], x[2 * n + c:]
+    if np.any(nu[active] < 0) or np.any(mu[active] < 0):
+        return None
+    p_next = np.asarray(cm.p_node_minus(qs, 0.0, qn, h)).reshape(-1)
+    return qs, qn, nu, np.where(active, mu, 0.0), p_next
+
+
+def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h: float,
+                length: float, v_zeno: float, two_impacts: bool = True) -> Dict[str, np.ndarray]:
+    """Guess for ``L`` steps from ``(q0, v0)``: RK4 flight with located impacts (see module docstring).
+
+    With ``two_impacts``, the rest of a bounce step is searched for a second crossing, which gets
+    a second impact (restitution e) in that step: the steps ``k2`` with their second sub-node
+    ``qs2``, ``beta2``, ``mu2``, ``bounced2`` (rows over ``k2``).  A third crossing in the same
+    step is not looked for (the flight continues through it).
+    """
+    n, c, e = cm.n, cm.c, cm.e
+    p0 = np.asarray(cm.system.mass_matrix(q0)) @ np.asarray(v0, float)
+    Mf, gapf = cm.system.mass_matrix, cm.system.gap
+    Q = np.zeros((L + 1, n))
+    S = np.zeros((L, n))
+    B = np.zeros(L)
+    MU = np.zeros((L, c))
+    event = np.zeros(L, dtype=bool)
+    BOUNCED = np.zeros((L, c), dtype=bool)      # impacts resolved with restitution (not caught, not resting)
+    second: Dict[int, tuple] = {}               # step -> (β₂, x₂, μ₂ row, bounced₂ row)
+    q, v = np.asarray(q0, float).copy(), np.asarray(v0, float).copy()
+    Q[0] = q
+    # contacts held closed (caught, or resting from the start): the guess then flies constrained
+    # to φ_j = 0 for them (plastic), sliding freely along the ground, until the free flight would
+    # lift one off
+    active = np.zeros(c, dtype=bool)
+    tol = TOUCH_TOL * length
+    k = 0
+    p_held = None  # discrete momentum at the node, while the guess marches the held contacts
+    while k < L:
+        if np.any(active):
+            pk = p_held if p_held is not None else np.asarray(Mf(q)) @ v
+            step = _held_step(cm, q, pk, active, h, v)
+            if step is not None:
+                phn = np.asarray(gapf(step[1])[0]).reshape(-1)
+                closing = ~active & (phn < -tol)
+                if np.any(closing):
+                    # another contact closes during the held step: caught too, held from the step's middle
+                    step = _held_step(cm, q, pk, active | closing, h, v)
+                    if step is not None:
+                        phn = np.asarray(gapf(step[1])[0]).reshape(-1)
+                        active = active | closing
+            if step is not None:
+                qs_k, qn, nu_k, mu_k, p_next = step
+                if np.all(phn[~active] >= -tol):
+                    # the discrete motion with the held contacts (it keeps pressing on them)
+                    S[k], B[k], event[k] = qs_k, 0.0, True
+                    MU[k] = mu_k
+                    q, p_held = qn, p_next
+                    v = np.linalg.solve(np.asarray(Mf(q)), p_next)
+                    Q[k + 1] = q
+                    k += 1
+                    continue
+            p_held = None
+            qn, vn, ph = (np.asarray(x).reshape(-1) for x in cm.flow(q, v, h))
+            active &= ~(ph > tol)                        # the free flight lifts it off: released
+            closing = ~active & (ph < -tol)              # crossings while held: caught too (a guess)
+            if np.any(closing):
+                active |= closing
+                S[k] = 0.5 * (q + qn)
+                B[k] = 0.0
+                event[k] = True
+                Jc = np.asarray(gapf(S[k])[1])[closing]
+                vc = 0.5 * (v + vn)
+                MU[k, closing] = simultaneous_impact(np.asarray(Mf(S[k])), Jc, vc, 0.0)[0]
+            if np.any(active):
+                qn, vn = _hold(cm, qn, vn, active)
+            q, v = qn, vn
+            Q[k + 1] = q
+            k += 1
+            continue
+        phi0, J0 = (np.asarray(x) for x in gapf(q))
+        phi0 = phi0.reshape(-1)
+        touching = phi0 <= tol
+        if not np.any(touching):
+            # fast path: free flight over a chunk of steps (one mapaccum call) up to the first crossing
+            K = min(GUESS_CHUNK, L - k)
+            Qc, Vc, Pc = (np.asarray(x) for x in cm.flights(K)(q, v, h))
+            bad = np.where(np.any(Pc < -tol, axis=0))[0]
+            i = int(bad[0]) if bad.size else K
+            if i:
+                Q[k + 1:k + i + 1] = Qc[:, :i].T
+                q, v = Qc[:, i - 1].copy(), Vc[:, i - 1].copy()
+                k += i
+                continue
+        else:
+            vn0 = J0[touching] @ v
+            an0 = np.asarray(cm.acc_normal(q, v)).reshape(-1)[touching]
+            if np.all(vn0 <= tol / h) and np.any(an0 < 0) and \
+                    np.max(np.abs(J0 @ v)) <= REST_SPEED_STEPS * float(np.max(-an0)) * h:
+                # in contact, not separating, pressed on and no fast normal motion anywhere
+                # on the body: the guess holds the touching contacts from here
+                active = touching.copy()
+                q, v = _hold(cm, q, v, active)
+                continue
+        qn, vn, ph = (np.asarray(x).reshape(-1) for x in cm.flow(q, v, h))
+        # contacts that start touching and separate are not crossings
+        crossing = ~((phi0 <= tol) & (ph >= -tol))
+        if np.any(ph[crossing] < -tol):
+            # the sub-node's time fraction is bounded: an earlier or later crossing is placed at the bound
+            tc = min(max(_bisect_crossing(cm, q, v, h, crossing), ALPHA_MIN * h), (1 - ALPHA_MIN) * h)
+            qc, vc, phc = (np.asarray(x).reshape(-1) for x in cm.flow(q, v, tc))
+            j = int(np.argmin(np.where(crossing, phc, np.inf)))
+            Jall = np.asarray(gapf(qc)[1])
+            Jc = Jall[j]
+            Mc = np.asarray(Mf(qc))
+            event[k] = True
+            B[k] = tc / h - 0.5
+            S[k] = qc
+            an = float(np.asarray(cm.acc_normal(qc, vc)).reshape(-1)[j])
+            slow = an < 0 and -float(Jc @ vc) <= v_zeno and np.max(np.abs(Jall @ vc)) <= 2 * v_zeno
+            if not slow and e < 1.0:
+                # a rocking accumulation: the bounce would barely lift the contact (below v_z h) before
+                # another contact closes within LOOKAHEAD_CATCH steps
+                bounce = impact_law(Mc, Jc, vc, e)
+                _, _, Pf = (np.asarray(x) for x in cm.flights(LOOKAHEAD_CATCH)(qc, bounce.v_after, h))
+                others = np.arange(c) != j
+                slow = bool(np.any(Pf[others] < -tol)) and float(np.max(Pf[j])) <= v_zeno * h
+            if slow:
+                # Zeno accumulation: a slow arrival (below v_zeno, where the NLP may waive the
+                # impact law, see ContactNLP) while every contact of the body moves slowly along
+                # the normal (sliding along the ground does not count).  It is caught, together
+                # with every contact within a slow step's travel: held closed from here on.
+                near = crossing & (phc <= phc[j] + v_zeno * h)
+                mus, v_after = simultaneous_impact(Mc, Jall[near], vc, 0.0)
+                MU[k, near] = mus
+                active = near.copy()
+                qn, vn, _ = (np.asarray(x).reshape(-1) for x in cm.flow(qc, v_after, h - tc))
+                qn, vn = _hold(cm, qn, vn, active)
+                q, v = qn, vn
+                Q[k + 1] = q
+                k += 1
+                continue
+            imp = impact_law(Mc, Jc, vc, e)
+            MU[k, j] = imp.mu
+            BOUNCED[k, j] = True
+            together = np.where(crossing & (phc <= phc[j] + SIMULTANEOUS_TOL * length))[0]
+            if together.size > 1:
+                # contacts that close together (a flat landing): one simultaneous impact
+                mus, v_after = simultaneous_impact(Mc, Jall[together], vc, e)
+                MU[k, together] = mus
+                BOUNCED[k, together] = mus > 0
+                imp.v_after = v_after
+            qn, vn, ph = (np.asarray(x).reshape(-1) for x in cm.flow(qc, imp.v_after, h - tc))
+            # a second crossing in the rest of the step (another contact, or the same one again)
+            crossing2 = ~((phc <= tol) & (ph >= -tol))
+            if two_impacts and tc < (1 - 2 * ALPHA_MIN) * h and np.any(ph[crossing2] < -tol):
+                tc2 = tc + _bisect_crossing(cm, qc, imp.v_after, h - tc, crossing2)
+                tc2 = min(max(tc2, tc + ALPHA_MIN * h), (1 - ALPHA_MIN) * h)
+                qc2, vc2, phc2 = (np.asarray(x).reshape(-1) for x in cm.flow(qc, imp.v_after, tc2 - tc))
+                j2 = int(np.argmin(np.where(crossing2, phc2, np.inf)))
+                Jall2 = np.asarray(gapf(qc2)[1])
+                Mc2 = np.asarray(Mf(qc2))
+                imp2 = impact_law(Mc2, Jall2[j2], vc2, e)
+                mu2, b2 = np.zeros(c), np.zeros(c, dtype=bool)
+                mu2[j2], b2[j2] = imp2.mu, True
+                together = np.where(crossing2 & (phc2 <= phc2[j2] + SIMULTANEOUS_TOL * length))[0]
+                if together.size > 1:
+                    mus, v_after = simultaneous_impact(Mc2, Jall2[together], vc2, e)
+                    mu2[together] = mus
+                    b2[together] = mus > 0
+                    imp2.v_after = v_after
+                second[k] = (tc2 / h - 0.5, qc2, mu2, b2)
+                qn, vn, _ = (np.asarray(x).reshape(-1) for x in cm.flow(qc2, imp2.v_after, h - tc2))
+        q, v = qn, vn
+        Q[k + 1] = q
+        k += 1
+    # free sub-nodes (α = ½) from the nodes: a few Newton steps, all steps at once
+    free = ~event
+    if np.any(free):
+        kk = np.where(free)[0]
+        F = cm.free_sub.map(kk.size)
+        Z = 0.5 * (Q[kk] + Q[kk + 1])
+        for _ in range(4):
+            r, Jr = F(Q[kk].T, Z.T, Q[kk + 1].T, h)
+            r = np.asarray(r).T
+            Jr = np.asarray(Jr).reshape(n, kk.size, n).transpose(1, 0, 2)
+            Z = Z - np.linalg.solve(Jr, r[..., None])[..., 0]
+        S[kk] = Z
+    gq = np.asarray(gapf.map(L + 1)(Q.T)[0]).reshape(c, L + 1).T
+    # steps that start and end on the ground (a resting body): the sub-node rests too, carrying its
+    # share of the weight (least squares on the sub-node equation, clipped at 0), rather than
+    # hopping to the apex of a free midpoint flight: both are exact discrete solutions, and this
+    # one has no motion at all between the nodes (docs/derivations.md, "Contact trajectories", §2, "A resting ball")
+    for k in np.where(~event & (np.min(gq[:-1], axis=1) <= tol) & (np.min(gq[1:], axis=1) <= tol))[0]:
+        S[k] = 0.5 * (Q[k] + Q[k + 1])
+        r = np.asarray(cm.sub(Q[k], S[k], Q[k + 1], B[k], np.zeros(c), h)).reshape(-1) * h
+        Js = np.asarray(gapf(S[k])[1])
+        act = np.asarray(gapf(S[k])[0]).reshape(-1) <= tol
+        if np.any(act):
+            MU[k, act] = np.maximum(np.linalg.lstsq(Js[act].T, -r, rcond=None)[0], 0.0)
+    # node forces where the guess touches: least squares on the node equations, clipped at 0
+    NU = np.zeros((L, c))
+    gq = gq[:L]
+    touching = np.where(np.min(gq, axis=1) <= tol)[0]
+    for k in touching:
+        if k == 0:
+            r = np.asarray(cm.initial(Q[0], S[0], B[0], p0, np.zeros(c), h)).reshape(-1)
+        else:
+            sp, bp = (second[k - 1][1], second[k - 1][0]) if k - 1 in second else (S[k - 1], B[k - 1])
+            r = np.asarray(cm.node(sp, bp, Q[k], S[k], B[k], np.zeros(c), h)).reshape(-1)
+        J = np.asarray(gapf(Q[k])[1])
+        act = gq[k] <= tol
+        sol = np.linalg.lstsq(J[act].T, -r, rcond=None)[0]
+        NU[k, act] = np.maximum(sol, 0.0)
+    out = {"q": Q.reshape(-1), "qs": S.reshape(-1), "beta": B, "mu": MU.reshape(-1), "nu": NU.reshape(-1),
+           "bounced": BOUNCED}
+    if second:
+        k2 = np.array(sorted(second), dtype=np.int64)
+        out.update(k2=k2, beta2=np.array([second[k][0] for k in k2]),
+                   qs2=np.array([second[k][1] for k in k2]).reshape(-1),
+                   mu2=np.array([second[k][2] for k in k2]).reshape(-1),
+                   bounced2=np.array([second[k][3] for k in k2]))
+    return out

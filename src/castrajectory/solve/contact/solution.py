@@ -1,0 +1,194 @@
+"""The solution of a contact trajectory: the result contract, its impacts, and how it is read from the NLP."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import List
+
+import numpy as np
+
+from ...result import HomotopyStep, NLPResult, Result
+from ...discretise.contact.elements import ContactMechanics
+from ...discretise.contact.transcription import LOOKAHEAD, TOUCH_TOL
+from .nlp import ContactNLP
+
+
+#: A sub-node impulse counts as an impact when the contact approaches faster than this many
+#: steps' worth of its normal acceleration (resting contact approaches at about ½ step's worth).
+IMPACT_SPEED_STEPS = 2.0
+#: ... and its impulse exceeds this fraction of the momentum scale (interior-point noise is far below).
+IMPULSE_TOL = 1e-6
+
+@dataclass
+class SubNodeImpact:
+    """One impact found in a solution (at a sub-node; the law itself is :mod:`castrajectory.models.impact`): step ``k``, time, contact, impulse and velocities."""
+
+    step: int
+    t: float
+    contact: int
+    mu: float
+    q: np.ndarray
+    v_before: np.ndarray
+    v_after: np.ndarray
+    #: the contact is closed again at the next node: the body is caught (plastic, Newton's law
+    #: waived; the accumulation of Zeno bouncing or rocking), not a bounce
+    caught: bool = False
+    #: which sub-node of the step: 0 (the first, ``q_sub``), 1 (the second, ``q_sub2``)
+    sub: int = 0
+
+    def as_dict(self) -> dict:
+        return {"step": self.step, "t": self.t, "contact": self.contact, "mu": self.mu,
+                "q": self.q, "v_before": self.v_before, "v_after": self.v_after, "caught": self.caught,
+                "sub": self.sub}
+
+
+@dataclass(kw_only=True)
+class ContactTrajectory(Result):
+    """Solution of a contact trajectory (fields as :class:`castrajectory.solve.trajectory.Trajectory`, plus contact data)."""
+
+    t: np.ndarray
+    q: np.ndarray
+    p: np.ndarray               # node momenta: mean of p_k⁻ and p_k⁺ (see _finish); p_0 as given
+    v: np.ndarray
+    energy: np.ndarray
+    t_sub: np.ndarray           # sub-node times t_k + α_k h, one per step
+    q_sub: np.ndarray
+    mu: np.ndarray              # (N, contacts) sub-node impulses
+    nu: np.ndarray              # (N + 1, contacts) node impulses h ν_k (last row: the look-ahead's node force at T)
+    node_impulse: np.ndarray    # (N + 1, contacts) Λ_k: impulse per node (sub-node impulses lumped, see _finish)
+    gap: np.ndarray             # (N + 1, contacts) gaps at the nodes
+    gap_sub: np.ndarray         # (N, contacts) gaps at the sub-nodes
+    impacts: List[SubNodeImpact]
+    complementarity_residual: float
+    scheme: str
+    homotopy: List[HomotopyStep] = field(default_factory=list)
+    attempts: List[dict] = field(default_factory=list)
+    mode: str = "initial_value"
+    method: str = "whole"
+    #: Steps with a second sub-node (where the event-located guess found two impacts in one step;
+    #: empty otherwise) and, as rows over these steps, its time t_k + α₂ h, configuration, impulses
+    #: and gaps.  In those steps ``t_sub``, ``q_sub``, ``mu`` hold the first sub-node.
+    steps_sub2: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    t_sub2: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    q_sub2: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    mu_sub2: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    gap_sub2: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+
+    def as_dict(self) -> dict:
+        return {**super().as_dict(), "solver_status": self.solver_status,
+                "scheme": self.scheme, "method": self.method, "t": self.t, "q": self.q,
+                "energy": self.energy, "t_sub": self.t_sub, "mu": self.mu, "nu": self.nu,
+                "node_impulse": self.node_impulse,
+                "gap": self.gap, "complementarity_residual": self.complementarity_residual,
+                "impacts": [i.as_dict() for i in self.impacts],
+                "steps_sub2": self.steps_sub2, "t_sub2": self.t_sub2, "mu_sub2": self.mu_sub2,
+                "homotopy": [vars(s) for s in self.homotopy], "attempts": self.attempts}
+
+
+def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: float, attempts,
+            guess_time: float, p0: np.ndarray) -> ContactTrajectory:
+    n, c, sysm = cm.n, cm.c, cm.system
+    # the reported horizon: the first N steps (the look-ahead steps are not part of the answer)
+    q = res.values["q"][:(N + 1) * n].reshape(N + 1, n)
+    S = res.values["qs"][:N * n].reshape(N, n)
+    B = res.values["beta"][:N].reshape(N)
+    MU = res.values["mu"][:N * c].reshape(N, c)
+    hv = np.array([h])
+    # Node momenta: a node force h ν_k makes the one-sided momenta differ, p_k⁺ = p_k⁻ + h ∇φ(q_k)ᵀ ν_k;
+    # the node's momentum is their mean where the contact is closed (for a body resting on the
+    # ground p_k⁻ = −p_k⁺, so it is 0, not ±m g h/4).  Without a node force p_k⁻ = p_k⁺ (DEL).  At t = 0 the given p_0; at T the
+    # look-ahead step supplies ν_N.
+    NL = N + LOOKAHEAD
+    nu_full = h * res.values["nu"][:NL * c].reshape(NL, c)
+    Jn = np.asarray(sysm.gap.map(N + 1)(q.T)[1])                    # (c, (N + 1) n)
+    Jn = Jn.reshape(c, N + 1, n).transpose(1, 0, 2)                  # (N + 1, c, n)
+    # only closed contacts (gap within TOUCH_TOL): on an open one ν is interior-point noise below the
+    # complementarity tolerance, left on p⁺ as before
+    closed = np.asarray(sysm.gap.map(N + 1)(q.T)[0]).reshape(c, N + 1).T <= TOUCH_TOL * tn.scales_ell
+    half = 0.5 * np.einsum("kcn,kc->kn", Jn, np.where(closed, nu_full[:N + 1], 0.0))
+    # second sub-nodes (steps tn.k2; only those of the reported horizon are reported)
+    K2 = tn.k2
+    m2 = K2.size
+    if m2:
+        S2a, B2a, MU2a = (res.values["qs2"].reshape(m2, n), res.values["beta2"].reshape(m2),
+                          res.values["mu2"].reshape(m2, c))
+    else:
+        S2a, B2a, MU2a = np.zeros((0, n)), np.zeros(0), np.zeros((0, c))
+    rep2 = K2 < N
+    last = {int(k): i for i, k in enumerate(K2)}
+    pp = np.asarray(cm.p_node_plus.map(N)(q[:-1].T, S.T, B, hv)).T
+    if N - 1 in last:
+        pN = np.asarray(cm.p_node_minus(S2a[last[N - 1]], B2a[last[N - 1]], q[-1], h)).reshape(1, -1)
+    else:
+        pN = np.asarray(cm.p_node_minus(S[-1], B[-1], q[-1], h)).reshape(1, -1)
+    p = np.vstack([pp - half[:N], pN + half[N:]])
+    p[0] = p0
+    M = np.asarray(sysm.mass_matrix.map(N + 1)(q.T)).reshape(n, N + 1, n).transpose(1, 0, 2)
+    v = np.linalg.solve(M, p[..., None])[..., 0]
+    energy = sysm.energies(q, v)
+    gap = np.asarray(sysm.gap.map(N + 1)(q.T)[0]).reshape(c, N + 1).T
+    gap_sub = np.asarray(sysm.gap.map(N)(S.T)[0]).reshape(c, N).T
+    t = np.linspace(0.0, N * h, N + 1)
+    t_sub = t[:-1] + (0.5 + B) * h
+    # Impacts: sub-node impulses of a contact that approaches faster than a step's worth of its
+    # normal acceleration (slower "impacts" are the discrete form of persistent contact).
+    # caught: closed again at the next two nodes (the look-ahead step supplies node N + 1)
+    q_full = res.values["q"].reshape(-1, n)[:N + 2]
+    gap_full = np.asarray(sysm.gap.map(N + 2)(q_full.T)[0]).reshape(c, N + 2).T
+    impacts = []
+    cands = [(int(k), 0, int(j)) for k, j in zip(*np.where(MU > IMPULSE_TOL * tn.scales_p / tn.scales_ell))]
+    cands += [(int(K2[i]), 1, int(j)) for i, j in zip(*np.where(MU2a > IMPULSE_TOL * tn.scales_p / tn.scales_ell))
+              if K2[i] < N]
+    for k, sub, j in sorted(cands):
+        if sub == 0 and k in last:          # first of two sub-nodes: its next point is the second
+            i = last[k]
+            x, tk, muk = S[k], float(t_sub[k]), float(MU[k, j])
+            pm = np.asarray(cm.p_minus(q[k], S[k], B[k], h)).reshape(-1)
+            pl = np.asarray(cm.p_plus_g(S[k], S2a[i], B[k], B2a[i], h)).reshape(-1)
+        elif sub == 1:
+            i = last[k]
+            x, tk, muk = S2a[i], float(t[k] + (0.5 + B2a[i]) * h), float(MU2a[i, j])
+            pm = np.asarray(cm.p_minus_g(S[k], S2a[i], B[k], B2a[i], h)).reshape(-1)
+            pl = np.asarray(cm.p_plus_g(S2a[i], q[k + 1], B2a[i], 0.5, h)).reshape(-1)
+        else:
+            x, tk, muk = S[k], float(t_sub[k]), float(MU[k, j])
+            pm = np.asarray(cm.p_minus(q[k], S[k], B[k], h)).reshape(-1)
+            pl = np.asarray(cm.p_plus(S[k], q[k + 1], B[k], h)).reshape(-1)
+        Ms = np.asarray(sysm.mass_matrix(x))
+        vb, va = np.linalg.solve(Ms, pm), np.linalg.solve(Ms, pl)
+        Jj = np.asarray(sysm.gap(x)[1])[j]
+        an = abs(float(np.asarray(cm.acc_normal(x, vb)).reshape(-1)[j]))
+        if -float(Jj @ vb) > IMPACT_SPEED_STEPS * an * h:
+            impacts.append(SubNodeImpact(int(k), tk, int(j), muk, np.array(x, float).copy(), vb, va,
+                                  caught=bool(max(gap_full[k + 1, j], gap_full[k + 2, j]) <= tn.open_gap),
+                                  sub=sub))
+    # Impulse per node: Λ_k = h ν_k + (1 − α_k) μ_k + α_{k−1} μ_{k−1}, each sub-node impulse shared
+    # between its two nodes by linear (hat-function) interpolation of its time; node N takes the
+    # look-ahead step's node force and sub-node share (its dual cell reaches past T).  For a body
+    # resting on the ground Λ_k = m g h exactly whatever the sub-nodes do (derivation, "Resting
+    # contact"); Λ_0 covers the half cell [0, h/2].
+    alpha_full = 0.5 + res.values["beta"][:NL]
+    mu_full = res.values["mu"][:NL * c].reshape(NL, c)
+    lam = nu_full[:N + 1] + (1.0 - alpha_full[:N + 1, None]) * mu_full[:N + 1]
+    lam[1:] += alpha_full[:N, None] * mu_full[:N]
+    for i, k in enumerate(K2):
+        # the second sub-node's impulse, shared by the hat weights of its time fraction α₂
+        a2 = 0.5 + B2a[i]
+        if k <= N:
+            lam[k] += (1.0 - a2) * MU2a[i]
+        if k + 1 <= N:
+            lam[k + 1] += a2 * MU2a[i]
+    nu = nu_full[:N + 1].copy()
+    steps2 = K2[rep2]
+    t_sub2 = t[steps2] + (0.5 + B2a[rep2]) * h
+    gap_sub2 = (np.asarray(sysm.gap.map(int(rep2.sum()))(S2a[rep2].T)[0]).reshape(c, -1).T if rep2.any()
+                else np.zeros((0, c)))
+    total_iter = sum(a["iterations"] for a in attempts)
+    return ContactTrajectory(
+        t=t, q=q, p=p, v=v, energy=energy, t_sub=t_sub, q_sub=S, mu=MU, nu=nu, gap=gap, gap_sub=gap_sub,
+        node_impulse=lam, impacts=impacts, complementarity_residual=float(res.complementarity_residual),
+        status=res.status, success=res.success, message=res.message, solver_status=res.solver_status,
+        iterations=int(total_iter),
+        build_time_s=float(sum(a["build_time_s"] for a in attempts)),
+        solve_time_s=float(guess_time + sum(a["solve_time_s"] for a in attempts)),
+        scheme=cm.dm.scheme.name, homotopy=list(res.homotopy), attempts=attempts,
+        steps_sub2=steps2, t_sub2=t_sub2, q_sub2=S2a[rep2], mu_sub2=MU2a[rep2], gap_sub2=gap_sub2)
