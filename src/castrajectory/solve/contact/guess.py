@@ -50,7 +50,7 @@ def _hold(cm: ContactMechanics, q, v, active, iterations: int = 4):
     return q, v
 
 
-def _held_step(cm: ContactMechanics, q, p, active, h, v, iterations: int = 8):
+def _held_step(cm: ContactMechanics, q, p, active, h, v, iterations: int = 20):
     """One step of the discrete motion with the ``active`` contacts held closed (``ContactMechanics.held_step``,
     Newton from the free flight): ``(q̃, q_{k+1}, ν, μ, p_{k+1}⁻)``, or ``None`` if Newton does not converge
     or a held contact would pull (``ν`` or ``μ`` < 0: it is released, the caller flies freely)."""
@@ -69,7 +69,10 @@ def _held_step(cm: ContactMechanics, q, p, active, h, v, iterations: int = 8):
         if np.max(np.abs(dx)) <= 1e-12 * (1.0 + float(np.max(np.abs(x)))):
             break
     r = np.asarray(cm.held_step(x, q, p, mask, h)[0]).reshape(-1)
-    if not np.all(np.isfinite(x)) or np.max(np.abs(r)) > 1e-9 * scale / h:
+    # momentum rows (divided by h) and gap rows (lengths) each to their own scale
+    length = 1.0 + float(np.max(np.abs(q)))
+    if not np.all(np.isfinite(x)) or np.max(np.abs(r[:2 * n])) > 1e-9 * scale / h or \
+            np.max(np.abs(r[2 * n:])) > 1e-12 * length:
         return None
     qs, qn, nu, mu = x[:n], x[n:2 * n], x[2 * n:2 * n + c], x[2 * n + c:]
     if np.any(nu[active] < 0) or np.any(mu[active] < 0):
