@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import io
 import math
 import multiprocessing as mp
 import os
@@ -318,14 +319,11 @@ def main(argv=None):
     t0 = time.perf_counter()
     rows = run_all(scenes, args.jobs, args.timeout, log)
     seconds = time.perf_counter() - t0
-    buf = [",".join(FIELDS)]
-    import io
     sio = io.StringIO()
     w = csv.DictWriter(sio, fieldnames=FIELDS, extrasaction="ignore")
     w.writeheader()
     for r in rows:
         w.writerow({k: _fmt(r.get(k)) for k in FIELDS})
-    del buf
     write_atomic(out / "battery.csv", sio.getvalue())
     summary = summarise(rows, seconds)
     write_atomic(out / "summary.md", summary)

@@ -425,15 +425,8 @@ class NLP(Program):
                 self._comp_fun = self.evaluator(ca.vertcat(*[ca.fabs(a * b) for _, a, b in self._comps]))
             vals = np.asarray(self._comp_fun(x, p)).reshape(-1)
             worst = max(worst, float(vals.max()) if vals.size else 0.0)
-        for _, fabs, args, count in self._comp_groups:
-            call = []
-            for i, a in enumerate(args):
-                if isinstance(a, X):
-                    src = p if isinstance(a, P) else x
-                    vals_i = src[a.index]
-                    call.append(vals_i.T if vals_i.ndim == 2 else vals_i.reshape(-1, 1))
-                else:
-                    call.append(a.T if a.ndim == 2 else a.reshape(-1, 1))
+        for name, fabs, args, count in self._comp_groups:
+            call = self._element_values(_Group(name, fabs, args, count, 0), x, p)
             vals = np.asarray((fabs.map(count) if count > 1 else fabs)(*call)).reshape(-1)
             worst = max(worst, float(vals.max()) if vals.size else 0.0)
         return worst

@@ -31,38 +31,12 @@ class ContactNLP(ContactTranscription):
     def solve(self, q0, p0, guess: Dict[str, np.ndarray], penalties=None, options=None, verbose=False):
         """Solve from ``guess``, raising the penalty until complementarity holds.
 
-        Returns ``(NLPResult, steps)``; ``NLPResult.build_time_s`` is 0 unless this call (re)built the solver.
+        Returns the :class:`NLPResult` of the last penalty step (see :meth:`_ladder`).
         """
-        before = self.nlp._solver
-        qlo, qhi = self._q_bounds(q0)
         opts = dict(CONTACT_IPOPT)
         opts.update(options or {})
-        init = self._start(q0, p0, guess)
-        steps: List[HomotopyStep] = []
-        res, build = None, 0.0
-        self.last_good = None            # (ρ, NLPResult) of the last penalty step Ipopt solved
-        for rho in (penalties or PENALTY):
-            self.nlp.set_parameter("rho", rho)
-            res = self.nlp.solve(init=init if res is None else None, warm=res, options=opts, verbose=verbose,
-                                 bounds={"q": (qlo, qhi)})
-            if self.nlp._solver is not before and build == 0.0:
-                build = res.build_time_s
-            resid = self.residual(res.values)
-            steps.append(HomotopyStep(rho, res.solver_status, res.iterations, res.solve_time_s, resid, parameter="rho"))
-            if res.success:
-                self.last_good = (rho, res)
-            if not res.success or resid <= COMPLEMENTARITY_TOL:
-                break
-        res.build_time_s = build
-        res.iterations = sum(st.iterations for st in steps)
-        res.solve_time_s = sum(st.solve_time_s for st in steps)
-        res.complementarity_residual = steps[-1].complementarity_residual
-        res.homotopy = steps
-        if res.success and steps[-1].complementarity_residual > COMPLEMENTARITY_TOL:
-            res.fail("Complementarity_Not_Reached",
-                     f"Ipopt converged but the complementarity residual "
-                     f"{steps[-1].complementarity_residual:.2e} exceeds {COMPLEMENTARITY_TOL:g}")
-        return res
+        return self._ladder(self._start(q0, p0, guess), opts, {"q": self._q_bounds(q0)}, penalties or PENALTY,
+                            verbose, "rho", "Ipopt")
 
     def solve_branch(self, q0, p0, guess: Dict[str, np.ndarray], options=None, verbose=False) -> NLPResult:
         """Solve the branch of the complementarity problem that ``guess`` identifies.
@@ -126,11 +100,20 @@ class ContactNLP(ContactTranscription):
         init = self._start(q0, p0, guess)
         opts = {**CONTACT_IPOPT, **BRANCH_IPOPT, **(options or {})}
         opts["max_iter"] = min(int(opts["max_iter"]), BRANCH_IPOPT["max_iter"])
+        # the undecided pairs (if any) by the penalty ladder, warm-started; decided ones are exact
+        ladder = PENALTY if (np.any(node_free) or np.any(sub_free)) else PENALTY[:1]
+        return self._ladder(init, opts, bounds, ladder, verbose, "branch", "the branch")
+
+    def _ladder(self, init, opts, bounds, penalties, verbose, parameter: str, who: str) -> NLPResult:
+        """Solve at each penalty ρ of ``penalties`` in turn, warm-started, until complementarity holds
+        (or a solve fails); every step recorded (``HomotopyStep``, ``parameter``).  The result sums the
+        steps' iterations and times; ``build_time_s`` is 0 unless this call (re)built the solver, and
+        ``last_good`` holds (ρ, result) of the last step Ipopt solved."""
         before = self.nlp._solver
         steps: List[HomotopyStep] = []
         res, build = None, 0.0
-        # the undecided pairs (if any) by the penalty ladder, warm-started; decided ones are exact
-        for rho in PENALTY:
+        self.last_good = None
+        for rho in penalties:
             self.nlp.set_parameter("rho", rho)
             res = self.nlp.solve(init=init if res is None else None, warm=res, options=opts, verbose=verbose,
                                  bounds=bounds)
@@ -138,8 +121,10 @@ class ContactNLP(ContactTranscription):
                 build = res.build_time_s
             resid = self.residual(res.values)
             steps.append(HomotopyStep(rho, res.solver_status, res.iterations, res.solve_time_s, resid,
-                                      parameter="branch"))
-            if not res.success or resid <= COMPLEMENTARITY_TOL or not (np.any(node_free) or np.any(sub_free)):
+                                      parameter=parameter))
+            if res.success:
+                self.last_good = (rho, res)
+            if not res.success or resid <= COMPLEMENTARITY_TOL:
                 break
         res.build_time_s = build
         res.iterations = sum(st.iterations for st in steps)
@@ -148,7 +133,7 @@ class ContactNLP(ContactTranscription):
         res.complementarity_residual = resid = steps[-1].complementarity_residual
         if res.success and resid > COMPLEMENTARITY_TOL:
             res.fail("Complementarity_Not_Reached",
-                     f"the branch converged but the complementarity residual {resid:.2e} exceeds {COMPLEMENTARITY_TOL:g}")
+                     f"{who} converged but the complementarity residual {resid:.2e} exceeds {COMPLEMENTARITY_TOL:g}")
         return res
 
     def _q_bounds(self, q0):
