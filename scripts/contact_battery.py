@@ -113,7 +113,7 @@ def command(sc) -> str:
     script = "rectangle_drop" if sc["family"] == "rectangle" else "bowl"
     extra = f" --radius {sc['radius']}" if sc["family"] == "bowl" else ""
     return (f"python problems/{script}.py --restitution {sc['e']} --width {sc['width']} --height {sc['height']} "
-            f"--x {sc['x']} --y {sc['y']:.6g} --angle {sc['angle']} --vx {sc['vx']} --vy {sc['vy']} "
+            f"--x {sc['x']} --y {sc['y']!r} --angle {sc['angle']} --vx {sc['vx']} --vy {sc['vy']} "
             f"--omega {sc['omega']} --T {sc['T']} --n {sc['N']}{extra}")
 
 

@@ -511,23 +511,125 @@ class NLP(Program):
         t = time.perf_counter()
         a = self._arguments(init, None, bounds)
         x = a["x0"]
-        g, grad = self._rows_and_gradients(x)
-        # Ipopt's acceptance: rows scaled as its gradient-based scaling does (a row whose largest
-        # derivative exceeds 100 is divided by it / 100), within tol; unscaled within constr_viol_tol.
-        scale = np.minimum(1.0, 100.0 / np.maximum(grad, 1e-300))
-        rows = np.maximum(a["lbg"] - g, g - a["ubg"])
-        viol = max(float(np.max(rows * scale, initial=0.0)),
-                   float(np.max(np.maximum(a["lbx"] - x, x - a["ubx"]), initial=0.0)))
+        # Ipopt's acceptance: rows scaled as its gradient-based scaling does, within tol; unscaled
+        # within constr_viol_tol
+        viol, rows = self._row_violation(a, x)
         ok = bool(np.isfinite(viol) and viol <= tol and np.max(rows, initial=0.0) <= 1e-4)
         status = "Rows_Verified" if ok else "Rows_Not_Verified"
         message = NLPResult.describe_status(status) if ok else \
-            f"the assembled point misses a row by {viol:.3g} (tolerance {tol:g}); worst row {int(np.argmax(rows * scale))} of {self._ng}"
+            f"the assembled point misses a row by {viol:.3g} (tolerance {tol:g}); worst row {int(np.argmax(rows))} of {self._ng}"
         f = float(ca.evalf(ca.SX(self._f))) if self._f is not None else 0.0
         return NLPResult(
             values=self._split(x, self._vars), multipliers={c.name: np.zeros(c.size) for c in self._cons.values()},
             bound_multipliers=self._split(np.zeros_like(x), self._vars), objective=f, solver_status=status,
             success=ok, message=message, iterations=0, build_time_s=0.0, solve_time_s=time.perf_counter() - t,
             x=x, lam_x=np.zeros_like(x), lam_g=np.zeros(self._ng))
+
+    def certify(self, init: Dict[str, object], tol: float, bounds: Optional[Dict[str, tuple]] = None,
+                newton: bool = True) -> NLPResult:
+        """Certify a point computed elsewhere as a KKT point of this NLP, without Ipopt.
+
+        For a *square branch* (after ``bounds``: as many equality rows as free variables), e.g. a
+        complementarity problem whose every pair is decided and a point solved row by row.  The point
+        must satisfy every row and bound within ``tol`` (scaled as Ipopt scales rows, as in
+        :meth:`check`); the multipliers of the equality rows then follow from stationarity on the free
+        variables, ``J_EFᵀ λ_E = −∇_F f`` (one sparse QR), inequality rows and free bounds get zero
+        multipliers (they hold; weakly active ones are not needed), and fixed variables take what is
+        left, ``λ_x = −(∇f + Jᵀλ)``.  The result is ``Rows_Verified`` (a success, with multipliers
+        and objective) when that solve leaves a stationarity residual within ``tol`` (per variable,
+        relative to ``|∇f| + |J|ᵀ|λ|``: a backward error); otherwise ``Rows_Not_Verified`` and the caller solves.  With ``newton``, the
+        point first takes one Newton step of the whole square system (``J_EF Δx = −g_E``).
+        """
+        t = time.perf_counter()
+        funcs = self.functions()
+        if not funcs:
+            raise ValueError("certify() needs an NLP of element families")
+        a = self._arguments(init, None, bounds)
+        x = a["x0"]
+        p = np.concatenate([b.init for b in self._params]) if self._params else np.zeros(0)
+        free = np.where(a["lbx"] < a["ubx"])[0]
+        eq = np.where(a["lbg"] == a["ubg"])[0]
+        gv, Jg = funcs["jac_g"](x, p)
+        viol, _ = self._row_violation(a, x)
+        if newton and eq.size == free.size:
+            # one Newton step of the whole square system: a point solved piece by piece carries each
+            # piece's rounding forward (a march drifts by 3e-12 m over 176 steps of a free fall); the
+            # whole system's step removes that drift
+            r = np.asarray(gv).reshape(-1)[eq] - a["lbg"][eq]
+            A = Jg[eq.tolist(), free.tolist()]
+            try:
+                dx = np.asarray(ca.solve(A, ca.DM(r), "qr")).reshape(-1)
+                if np.all(np.isfinite(dx)):
+                    xn = x.copy()
+                    xn[free] -= dx
+                    vn, _ = self._row_violation(a, xn)
+                    # kept unless it makes the rows worse beyond rounding (a nearly singular branch)
+                    if vn <= max(viol, 1e-3 * tol):
+                        x, viol = xn, vn
+                        gv, Jg = funcs["jac_g"](x, p)
+            except RuntimeError:
+                pass
+        f, gf = funcs["grad_f"](x, p)
+        gf = np.asarray(gf).reshape(-1)
+        lam_g = np.zeros(self._ng)
+        resid = np.inf
+        why = f"the point misses a row by {viol:.3g} (tolerance {tol:g})"
+        # rows as Ipopt scales them (a row of a very short step has large derivatives and rounding
+        # to match: its unscaled size says nothing)
+        if viol <= tol:
+            if eq.size != free.size:
+                why = f"not a square branch ({eq.size} equality rows, {free.size} free variables)"
+            elif not np.any(gf[free]):
+                # a constant objective on the free variables: zero multipliers are exact
+                lam, resid = np.zeros(eq.size), 0.0
+            else:
+                A = Jg[eq.tolist(), free.tolist()]
+                try:
+                    lam = np.asarray(ca.solve(A.T, ca.DM(-gf[free]), "qr")).reshape(-1)
+                except RuntimeError:
+                    lam = np.full(eq.size, np.nan)
+                lam_g[eq] = lam
+                stat = gf + np.asarray(ca.mtimes(Jg.T, ca.DM(lam_g))).reshape(-1)
+                # backward error: each variable's stationarity relative to the size of its terms
+                # (rows of very short steps have derivatives ~ 1/h², and rounding to match)
+                size = np.abs(gf) + np.asarray(ca.mtimes(ca.fabs(Jg).T, ca.DM(np.abs(lam_g)))).reshape(-1)
+                back = np.abs(stat[free]) / np.maximum(size[free], 1e-300)
+                resid = float(np.max(back, initial=0.0))
+                worst = int(free[np.argmax(back)]) if back.size else 0
+                why = (f"stationarity holds only to {resid:.3g} (tolerance {tol:g}) at variable "
+                       f"{self._variable_name(worst)}: a singular branch")
+        ok = bool(np.isfinite(resid) and resid <= tol)
+        lam_x = np.zeros_like(x)
+        if ok:
+            lam_x = -(gf + np.asarray(ca.mtimes(Jg.T, ca.DM(lam_g))).reshape(-1))
+            lam_x[free] = 0.0
+        status = "Rows_Verified" if ok else "Rows_Not_Verified"
+        message = NLPResult.describe_status(status) if ok else why
+        return NLPResult(
+            values=self._split(x, self._vars),
+            multipliers={c.name: lam_g[c.slice] for c in self._cons.values()},
+            bound_multipliers=self._split(lam_x, self._vars), objective=float(f), solver_status=status,
+            success=ok, message=message, iterations=0, build_time_s=self._build_time,
+            solve_time_s=time.perf_counter() - t, x=x, lam_x=lam_x, lam_g=lam_g)
+
+    def _variable_name(self, i: int) -> str:
+        """``name[j]`` of entry ``i`` of the variable vector."""
+        for b in self._vars:
+            if i < b.init.size:
+                return f"{b.name}[{i}]"
+            i -= b.init.size
+        return f"x[{i}]"
+
+    def _row_violation(self, a: dict, x: np.ndarray):
+        """Largest scaled violation of the rows and bounds of ``a`` at ``x`` (Ipopt's gradient-based
+        scaling: a row whose largest derivative exceeds 100 is divided by it / 100), and the unscaled
+        row violations."""
+        g, grad = self._rows_and_gradients(x)
+        scale = np.minimum(1.0, 100.0 / np.maximum(grad, 1e-300))
+        rows = np.maximum(a["lbg"] - g, g - a["ubg"])
+        viol = max(float(np.max(rows * scale, initial=0.0)),
+                   float(np.max(np.maximum(a["lbx"] - x, x - a["ubx"]), initial=0.0)))
+        return viol, rows
 
     def solve(self, init: Optional[Dict[str, object]] = None, *, warm: Optional[NLPResult] = None,
               options: Optional[dict] = None, verbose: bool = False, expand: bool = False,

@@ -50,8 +50,9 @@ class ContactMechanics:
         phi = lambda q: gapf(q)[0]  # noqa: E731
         self.initial = ca.Function("c_initial", [q0, qs, b, p0, nu, h],
                                    [(p0 + D1(q0, qs, a * h)) / h + ca.mtimes(J(q0).T, nu)])
-        self.node = ca.Function("c_node", [qsm, bm, qk, qs, b, nu, h],
-                                [(D2(qsm, qk, (1 - am) * h) + D1(qk, qs, a * h)) / h + ca.mtimes(J(qk).T, nu)])
+        hp = sym("hp")
+        self.node = ca.Function("c_node", [qsm, bm, qk, qs, b, nu, hp, h],
+                                [(D2(qsm, qk, (1 - am) * hp) + D1(qk, qs, a * h)) / h + ca.mtimes(J(qk).T, nu)])
         self._kinematics = kin = lambda xp, x, xn, tau_m, tau_p: _sub_node_kinematics(  # noqa: E731
             D1, D2, J, Mf, e, xp, x, xn, tau_m, tau_p)
         pm, pp, r = kin(qk, qs, qk1, a * h, (1 - a) * h)
@@ -71,7 +72,8 @@ class ContactMechanics:
         self.law_check = ca.Function("c_law_check", [qk, qs, qk1, b, mu, h], [mu * r, phi(qk1)])
         self.pair = ca.Function("c_pair", [qk, nu], [ca.vertcat(phi(qk), nu)])
         self.gap_row = ca.Function("c_gap", [qk], [phi(qk)])
-        self.split = ca.Function("c_split", [b], [SPLIT_WEIGHT * b * b])
+        w = sym("w")
+        self.split = ca.Function("c_split", [b, w], [w * b * b])
         # a catch that must hold: the law weighted by φ(q_{k+1})/δ + κ φ(q_{k+2}) (κ per contact, 1/ℓ
         # where the solution used the waiver for a catch that lifts off again, ContactNLP.loopholes)
         qk2, kap = sym("qk2", n), sym("kappa", c)
@@ -105,8 +107,39 @@ class ContactMechanics:
             x = rk4_step(f, x, dt)
         self.flow = ca.Function("flow", [qk, v, tau], [x[:n], x[n:], phi(x[:n])])
         self._flights: Dict[int, ca.Function] = {}
+        self._march_function(D1, D2, J, phi)
         self.acc_normal = ca.Function("acc_normal", [qk, v], [ca.mtimes(J(qk), acc(qk, v))])
 
+
+    def _march_function(self, D1, D2, J, phi):
+        """One step of the transcription's own rows, each contact in a mode given by masks (the march).
+
+        Unknowns ``x = (q̃, q_{k+1}, β, ν, μ)``; inputs the node ``q_k``, its incoming momentum
+        ``p_k⁻``, ``h``, the length ``ℓ`` and the scales of ν and μ, and per contact the masks
+        ``t`` (the contact that times the sub-node: ``φ_t(q̃) = 0`` replaces ``β = β_fix``),
+        ``held`` (``φ(q̃) = 0`` replaces ``ν = 0``), ``closed`` (``φ(q_{k+1}) = 0`` replaces
+        ``μ = 0``) and ``law`` (Newton's law ``r = 0`` replaces ``μ = 0``).  The rows are the node
+        and sub-node rows of the transcription, so a point solved step by step satisfies the whole
+        program's rows (``docs/derivations.md``, "Contact trajectories", "The march").
+        """
+        n, c, sym = self.n, self.c, ca.SX.sym
+        x = sym("x", 2 * n + 1 + 2 * c)
+        qs, qn, b = x[:n], x[n:2 * n], x[2 * n]
+        nu, mu = x[2 * n + 1:2 * n + 1 + c], x[2 * n + 1 + c:]
+        qk, p, h, ell = sym("q", n), sym("p", n), sym("h"), sym("ell")
+        snu, smu, vref, bfix = sym("snu"), sym("smu"), sym("vref"), sym("bfix")
+        t, held, closed, law = sym("t", c), sym("held", c), sym("closed", c), sym("law", c)
+        a = 0.5 + b
+        pm, pp, r = self._kinematics(qk, qs, qn, a * h, (1 - a) * h)
+        free = 1 - held
+        other = 1 - closed - law
+        R = ca.vertcat((p + D1(qk, qs, a * h)) / h + ca.mtimes(J(qk).T, nu),
+                       (pm - pp + ca.mtimes(J(qs).T, mu)) / h,
+                       (1 - ca.sum1(t)) * (b - bfix) + ca.dot(t, phi(qs)) / ell,
+                       held * phi(qs) / ell + free * nu / snu,
+                       closed * phi(qn) / ell + law * r / vref + other * mu / smu)
+        self.march_step = ca.Function("march_step", [x, qk, p, h, ell, snu, smu, vref, bfix, t, held, closed, law],
+                                      [R, ca.jacobian(R, x)])
 
     def flights(self, K: int) -> ca.Function:
         """``K`` RK4 steps of length ``h`` from ``(q, v)``: nodes, velocities and gaps as columns."""

@@ -70,7 +70,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..program import P, Program, X
-from .elements import ContactMechanics
+from .elements import SPLIT_WEIGHT, ContactMechanics
 
 #: The sub-node's time fraction stays in [ALPHA_MIN, 1 − ALPHA_MIN].
 ALPHA_MIN = 1e-6
@@ -117,8 +117,10 @@ class ContactTranscription:
 
     program = Program
 
-    def __init__(self, cm: ContactMechanics, L: int, h: float, scales, k2=None, held=None):
+    def __init__(self, cm: ContactMechanics, L: int, h: float, scales, k2=None, held=None, steps=None):
         self.cm, self.L, self.h = cm, L, h
+        # step lengths h_k (a grid refined where impacts crowd, see solve.contact.march); h by default
+        self.H = np.full(L, float(h)) if steps is None else np.asarray(steps, float).reshape(L)
         n, c = cm.n, cm.c
         ell, pref, vref, aref = scales
         self.scales_p = ell * pref
@@ -151,6 +153,8 @@ class ContactTranscription:
         nlp.variable("s_minus", L * c, lb=0.0)
         nlp.parameter("p0", n)
         nlp.parameter("rho", 1, value=PENALTY[0])
+        # weight of the centred-split term (0 where every β is fixed or timed: a decided branch)
+        nlp.parameter("split", 1, value=SPLIT_WEIGHT)
         # weight length of Newton's law per step and contact (law_lengths)
         nlp.parameter("law_length", L * c, value=self.delta)
         Q = nlp.index("q").reshape(L + 1, n)
@@ -160,11 +164,11 @@ class ContactTranscription:
         NU = nlp.index("nu").reshape(L, c)
         SP = nlp.index("s_plus").reshape(L, c)
         SM = nlp.index("s_minus").reshape(L, c)
-        hh = np.array([h])
+        Hc = self.H.reshape(-1, 1)
         k = np.arange(L)
         rho = P(nlp.parameter_index("rho"))
         nlp.equal_elements("initial", cm.initial,
-                           [X(Q[0]), X(S[0]), X(B[0]), P(nlp.parameter_index("p0")), X(NU[0]), hh])
+                           [X(Q[0]), X(S[0]), X(B[0]), P(nlp.parameter_index("p0")), X(NU[0]), Hc[0]])
         K2 = self.k2
         # steps with one sub-node: the sub-node row and law as in the module docstring
         KN = self.k_next
@@ -188,47 +192,47 @@ class ContactTranscription:
         if L > 1:
             i = np.arange(1, L)
             nlp.equal_elements("node", cm.node, [X(S_last[i - 1]), X(B_last[i - 1]), X(Q[i]), X(S[i]), X(B[i]),
-                                                 X(NU[i]), hh])
-        nlp.equal_elements("sub", cm.sub, [X(Q[k1]), X(S[k1]), X(Q[k1 + 1]), X(B[k1]), X(MU[k1]), hh])
+                                                 X(NU[i]), Hc[i - 1], Hc[i]])
+        nlp.equal_elements("sub", cm.sub, [X(Q[k1]), X(S[k1]), X(Q[k1 + 1]), X(B[k1]), X(MU[k1]), Hc[k1]])
         nlp.inequality_elements("node_gap", cm.gap_row, [X(Q[1:])], lb=0.0)
         nlp.inequality_elements("sub_gap", cm.gap_row, [X(S)], lb=0.0)
         LL = P(nlp.parameter_index("law_length").reshape(L, c))
-        law_args = [X(Q[k1]), X(S[k1]), X(Q[k1 + 1]), X(B[k1]), X(MU[k1]), X(SP[k1]), X(SM[k1]), hh,
+        law_args = [X(Q[k1]), X(S[k1]), X(Q[k1 + 1]), X(B[k1]), X(MU[k1]), X(SP[k1]), X(SM[k1]), Hc[k1],
                     LL if not (K2.size or KN.size) else P(LL.index[k1]), np.array([self.scales_law])]
         nlp.equal_elements("impact_law", cm.law_slack, law_args)
         if KN.size:
             self.kappa = np.where(self.held, 1.0 / ell, 0.0)
             nlp.equal_elements("impact_law_next", cm.law_slack_next,
                                [X(Q[KN]), X(S[KN]), X(Q[KN + 1]), X(Q[KN + 2]), X(B[KN]), X(MU[KN]), X(SP[KN]),
-                                X(SM[KN]), hh, P(LL.index[KN]), self.kappa[KN], np.array([self.scales_law])])
+                                X(SM[KN]), Hc[KN], P(LL.index[KN]), self.kappa[KN], np.array([self.scales_law])])
         if K2.size:
             lo, hi = np.array([-0.5]), np.array([0.5])
             LL2 = P(nlp.parameter_index("law_length2").reshape(m2, c))
             # x₁ between q_k and x₂, x₂ between x₁ and q_{k+1}; both laws weighted by φ(q_{k+1})
             nlp.equal_elements("sub_first", cm.sub_g,
-                               [X(Q[K2]), X(S[K2]), X(S2), lo, X(B[K2]), X(B2), X(MU[K2]), hh])
+                               [X(Q[K2]), X(S[K2]), X(S2), lo, X(B[K2]), X(B2), X(MU[K2]), Hc[K2]])
             nlp.equal_elements("sub_second", cm.sub_g,
-                               [X(S[K2]), X(S2), X(Q[K2 + 1]), X(B[K2]), X(B2), hi, X(MU2), hh])
+                               [X(S[K2]), X(S2), X(Q[K2 + 1]), X(B[K2]), X(B2), hi, X(MU2), Hc[K2]])
             nlp.inequality_elements("sub_gap2", cm.gap_row, [X(S2)], lb=0.0)
             nlp.inequality_elements("sub_order", cm.order, [X(B[K2]), X(B2)], lb=ALPHA_MIN)
             scl = np.array([self.scales_law])
             nlp.equal_elements("impact_law_first", cm.law_slack_g,
                                [X(Q[K2]), X(S[K2]), X(S2), lo, X(B[K2]), X(B2), X(MU[K2]), X(SP[K2]), X(SM[K2]),
-                                X(Q[K2 + 1]), hh, P(LL.index[K2]), scl])
+                                X(Q[K2 + 1]), Hc[K2], P(LL.index[K2]), scl])
             nlp.equal_elements("impact_law_second", cm.law_slack_g,
                                [X(S[K2]), X(S2), X(Q[K2 + 1]), X(B[K2]), X(B2), hi, X(MU2), X(SP2), X(SM2),
-                                X(Q[K2 + 1]), hh, LL2, scl])
+                                X(Q[K2 + 1]), Hc[K2], LL2, scl])
         # exact (l1) penalties: complementarity products and the impact-law slacks
-        nlp.minimize_elements("node_penalty", cm.product_penalty, [X(Q[k]), X(NU[k]), rho, np.array([ell * pref / h])])
+        nlp.minimize_elements("node_penalty", cm.product_penalty, [X(Q[k]), X(NU[k]), rho, ell * pref / Hc])
         nlp.minimize_elements("sub_penalty", cm.product_penalty, [X(S[k]), X(MU[k]), rho, np.array([ell * pref])])
         nlp.minimize_elements("law_penalty", cm.slack_penalty, [X(SP[k]), X(SM[k]), rho])
-        nlp.minimize_elements("split", cm.split, [X(B[k])])
+        nlp.minimize_elements("split", cm.split, [X(B[k]), P(nlp.parameter_index("split"))])
         if K2.size:
             nlp.minimize_elements("sub_penalty2", cm.product_penalty, [X(S2), X(MU2), rho, np.array([ell * pref])])
             nlp.minimize_elements("law_penalty2", cm.slack_penalty, [X(SP2), X(SM2), rho])
         # terminal condition: the last node force may not launch the body (its gap at the end node
         # q_L would otherwise be free; see the module docstring, "Look-ahead step")
-        nlp.minimize_elements("end_penalty", cm.product_penalty, [X(Q[L]), X(NU[L - 1]), rho, np.array([ell * pref / h])])
+        nlp.minimize_elements("end_penalty", cm.product_penalty, [X(Q[L]), X(NU[L - 1]), rho, ell * pref / Hc[L - 1]])
 
     def law_lengths(self, guess) -> np.ndarray:
         """Weight length δ_kj of Newton's law, ``W = φ_j(q_{k+1})/δ_kj``, per step and contact.
@@ -287,12 +291,12 @@ class ContactTranscription:
         leaves after the impulse: one of the next two nodes open by more than the hop of a resting
         body, a h²/8.  Its check holds an impact late in its step (small next-node gap, small
         weight) to the same tolerance, and rejects a "catch" that lifts off again."""
-        cm, L, h, c = self.cm, self.L, self.h, self.cm.c
+        cm, L, H, c = self.cm, self.L, self.H, self.cm.c
         Q = values["q"].reshape(L + 1, cm.n)
         S = values["qs"].reshape(L, cm.n)
         MU = values["mu"].reshape(L, c)
         B = values["beta"].reshape(L)
-        raw, nxt = (np.asarray(v).reshape(c, L).T for v in cm.law_check.map(L)(Q[:-1].T, S.T, Q[1:].T, B, MU.T, h))
+        raw, nxt = (np.asarray(v).reshape(c, L).T for v in cm.law_check.map(L)(Q[:-1].T, S.T, Q[1:].T, B, MU.T, H))
         nxt2 = np.vstack([nxt[1:], nxt[-1:]])
         leaves = (nxt > self.open_gap) | (nxt2 > self.open_gap)
         # ... if the contact arrived faster than the grid resolves (v_z = a h / e): a slower arrival
@@ -300,7 +304,7 @@ class ContactTranscription:
         # accumulation even where the contact opens again soon after
         ks = np.where(np.any(leaves & (MU > 0), axis=1))[0]
         if ks.size:
-            pm = np.asarray(cm.p_minus.map(ks.size)(Q[ks].T, S[ks].T, B[ks], h)).T
+            pm = np.asarray(cm.p_minus.map(ks.size)(Q[ks].T, S[ks].T, B[ks], H[ks])).T
             for i, k in enumerate(ks):
                 J = np.asarray(cm.system.gap(S[k])[1])
                 vn = J @ np.linalg.solve(np.asarray(cm.system.mass_matrix(S[k])), pm[i])
@@ -319,7 +323,8 @@ class ContactTranscription:
     def _residual2(self, values):
         """Terms of the residual at the steps with two sub-nodes: (|φ(x₂) μ₂|, weighted law, raw law, next gaps)
         over both sub-nodes of those steps, and the raw law of x₁ (which :meth:`residual` replaces)."""
-        cm, h, c, m2 = self.cm, self.h, self.cm.c, self.k2.size
+        cm, c, m2 = self.cm, self.cm.c, self.k2.size
+        h = self.H[self.k2]
         S2, B2, MU2, S1, B1, MU1, Qk, Qk1 = self._second(values)
         lo, hi = -0.5 * np.ones(m2), 0.5 * np.ones(m2)
         gs2 = np.asarray(cm.gap_row.map(m2)(S2.T)).reshape(c, m2).T
@@ -333,7 +338,7 @@ class ContactTranscription:
 
     def residual(self, values) -> float:
         """Largest complementarity violation: |φ ν h|, |φ μ| and |μ r| (scaled as in the penalties)."""
-        cm, L, h = self.cm, self.L, self.h
+        cm, L, H = self.cm, self.L, self.H
         n, c = cm.n, cm.c
         Q = values["q"].reshape(L + 1, n)
         S = values["qs"].reshape(L, n)
@@ -342,12 +347,12 @@ class ContactTranscription:
         B = values["beta"].reshape(L)
         gq = np.asarray(cm.gap_row.map(L)(Q[:-1].T)).reshape(c, L).T
         gs = np.asarray(cm.gap_row.map(L)(S.T)).reshape(c, L).T
-        law = np.asarray(cm.impact_law.map(L)(Q[:-1].T, S.T, Q[1:].T, B, MU.T, h,
+        law = np.asarray(cm.impact_law.map(L)(Q[:-1].T, S.T, Q[1:].T, B, MU.T, H,
                                               self._law_length.T)).reshape(c, L).T
         if self.k_next.size:
             KN = self.k_next
             law[KN] = np.asarray(cm.impact_law_next.map(KN.size)(
-                Q[KN].T, S[KN].T, Q[KN + 1].T, Q[KN + 2].T, B[KN], MU[KN].T, h, self._law_length[KN].T,
+                Q[KN].T, S[KN].T, Q[KN + 1].T, Q[KN + 2].T, B[KN], MU[KN].T, H[KN], self._law_length[KN].T,
                 self.kappa[KN].T)).reshape(c, KN.size).T
         # Newton's law of every impact after which the body leaves, unweighted (_raw_law)
         raw, leaves = self._raw_law(values)
@@ -363,7 +368,7 @@ class ContactTranscription:
                      / self.scales_law * COMPLEMENTARITY_TOL / LAW_TOL]
         raw_max = float(np.max(np.abs(raw[leaves]))) if np.any(leaves) else 0.0
         g_end = np.asarray(cm.gap_row(Q[L])).reshape(-1)
-        return float(max(np.max(np.abs(gq * NU * h)) / self.scales_p, np.max(np.abs(gs * MU)) / self.scales_p,
-                         float(np.max(np.abs(g_end * NU[L - 1] * h))) / self.scales_p,
+        return float(max(np.max(np.abs(gq * NU * H[:, None])) / self.scales_p, np.max(np.abs(gs * MU)) / self.scales_p,
+                         float(np.max(np.abs(g_end * NU[L - 1] * H[L - 1]))) / self.scales_p,
                          np.max(np.abs(law)) / self.scales_law,
                          raw_max / self.scales_law * COMPLEMENTARITY_TOL / LAW_TOL, *extra))

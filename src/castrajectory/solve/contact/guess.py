@@ -283,7 +283,7 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
             r = np.asarray(cm.initial(Q[0], S[0], B[0], p0, np.zeros(c), h)).reshape(-1)
         else:
             sp, bp = (second[k - 1][1], second[k - 1][0]) if k - 1 in second else (S[k - 1], B[k - 1])
-            r = np.asarray(cm.node(sp, bp, Q[k], S[k], B[k], np.zeros(c), h)).reshape(-1)
+            r = np.asarray(cm.node(sp, bp, Q[k], S[k], B[k], np.zeros(c), h, h)).reshape(-1)
         J = np.asarray(gapf(Q[k])[1])
         act = gq[k] <= tol
         sol = np.linalg.lstsq(J[act].T, -r, rcond=None)[0]

@@ -6,6 +6,7 @@ from typing import Dict, List
 import numpy as np
 
 from ...result import HomotopyStep, NLPResult
+from ...discretise.contact.elements import SPLIT_WEIGHT
 from ...discretise.contact.transcription import COMPLEMENTARITY_TOL, PENALTY, TOUCH_TOL, ContactTranscription
 from ..nlp import NLP
 
@@ -20,6 +21,9 @@ CONTACT_IPOPT = {"tol": 1e-10, "max_iter": 200, "bound_relax_factor": 0.0,
 #: needs more is a wrong decision, and its iterations grow expensive (restoration on a degenerate KKT
 #: matrix: 2 s each with MUMPS' default pivot tolerance, 0.46 s with 1e-8, on a 4000-step block drop).
 BRANCH_IPOPT = {"max_iter": 30, "mumps_pivtol": 1e-8}
+#: Scaled row violation and relative stationarity residual within which the march's point is
+#: certified as a KKT point of its branch without Ipopt (:meth:`ContactNLP.solve_modes`).
+CERTIFY_TOL = 1e-9
 
 
 class ContactNLP(ContactTranscription):
@@ -37,6 +41,56 @@ class ContactNLP(ContactTranscription):
         opts.update(options or {})
         return self._ladder(self._start(q0, p0, guess), opts, {"q": self._q_bounds(q0)}, penalties or PENALTY,
                             verbose, "rho", "Ipopt")
+
+    def solve_modes(self, q0, p0, point: Dict[str, np.ndarray], options=None, verbose=False) -> NLPResult:
+        """Solve the branch of the discrete march's modes (``point["modes"]``, one letter per step and
+        contact, :mod:`.march`): every pair decided, a square system whose solution ``point`` already is
+        (to the march's Newton tolerance).  Held and caught contacts keep their gap rows as equalities
+        (sub-node and next node), a timed impact its sub-node gap; free forces and impulses are those of
+        the modes (the rest fixed at 0), ``β = 0`` in a step without a timed impact, and Newton's law is
+        exact at every impact whose contact leaves.  Ipopt then only confirms the point and forms the
+        multipliers."""
+        c, L = self.cm.c, self.L
+        modes = np.asarray(point["modes"]).reshape(L, c)
+        timed = np.isin(modes, ("I", "C"))
+        # the first timed contact of a step fixes its sub-node (simultaneous ones share it)
+        first = timed & (np.cumsum(timed, axis=1) == 1)
+        held = np.isin(modes, ("H", "R"))
+        closes = np.isin(modes, ("H", "C"))
+        law = (modes == "I") & np.asarray(point["bounced"], bool).reshape(L, c)
+        zero = np.zeros(L * c)
+        untimed = ~np.any(timed, axis=1)
+        blo = np.where(untimed, 0.0, self.nlp._vars[self.nlp.variable_names.index("beta")].lb)
+        bhi = np.where(untimed, 0.0, self.nlp._vars[self.nlp.variable_names.index("beta")].ub)
+        bounds = {
+            "q": self._q_bounds(q0),
+            "beta": (blo, bhi),
+            "nu": (zero, np.where(held.reshape(-1), np.inf, 0.0)),
+            "mu": (zero, np.where(np.isin(modes, ("H", "I", "C")).reshape(-1), np.inf, 0.0)),
+            "s_plus": (zero, zero), "s_minus": (zero, zero),
+            "node_gap": (zero, np.where(closes.reshape(-1), 0.0, np.inf)),
+            "sub_gap": (zero, np.where((held | first).reshape(-1), 0.0, np.inf)),
+            "impact_law": (np.where(law.reshape(-1), 0.0, -np.inf), np.where(law.reshape(-1), 0.0, np.inf)),
+        }
+        init = self._start(q0, p0, point)
+        opts = {**CONTACT_IPOPT, **BRANCH_IPOPT, **(options or {})}
+        opts["max_iter"] = min(int(opts["max_iter"]), BRANCH_IPOPT["max_iter"])
+        # every pair decided with exact zero products and every β fixed or timed: a square feasibility
+        # problem, no penalty and no selection term (its point is then a KKT point with zero multipliers)
+        self.nlp.set_parameter("rho", 0.0)
+        self.nlp.set_parameter("split", 0.0)
+        self.nlp.build(opts, verbose)
+        res = self.nlp.certify(init, CERTIFY_TOL, bounds)
+        if res.success:
+            resid = self.residual(res.values)
+            res.complementarity_residual = resid
+            res.homotopy = [HomotopyStep(0.0, res.solver_status, 0, res.solve_time_s, resid, parameter="modes")]
+            if resid <= COMPLEMENTARITY_TOL:
+                return res
+        try:
+            return self._ladder(init, opts, bounds, [0.0], verbose, "modes", "the march's branch")
+        finally:
+            self.nlp.set_parameter("split", SPLIT_WEIGHT)
 
     def solve_branch(self, q0, p0, guess: Dict[str, np.ndarray], options=None, verbose=False) -> NLPResult:
         """Solve the branch of the complementarity problem that ``guess`` identifies.

@@ -17,6 +17,8 @@ from .nlp import ContactNLP
 IMPACT_SPEED_STEPS = 2.0
 #: ... and its impulse exceeds this fraction of the momentum scale (interior-point noise is far below).
 IMPULSE_TOL = 1e-6
+#: An impact is *caught* where Newton's law misses by more than this fraction of the arrival speed.
+CAUGHT_LAW = 1e-6
 
 @dataclass
 class SubNodeImpact:
@@ -92,13 +94,15 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     S = res.values["qs"][:N * n].reshape(N, n)
     B = res.values["beta"][:N].reshape(N)
     MU = res.values["mu"][:N * c].reshape(N, c)
-    hv = np.array([h])
+    # step lengths (a refined grid where impacts crowd; h everywhere otherwise)
+    H = tn.H
+    hv = H[:N]
     # Node momenta: a node force h ν_k makes the one-sided momenta differ, p_k⁺ = p_k⁻ + h ∇φ(q_k)ᵀ ν_k;
     # the node's momentum is their mean where the contact is closed (for a body resting on the
     # ground p_k⁻ = −p_k⁺, so it is 0, not ±m g h/4).  Without a node force p_k⁻ = p_k⁺ (DEL).  At t = 0 the given p_0; at T the
     # look-ahead step supplies ν_N.
     NL = N + LOOKAHEAD
-    nu_full = h * res.values["nu"][:NL * c].reshape(NL, c)
+    nu_full = H[:NL, None] * res.values["nu"][:NL * c].reshape(NL, c)
     Jn = np.asarray(sysm.gap.map(N + 1)(q.T)[1])                    # (c, (N + 1) n)
     Jn = Jn.reshape(c, N + 1, n).transpose(1, 0, 2)                  # (N + 1, c, n)
     # only closed contacts (gap within TOUCH_TOL): on an open one ν is interior-point noise below the
@@ -117,9 +121,9 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     last = {int(k): i for i, k in enumerate(K2)}
     pp = np.asarray(cm.p_node_plus.map(N)(q[:-1].T, S.T, B, hv)).T
     if N - 1 in last:
-        pN = np.asarray(cm.p_node_minus(S2a[last[N - 1]], B2a[last[N - 1]], q[-1], h)).reshape(1, -1)
+        pN = np.asarray(cm.p_node_minus(S2a[last[N - 1]], B2a[last[N - 1]], q[-1], H[N - 1])).reshape(1, -1)
     else:
-        pN = np.asarray(cm.p_node_minus(S[-1], B[-1], q[-1], h)).reshape(1, -1)
+        pN = np.asarray(cm.p_node_minus(S[-1], B[-1], q[-1], H[N - 1])).reshape(1, -1)
     p = np.vstack([pp - half[:N], pN + half[N:]])
     p[0] = p0
     M = np.asarray(sysm.mass_matrix.map(N + 1)(q.T)).reshape(n, N + 1, n).transpose(1, 0, 2)
@@ -127,13 +131,12 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     energy = sysm.energies(q, v)
     gap = np.asarray(sysm.gap.map(N + 1)(q.T)[0]).reshape(c, N + 1).T
     gap_sub = np.asarray(sysm.gap.map(N)(S.T)[0]).reshape(c, N).T
-    t = np.linspace(0.0, N * h, N + 1)
-    t_sub = t[:-1] + (0.5 + B) * h
+    t = np.concatenate([[0.0], np.cumsum(H[:N])])
+    if np.all(H == h):
+        t = np.linspace(0.0, N * h, N + 1)
+    t_sub = t[:-1] + (0.5 + B) * H[:N]
     # Impacts: sub-node impulses of a contact that approaches faster than a step's worth of its
     # normal acceleration (slower "impacts" are the discrete form of persistent contact).
-    # caught: closed again at the next two nodes (the look-ahead step supplies node N + 1)
-    q_full = res.values["q"].reshape(-1, n)[:N + 2]
-    gap_full = np.asarray(sysm.gap.map(N + 2)(q_full.T)[0]).reshape(c, N + 2).T
     impacts = []
     cands = [(int(k), 0, int(j)) for k, j in zip(*np.where(MU > IMPULSE_TOL * tn.scales_p / tn.scales_ell))]
     cands += [(int(K2[i]), 1, int(j)) for i, j in zip(*np.where(MU2a > IMPULSE_TOL * tn.scales_p / tn.scales_ell))
@@ -142,25 +145,27 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
         if sub == 0 and k in last:          # first of two sub-nodes: its next point is the second
             i = last[k]
             x, tk, muk = S[k], float(t_sub[k]), float(MU[k, j])
-            pm = np.asarray(cm.p_minus(q[k], S[k], B[k], h)).reshape(-1)
-            pl = np.asarray(cm.p_plus_g(S[k], S2a[i], B[k], B2a[i], h)).reshape(-1)
+            pm = np.asarray(cm.p_minus(q[k], S[k], B[k], H[k])).reshape(-1)
+            pl = np.asarray(cm.p_plus_g(S[k], S2a[i], B[k], B2a[i], H[k])).reshape(-1)
         elif sub == 1:
             i = last[k]
-            x, tk, muk = S2a[i], float(t[k] + (0.5 + B2a[i]) * h), float(MU2a[i, j])
-            pm = np.asarray(cm.p_minus_g(S[k], S2a[i], B[k], B2a[i], h)).reshape(-1)
-            pl = np.asarray(cm.p_plus_g(S2a[i], q[k + 1], B2a[i], 0.5, h)).reshape(-1)
+            x, tk, muk = S2a[i], float(t[k] + (0.5 + B2a[i]) * H[k]), float(MU2a[i, j])
+            pm = np.asarray(cm.p_minus_g(S[k], S2a[i], B[k], B2a[i], H[k])).reshape(-1)
+            pl = np.asarray(cm.p_plus_g(S2a[i], q[k + 1], B2a[i], 0.5, H[k])).reshape(-1)
         else:
             x, tk, muk = S[k], float(t_sub[k]), float(MU[k, j])
-            pm = np.asarray(cm.p_minus(q[k], S[k], B[k], h)).reshape(-1)
-            pl = np.asarray(cm.p_plus(S[k], q[k + 1], B[k], h)).reshape(-1)
+            pm = np.asarray(cm.p_minus(q[k], S[k], B[k], H[k])).reshape(-1)
+            pl = np.asarray(cm.p_plus(S[k], q[k + 1], B[k], H[k])).reshape(-1)
         Ms = np.asarray(sysm.mass_matrix(x))
         vb, va = np.linalg.solve(Ms, pm), np.linalg.solve(Ms, pl)
         Jj = np.asarray(sysm.gap(x)[1])[j]
         an = abs(float(np.asarray(cm.acc_normal(x, vb)).reshape(-1)[j]))
-        if -float(Jj @ vb) > IMPACT_SPEED_STEPS * an * h:
+        if -float(Jj @ vb) > IMPACT_SPEED_STEPS * an * H[k]:
+            # caught: Newton's law waived (the arrival stopped, not reversed by e), which the
+            # transcription allows only where the contact is closed at the next node
+            vn_b, vn_a = float(Jj @ vb), float(Jj @ va)
             impacts.append(SubNodeImpact(int(k), tk, int(j), muk, np.array(x, float).copy(), vb, va,
-                                  caught=bool(max(gap_full[k + 1, j], gap_full[k + 2, j]) <= tn.open_gap),
-                                  sub=sub))
+                                  caught=bool(abs(vn_a + cm.e * vn_b) > CAUGHT_LAW * abs(vn_b)), sub=sub))
     # Impulse per node: Λ_k = h ν_k + (1 − α_k) μ_k + α_{k−1} μ_{k−1}, each sub-node impulse shared
     # between its two nodes by linear (hat-function) interpolation of its time; node N takes the
     # look-ahead step's node force and sub-node share (its dual cell reaches past T).  For a body
@@ -179,7 +184,7 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
             lam[k + 1] += a2 * MU2a[i]
     nu = nu_full[:N + 1].copy()
     steps2 = K2[rep2]
-    t_sub2 = t[steps2] + (0.5 + B2a[rep2]) * h
+    t_sub2 = t[steps2] + (0.5 + B2a[rep2]) * H[steps2]
     gap_sub2 = (np.asarray(sysm.gap.map(int(rep2.sum()))(S2a[rep2].T)[0]).reshape(c, -1).T if rep2.any()
                 else np.zeros((0, c)))
     total_iter = sum(a["iterations"] for a in attempts)

@@ -13,6 +13,7 @@ from ...validation import InputError
 from ...discretise.contact.elements import ContactMechanics
 from ...discretise.contact.transcription import COMPLEMENTARITY_TOL, LOOKAHEAD, TOUCH_TOL, _v_zeno
 from .guess import event_guess
+from .march import discrete_march
 from .nlp import ContactNLP
 from .solution import ContactTrajectory, _finish
 
@@ -46,9 +47,20 @@ def solve_contact(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: s
     p0 = np.asarray(system.momentum(q0, qd0)).reshape(-1)
     scales = _scales(system, q0, qd0, length)
     attempts: List[dict] = []
+    t_march = time.perf_counter()
+    point = discrete_march(cm, q0, p0, N + LOOKAHEAD, h, scales)
+    march_time = time.perf_counter() - t_march
+    if point is not None:
+        # the grid refined where impacts crowd: the steps of the first N base steps are reported
+        steps, base = point.pop("steps"), point.pop("base")
+        marched = ContactNLP(cm, steps.size, h, scales, steps=steps)
+        res = marched.solve_modes(q0, p0, point, options, verbose)
+        attempts.append(_attempt("march", res))
+        if res.success:
+            return _finish(cm, marched, res, int(np.sum(base < N)), h, attempts, march_time, p0)
     t_guess = time.perf_counter()
     guess = event_guess(cm, q0, qd0, N + LOOKAHEAD, h, length, _v_zeno(cm, h, scales))
-    guess_time = time.perf_counter() - t_guess
+    guess_time = time.perf_counter() - t_guess + march_time
     # a second sub-node only in the steps where the guess has two impacts (none: the one-sub-node NLP)
     whole = ContactNLP(cm, N + LOOKAHEAD, h, scales, k2=guess.get("k2"))
     # the branch of the complementarity problem that the guess identifies, then the penalty continuation

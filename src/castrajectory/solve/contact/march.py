@@ -1,0 +1,326 @@
+"""The discrete march: the transcription's own rows solved step by step, each step's contact modes by
+an active-set search (see the package docstring, step 1).
+
+Every step ``k`` of the contact program has the unknowns ``(q̃_k, q_{k+1}, β_k, ν_k, μ_k)`` and, given the
+node ``q_k`` and its incoming momentum ``p_k⁻ = D₂L_d(q̃_{k−1}, q_k)``, the node row, the sub-node row and
+one complementarity pair per contact.  An initial-value program is block lower-triangular in the steps,
+so the whole program is solved by solving its steps in order, provided each step picks the branch of
+its pairs that the whole program's solution has.  Each contact is in one of these modes:
+
+* ``O``, open: ``ν = μ = 0``;
+* ``H``, held (touching at ``q_k``): ``φ(q̃) = 0``, ``φ(q_{k+1}) = 0``, ``ν ≥ 0`` and ``μ ≥ 0`` free;
+* ``R``, released at the sub-node (touching at ``q_k``): ``φ(q̃) = 0`` with ``ν ≥ 0``, ``μ = 0``;
+* ``I``, impact from flight: ``φ(q̃) = 0`` fixes the sub-node's time ``β`` and Newton's law ``r = 0``
+  its impulse ``μ ≥ 0``;
+* ``C``, caught from flight: ``φ(q̃) = 0`` and ``φ(q_{k+1}) = 0`` (the law waived: the bounce would
+  not clear the next node, the grid does not resolve its flight).
+
+A step starts from the modes the previous step ended in (held contacts held, the others open) and
+changes one contact's mode per Newton solve, the one whose gap or multiplier is most violated, until
+every gap is ≥ 0 and every multiplier ≥ 0 (each set of modes is tried once).  A step whose search
+fails, or that needs two impacts of different contacts at different times, stops the march (the
+caller then falls back to the event-located guess).
+"""
+from __future__ import annotations
+
+from typing import Dict, Optional
+
+import numpy as np
+
+from ...discretise.contact.elements import ContactMechanics
+from ...discretise.contact.transcription import ALPHA_MIN, TOUCH_TOL
+
+#: Newton iterations of one step solve, and the largest row residual accepted (each row divided by
+#: its largest derivative, relative to the size of the unknowns).
+NEWTON_ITER = 30
+STEP_TOL = 1e-12
+#: Mode changes tried per step before the march gives up.
+MODE_ROUNDS = 12
+#: A contact whose gap at an impact's sub-node is within this (times the length scale) takes part in
+#: that impact (a flat landing: one simultaneous impact).
+SIMULTANEOUS_GAP = 1e-9
+
+O, H, R, I, C = "O", "H", "R", "I", "C"
+
+
+class _Step:
+    """The compiled step of ``cm`` (``ContactMechanics.march_step``) with the scene's scales."""
+
+    def __init__(self, cm: ContactMechanics, scales):
+        self.cm = cm
+        self.ell, self.pref, self.vref = scales[0], scales[1], scales[2]
+        self.n, self.c = cm.n, cm.c
+
+    def masks(self, modes):
+        c = self.c
+        t, held, closed, law = (np.zeros(c) for _ in range(4))
+        for j, m in enumerate(modes):
+            t[j] = m in (I, C)
+            held[j] = m in (H, R)
+            closed[j] = m in (H, C)
+            law[j] = m == I
+        # simultaneous impacts share one timing row: only the first timing contact times the sub-node
+        timing = np.where(t > 0)[0]
+        if timing.size > 1:
+            t[timing[1:]] = 0.0
+        return t, held, closed, law
+
+    def solve(self, x, q, p, h, modes, bfix=None):
+        """Newton on the step's rows in the given modes (with ``bfix``: the sub-node's ``β`` fixed
+        there instead of timed by a contact); ``(x, ok)``."""
+        n, c = self.n, self.c
+        self.snu, self.smu = self.pref / h, self.pref
+        t, held, closed, law = self.masks(modes)
+        if bfix is not None:
+            t = np.zeros(c)
+            x = x.copy()
+            x[2 * n] = bfix
+        args = (q, p, h, self.ell, self.snu, self.smu, self.vref, 0.0 if bfix is None else bfix,
+                t, held, closed, law)
+        small = 0
+        for _ in range(NEWTON_ITER):
+            r, Jr = self.cm.march_step(x, *args)
+            r = np.asarray(r).reshape(-1)
+            Jr = np.asarray(Jr)
+            # rows and columns equilibrated (momentum rows ~ 1/h², gap rows ~ 1/ℓ): the step's
+            # rounding then stays at the level of the unknowns, not of the Jacobian's condition
+            rs = 1.0 / np.maximum(np.max(np.abs(Jr), axis=1), 1e-300)
+            cs = 1.0 / np.maximum(np.max(np.abs(Jr * rs[:, None]), axis=0), 1e-300)
+            A = Jr * rs[:, None] * cs[None, :]
+            try:
+                dx = cs * np.linalg.solve(A, -r * rs)
+            except np.linalg.LinAlgError:
+                dx = cs * np.linalg.lstsq(A, -r * rs, rcond=None)[0]
+            x = x + dx
+            if not np.all(np.isfinite(x)):
+                return x, False
+            # converged: two steps in a row at the level of rounding (the second refines the first)
+            small = small + 1 if np.max(np.abs(dx)) <= 1e-14 * (1.0 + float(np.max(np.abs(x)))) else 0
+            if small == 2:
+                break
+        r, Jr = self.cm.march_step(x, *args)
+        # each row in units of the unknowns (divided by its largest derivative): rows that go like
+        # 1/α near α = 0 are then held to the rounding of the point, not of their size
+        r = np.asarray(r).reshape(-1) / np.maximum(np.max(np.abs(np.asarray(Jr)), axis=1), 1e-300)
+        return x, bool(np.max(np.abs(r)) <= STEP_TOL * (1.0 + float(np.max(np.abs(x)))))
+
+
+def _timed_by_bracket(step: _Step, x, q, p, h, modes, j: int):
+    """The step with contact ``j`` timing its sub-node, by regula falsi (Illinois) on ``β``: each trial
+    solves the step with ``β`` fixed, and the sub-node's gap of ``j`` is positive at the step's start
+    (``α = ALPHA_MIN``) and negative at the crossing the free flight showed.  ``(x, ok)``."""
+    n = step.n
+    gapf = step.cm.system.gap
+
+    def f(b, start):
+        xb, ok = step.solve(start, q, p, h, modes, bfix=b)
+        return (float(np.asarray(gapf(xb[:n])[0]).reshape(-1)[j]) if ok else np.nan), xb
+
+    lo, hi = ALPHA_MIN - 0.5, 0.5 - ALPHA_MIN
+    flo, xlo = f(lo, x)
+    fhi, xhi = f(0.0, x)
+    if fhi >= 0.0:
+        lo, flo, xlo = 0.0, fhi, xhi
+        fhi, xhi = f(hi, x)
+    else:
+        hi = 0.0
+    if not (flo > 0.0 and fhi < 0.0):
+        return x, False
+    side = 0
+    for _ in range(100):
+        b = hi - fhi * (hi - lo) / (fhi - flo)
+        fb, xb = f(b, xlo if side <= 0 else xhi)
+        if not np.isfinite(fb):
+            return x, False
+        if abs(fb) <= 1e-15 * step.ell or hi - lo <= 1e-15:
+            break
+        if fb > 0.0:
+            lo, flo, xlo = b, fb, xb
+            if side > 0:
+                fhi *= 0.5
+            side = 1
+        else:
+            hi, fhi, xhi = b, fb, xb
+            if side < 0:
+                flo *= 0.5
+            side = -1
+    # the timed rows from there (one or two Newton steps); the bracket's point if Newton leaves it
+    xt, ok = step.solve(xb, q, p, h, modes)
+    if ok and ALPHA_MIN - 0.5 <= xt[2 * n] <= 0.5 - ALPHA_MIN:
+        return xt, True
+    return xb, abs(fb) <= 1e-12 * step.ell
+
+
+def _crossing_fraction(g0, gs, gn, alpha):
+    """Estimated time fraction in the step at which a gap that is positive at ``q_k`` crosses zero, from
+    its values at the node, the sub-node (fraction ``alpha``) and the next node (linear pieces)."""
+    if gs < 0.0:
+        return alpha * g0 / (g0 - gs)
+    return alpha + (1.0 - alpha) * gs / (gs - gn) if gn < 0.0 else 1.0
+
+
+#: Halvings of a step allowed where impacts crowd (the finest step is h / 2**MAX_SPLITS).
+MAX_SPLITS = 20
+
+
+def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales,
+                   trace: Optional[list] = None) -> Optional[Dict[str, np.ndarray]]:
+    """The contact program's point for ``L`` steps of ``h`` from ``(q0, p0)``, solved step by step (module
+    docstring), on a grid refined where a step would hold two impacts: the point's arrays, ``steps``
+    (the step lengths) and ``base`` (the index of each step's base step); ``None`` where a step's mode
+    search fails."""
+    step = _Step(cm, scales)
+    ell = scales[0]
+    tol = TOUCH_TOL * ell          # touching: gap within this
+    gapf = cm.system.gap
+    rows = {key: [] for key in ("q", "qs", "beta", "nu", "mu", "bounced", "steps", "base", "modes")}
+    q, p = np.asarray(q0, float).copy(), np.asarray(p0, float).copy()
+    g_q = np.asarray(gapf(q)[0]).reshape(-1)
+    held_prev = g_q <= tol
+    rows["q"].append(q)
+    for k in range(L):
+        pending = [h]
+        while pending:
+            hk = pending.pop(0)
+            out = _march_step(step, q, p, hk, g_q, held_prev, tol, finest=hk < h / 2 ** MAX_SPLITS * 1.5)
+            if out == "split":
+                pending[:0] = [0.5 * hk, 0.5 * hk]
+                continue
+            if isinstance(out, tuple) and len(out) == 2:
+                if trace is not None:
+                    trace.append((k, hk) + out + (q, p, g_q, held_prev))
+                return None
+            qs, qn, b, nu, mu, modes, gn = out
+            for key, val in (("q", qn), ("qs", qs), ("beta", b), ("nu", nu), ("mu", mu),
+                             ("bounced", np.array([m == I for m in modes]) & (gn > tol)), ("steps", hk), ("base", k),
+                             ("modes", np.array(modes))):
+                rows[key].append(val)
+            p = np.asarray(cm.p_node_minus(qs, b, qn, hk)).reshape(-1)
+            held_prev = np.array([m in (H, C) for m in modes])
+            q, g_q = qn, gn
+    out = {key: np.asarray(val) for key, val in rows.items()}
+    for key in ("q", "qs", "mu", "nu"):
+        out[key] = out[key].reshape(-1)
+    return out
+
+
+def _march_step(step: _Step, q, p, h, g_q, held_prev, tol, finest: bool):
+    """One step from ``(q, p)``: ``(q̃, q_{k+1}, β, ν, μ, modes, gaps at q_{k+1})``, ``"split"`` if it
+    needs two impacts at different times (and is not the finest step), or ``(reason, detail)``."""
+    n, c = step.n, step.c
+    gapf, Mf = step.cm.system.gap, step.cm.system.mass_matrix
+    pen = 1e-12 * step.ell
+    touch = g_q <= tol
+    v = np.linalg.solve(np.asarray(Mf(q)), p)
+    x0 = np.concatenate([q + 0.5 * h * v, q + h * v, [0.0], np.zeros(2 * c)])
+    modes = [H if (touch[j] and held_prev[j]) else O for j in range(c)]
+    tried = set()
+    x, frac = x0, None
+    for _ in range(MODE_ROUNDS):
+        key = tuple(modes)
+        if key in tried:
+            return ("cycle", key)
+        tried.add(key)
+        start = x.copy()
+        if frac is not None:
+            # a newly timed impact: the sub-node starts at the estimated crossing
+            start[2 * n] = min(max(frac - 0.5, ALPHA_MIN - 0.5), 0.5 - ALPHA_MIN)
+            start[:n] = q + frac * (x[n:2 * n] - q)
+        xprev = x
+        x, ok = step.solve(start, q, p, h, modes)
+        timed = [j for j, m in enumerate(modes) if m in (I, C)]
+        if timed and not (ok and ALPHA_MIN - 0.5 <= x[2 * n] <= 0.5 - ALPHA_MIN):
+            # Newton on the timing row left the step (its rows go like 1/α near α = 0): the time
+            # of the impact by a bracketed search on the gap instead
+            x, ok = _timed_by_bracket(step, xprev, q, p, h, modes, timed[0])
+        if not ok:
+            x, ok = step.solve(x0.copy(), q, p, h, modes)
+            if not ok:
+                return ("newton", key)
+        qs, qn, b = x[:n], x[n:2 * n], float(x[2 * n])
+        nu, mu = x[2 * n + 1:2 * n + 1 + c], x[2 * n + 1 + c:]
+        gs = np.asarray(gapf(qs)[0]).reshape(-1)
+        gn = np.asarray(gapf(qn)[0]).reshape(-1)
+        change = _next_modes(modes, touch, g_q, gs, gn, nu, mu, b, pen, tol, step, finest)
+        if change is None:
+            return qs, qn, b, nu, mu, modes, gn
+        if change == "split":
+            return "split" if not finest else ("split at the finest step", key)
+        modes, frac = change
+    return ("rounds", tuple(modes))
+
+
+def _next_modes(modes, touch, g0, gs, gn, nu, mu, b, pen, tol, step, finest):
+    """The modes after one change (the most violated condition), ``None`` if the step is solved, or
+    ``"split"`` if it needs two impacts at different times."""
+    alpha = 0.5 + b
+    worst, pick = 0.0, None
+    # multipliers of free contacts (scaled)
+    for j, m in enumerate(modes):
+        if m in (H, R) and nu[j] < 0.0:
+            viol = -nu[j] / step.snu
+            if viol > worst:
+                worst, pick = viol, (j, O)
+        if m in (H, I, C) and mu[j] < 0.0:
+            viol = -mu[j] / step.smu
+            if viol > worst:
+                worst, pick = viol, (j, {H: R, I: O, C: I}[m])
+    if worst > 1e-12:
+        j, m = pick
+        out = list(modes)
+        out[j] = m
+        return out, None
+    if b < ALPHA_MIN - 0.5 - 1e-12 or b > 0.5 - ALPHA_MIN + 1e-12:
+        return "split"
+    # gaps
+    worst, pick = pen, None
+    crossing = []
+    for j, m in enumerate(modes):
+        if m == O and (gs[j] < -pen or gn[j] < -pen):
+            if touch[j]:
+                cand = R if gs[j] < -pen and gn[j] >= -pen else H
+                viol = -min(gs[j], gn[j])
+                if viol > worst:
+                    worst, pick = viol, (j, cand)
+            else:
+                crossing.append(j)
+        elif m == R and gn[j] < -pen:
+            viol = -gn[j]
+            if viol > worst:
+                worst, pick = viol, (j, H)
+        elif m == I and gn[j] < tol:
+            # the bounce does not clear the next node (its flight is shorter than the rest of the step:
+            # the end of a Zeno accumulation) or lands exactly on it: caught there
+            viol = tol - gn[j]
+            if viol > worst:
+                worst, pick = viol, (j, C)
+        elif m in (I, C, H, R) and gs[j] < -pen:
+            return "split"
+    if pick is not None:
+        j, m = pick
+        out = list(modes)
+        out[j] = m
+        return out, None
+    if crossing:
+        timed = [j for j, m in enumerate(modes) if m in (I, C)]
+        fr = {j: _crossing_fraction(g0[j], gs[j], gn[j], alpha) for j in crossing}
+        first = min(crossing, key=lambda j: fr[j])
+        if timed:
+            # a crossing after the sub-node's impact: simultaneous with it, or a second impact
+            out = list(modes)
+            if abs(gs[first]) <= SIMULTANEOUS_GAP * step.ell:
+                out[first] = I
+                return out, None
+            t = timed[0]
+            if not finest:
+                return "split"
+            if modes[t] == I:
+                # the bounce does not let the step end before another contact closes: caught (the
+                # accumulation of rocking, which the grid does not resolve)
+                out[t] = C
+                return out, None
+            return "split"
+        out = list(modes)
+        out[first] = I
+        return out, fr[first]
+    return None
