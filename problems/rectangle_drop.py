@@ -55,10 +55,10 @@ def initial_state(args):
 def impact_table(tr, body, e):
     """Impacts with the closed-form corner law's post-impact velocity (rectangle on flat ground).
 
-    Corners hitting at the same sub-node (a flat landing) are compared with the simultaneous law
-    ``J v⁺ + e J v⁻ ≥ 0 ⟂ μ ≥ 0`` instead.  A caught impact (the corner closed again at the
-    next node: the end of a rocking or bouncing accumulation, plastic) waives the law and is
-    listed without a comparison.
+    Corners with an impulse at the same sub-node (a flat landing, or a corner held on the ground
+    while another hits) are compared with the simultaneous law ``J v⁺ + e J v⁻ ≥ 0 ⟂ μ ≥ 0``
+    instead.  A caught impact (Newton's law waived because the corner is closed at the next node:
+    the end of a rocking or bouncing accumulation, plastic) is listed without a comparison.
     """
     rows, worst = [], 0.0
     cs, M = body.corners, body.mass_matrix
@@ -69,14 +69,15 @@ def impact_table(tr, body, e):
                          "mu": imp.mu, "mu_exact": None, "v_after_exact": None, "law_error": None,
                          "simultaneous": False, "caught": True})
             continue
-        same = [i for i in tr.impacts if i.step == imp.step and i.sub == imp.sub and not i.caught]
+        # every corner with an impulse at this sub-node (a held corner too: it arrives at rest)
+        same = [int(j) for j in np.where(tr.mu[imp.step] > 1e-9 * max(1.0, imp.mu))[0]]
         if len(same) == 1:
             exact = collision.corner_impact(body, imp.q[2], imp.v_before, e, cs[imp.contact])
             mu_exact, v_exact = exact.mu, exact.v_after
         else:
-            J = np.array([body.corner_jacobian(imp.q[2], cs[i.contact]) for i in same])
+            J = np.array([body.corner_jacobian(imp.q[2], cs[j]) for j in same])
             mus, v_exact = simultaneous_impact(M, J, imp.v_before, e)
-            mu_exact = float(mus[[i.contact for i in same].index(imp.contact)])
+            mu_exact = float(mus[same.index(imp.contact)])
         err = float(np.max(np.abs(v_exact - imp.v_after)))
         worst = max(worst, err)
         rows.append({"t": imp.t, "corner": cs[imp.contact], "corner_name": CORNER_NAMES[imp.contact],

@@ -365,7 +365,7 @@ def _rocking_checks(tr, e, m=1.0, w=2.0, hgt=1.0, vx=0.5, x_tol=1e-10):
     cs = col.corners(w, hgt)
     checked = 0
     for imp in bounces:
-        if sum(1 for i in bounces if i.step == imp.step and i.sub == imp.sub) == 1:
+        if np.count_nonzero(tr.mu[imp.step] > 1e-12) == 1:     # a single impulse at that sub-node
             law = col.rectangle_impact(m, w, hgt, imp.q[2], imp.v_before, e, cs[imp.contact])
             np.testing.assert_allclose(imp.v_after, law.v_after, rtol=0, atol=1e-6)
             checked += 1
@@ -545,7 +545,7 @@ def test_nearly_flat_landing_resolves_the_three_impact_cascade():
     # total they are the impulses of the sub-nodes and nodes of the horizon (the last step's share of
     # its sub-node reaches past T)
     last = (tr.t_sub[-1] - tr.t[-2]) / (tr.t[-1] - tr.t[-2])
-    total = tr.nu.sum() + tr.mu.sum() + tr.mu_sub2.sum() - (1 - last) * tr.mu[-1].sum()
+    total = tr.nu.sum() + tr.mu.sum() - (1 - last) * tr.mu[-1].sum()
     assert abs(tr.node_impulse.sum() - total) <= 1e-12 * total
 
 

@@ -103,12 +103,12 @@ CONTACT_EXTREMES = [
      "sequential corner impacts, impact law"),
     ("flatter landing (θ₀ = 1e-3: a three-impact cascade within 0.74 ms, h = 1.5 ms)", "rectangle_drop",
      ["--angle", "0.001", "--vx", "0", "--omega", "0", "--y", "1.5", "--T", "1.5", "--n", "1000"],
-     "two impacts in one step (two sub-nodes there), impact law, energy"),
+     "two impacts within one step (the step halved there), impact law, energy"),
     ("rocking block (default drop with e = 0.5, T = 3 s: rocking accumulation on the edge)", "rectangle_drop",
-     ["--restitution", "0.5"], "bounces obey the corner law, caught at the accumulation, then slides flat"),
+     ["--restitution", "0.5"], "bounces obey the corner law through the rocking accumulation, then slides flat"),
     ("rocking block, e = 0.3 (the same drop)", "rectangle_drop",
-     ["--restitution", "0.3"], "bounces obey the corner law; a caught corner must stay caught (re-solve with "
-     "the law weighted by the gap after next where the waiver was a loophole), then slides flat"),
+     ["--restitution", "0.3"], "bounces obey the corner law; a catch only where a bounce would not clear the "
+     "next node, then slides flat"),
 ]
 
 

@@ -152,7 +152,7 @@ def contact_outcome(title: str, system, tr, data: dict, lines: List[str], ground
                                 ground=ground, title=title)
 
     # the JSON: the trajectory's as_dict() (with solver_status and message, which say how the answer
-    # was reached, e.g. Assembled_From_Windows), the scene's keys on top
+    # was reached, e.g. Rows_Verified), the scene's keys on top
     return Outcome.of(tr, data, lines, writers={"plot": plot, "animate": animate})
 
 

@@ -38,7 +38,7 @@ import casadi as ca
 import numpy as np
 
 from ..validation import InputError, finite, positive
-from .mechanics import Gravity, LagrangianSystem
+from .mechanics import Contact, Gravity, LagrangianSystem
 
 
 # ----------------------------------------------------------------------------- quaternion algebra
@@ -238,6 +238,37 @@ def equivalent_box(inertia: Inertia, mass: float = 1.0) -> np.ndarray:
     """Edges of the uniform box of ``mass`` with these principal moments (for pictures)."""
     J = inertia.second_moments / mass  # = edge²/12
     return np.sqrt(np.maximum(12.0 * J, 1e-6 * max(12.0 * J.max(), 1e-300)))
+
+
+#: The box's corners in the order of :func:`box_points` (signs of the half edges along x, y, z).
+BOX_CORNERS = ["---", "+--", "++-", "-+-", "--+", "+-+", "+++", "-++"]
+
+
+def box_in_bowl(mass: float, size: Sequence[float], radius: float, g: float = 9.81,
+                restitution: float = 1.0) -> LagrangianSystem:
+    """A box free in space over the paraboloid bowl ``z = (x² + y²)/(2R)``: ``q = (c, quat)``, the
+    centre and the orientation quaternion (constraint ``|quat| = 1``), gravity ``g`` along ``−e_z``
+    (left out for ``g = 0``), and one contact per corner with restitution ``e``.
+
+    The gaps are the corners' heights above the bowl, ``φ_j = z_j − (x_j² + y_j²)/(2R)`` (a vertical
+    distance: its gradient is normal to the bowl, so the impulses act along the normal, as for the
+    planar bowl of :func:`castrajectory.models.collision.bowl`).  ``size`` are the edges along the
+    body axes; the kinetic energy is that of the uniform box (:meth:`Inertia.box`).
+    """
+    m = positive("mass", mass)
+    size = [positive(f"box edge {i + 1}", v) for i, v in enumerate(size)]
+    if len(size) != 3:
+        raise InputError(f"a box needs 3 edges (got {len(size)})")
+    R = positive("bowl radius", radius)
+    g = finite("g", g)
+    q = ca.SX.sym("q", 7)
+    c, quat = q[:3], q[3:]
+    corners = box_points(quat, size, c)
+    gaps = [p[2] - (p[0] ** 2 + p[1] ** 2) / (2.0 * R) for p in corners]
+    terms = [Gravity(g, heights=[c[2]], masses=[m])] if g != 0.0 else []
+    return LagrangianSystem(q, RigidBody(quat, Inertia.box(*size, m), center=c, mass=m), terms, [unit_norm(quat)],
+                            names=["x", "y", "z"] + QUAT_NAMES, points_expr=corners,
+                            contact=Contact(gaps, restitution, BOX_CORNERS))
 
 
 def heavy_top(mass: float, inertia: Inertia, distance: float, g: float = 9.81) -> LagrangianSystem:

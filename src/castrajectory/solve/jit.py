@@ -18,8 +18,8 @@ change to the function changes its code and therefore its hash; stale entries
 are never reused.  Writes go to a temporary file renamed into place, so
 concurrent processes can share the cache.
 
-Fallback.  Whenever no C compiler is found, compilation or loading fails, or
-compilation is switched off, :func:`compiled` returns the function unchanged
+Fallback.  Whenever no C compiler is found, compilation or loading fails, the code is longer
+than :data:`MAX_CODE_CHARS`, or compilation is switched off, :func:`compiled` returns the function unchanged
 (CasADi's virtual machine): results are the same, only slower.
 
 Environment:
@@ -55,11 +55,17 @@ COMPILE_TIMEOUT_S = 60.0
 #: Counters (per process), for tests and diagnostics.
 stats: Dict[str, int] = {"compiled": 0, "cache_hits": 0, "memory_hits": 0, "fallbacks": 0}
 
+#: Generated C code longer than this (characters) is not compiled: the VM evaluates it.  The exact
+#: Hessian of Newton's law for a box on SO(3) (a 7 × 7 mass matrix solved symbolically, projected on
+#: the quaternion constraint) is 2 MB of C that took 34 s to compile, once as the element and once as
+#: its chunk.  The marched step of that box (its rows and Jacobian, 444 kB) compiles in about 8 s, once.
+MAX_CODE_CHARS = 1_000_000
 #: Largest number of compiled libraries kept in the cache (least recently used ones are deleted).
 MAX_ENTRIES = 2000
 
 _loaded: Dict[str, ca.Function] = {}  # key -> loaded external function (this process)
 _failed: set = set()  # keys whose compilation or loading failed in this process
+_too_large: Dict[int, ca.Function] = {}  # functions whose code exceeds MAX_CODE_CHARS (this process)
 _compiler_checked: Dict[str, Optional[str]] = {}
 
 
@@ -121,7 +127,13 @@ def compiled(fn: ca.Function, build: bool = True) -> ca.Function:
         if cc is None:
             stats["fallbacks"] += 1
             return fn
+        if id(fn) in _too_large:
+            return fn
         code = c_code(fn)
+        if len(code) > MAX_CODE_CHARS:
+            _too_large[id(fn)] = fn          # (the reference keeps the id valid)
+            stats["fallbacks"] += 1
+            return fn
         key = _key(code, cc)
         if key in _loaded:
             stats["memory_hits"] += 1

@@ -32,10 +32,14 @@ class ContactMechanics:
         dm = DiscreteMechanics(system, scheme)
         if dm.s:
             raise InputError(f"contact trajectories need a two-point scheme (midpoint or trapezoid), not {scheme}")
-        if dm.m:
-            raise InputError("contact trajectories with holonomic constraints are not supported")
         self.system, self.dm = system, dm
         self.n, self.c, self.e = n, c, e = dm.n, system.ncontact, system.contact.restitution
+        # holonomic constraints c(q) = 0 (m of them): multipliers at the nodes and the sub-nodes
+        self.m = m = dm.m
+        cfun = system.constraint if m else None
+        C = (lambda q: cfun(q)[1]) if m else (lambda q: ca.SX(0, n))  # noqa: E731
+        qc = ca.SX.sym("qc", n)
+        self.constraint_row = ca.Function("c_con", [qc], [cfun(qc)[0] if m else ca.SX(0, 1)])
         z = ca.SX(0, 1)
         D1 = lambda a, b, tau: dm.D1(a, z, b, tau)  # noqa: E731
         D2 = lambda a, b, tau: dm.D2(a, z, b, tau)  # noqa: E731
@@ -45,18 +49,27 @@ class ContactMechanics:
         q0, qk, qs, qsm, qk1 = sym("q0", n), sym("q", n), sym("qs", n), sym("qsm", n), sym("qk1", n)
         b, bm, h = sym("beta"), sym("betam"), sym("h")
         mu, nu, p0 = sym("mu", c), sym("nu", c), sym("p0", n)
+        lam, lams = sym("lam", m), sym("lams", m)
         a, am = 0.5 + b, 0.5 + bm
         J = lambda q: gapf(q)[1]  # noqa: E731
         phi = lambda q: gapf(q)[0]  # noqa: E731
-        self.initial = ca.Function("c_initial", [q0, qs, b, p0, nu, h],
-                                   [(p0 + D1(q0, qs, a * h)) / h + ca.mtimes(J(q0).T, nu)])
+        # constraint forces −C(q)ᵀλ at the nodes and −C(q̃)ᵀλ̃ at the sub-nodes (the sign of the smooth
+        # transcription's DEL rows); λ, λ̃ have no entries without constraints
+        # (the multipliers are inputs only where there are constraints: a contact scene without them
+        # keeps the element functions it had)
+        xl, xls = ([lam], [lams]) if m else ([], [])
+        self.initial = ca.Function("c_initial", [q0, qs, b, p0, nu, h] + xl,
+                                   [(p0 + D1(q0, qs, a * h)) / h + ca.mtimes(J(q0).T, nu) - ca.mtimes(C(q0).T, lam)])
         hp = sym("hp")
-        self.node = ca.Function("c_node", [qsm, bm, qk, qs, b, nu, hp, h],
-                                [(D2(qsm, qk, (1 - am) * hp) + D1(qk, qs, a * h)) / h + ca.mtimes(J(qk).T, nu)])
+        self.node = ca.Function("c_node", [qsm, bm, qk, qs, b, nu, hp, h] + xl,
+                                [(D2(qsm, qk, (1 - am) * hp) + D1(qk, qs, a * h)) / h + ca.mtimes(J(qk).T, nu)
+                                 - ca.mtimes(C(qk).T, lam)])
         self._kinematics = kin = lambda xp, x, xn, tau_m, tau_p: _sub_node_kinematics(  # noqa: E731
-            D1, D2, J, Mf, e, xp, x, xn, tau_m, tau_p)
+            D1, D2, J, Mf, C, e, xp, x, xn, tau_m, tau_p)
+        self._C = C
         pm, pp, r = kin(qk, qs, qk1, a * h, (1 - a) * h)
-        self.sub = ca.Function("c_sub", [qk, qs, qk1, b, mu, h], [(pm - pp + ca.mtimes(J(qs).T, mu)) / h])
+        self.sub = ca.Function("c_sub", [qk, qs, qk1, b, mu, h] + xls,
+                               [(pm - pp + ca.mtimes(J(qs).T, mu)) / h - ca.mtimes(C(qs).T, lams)])
         # Newton's law on the normal velocity at the sub-node, weighted by W = φ(q_{k+1})/δ: the law
         # holds unless the contact is closed again at the next node, where the body is caught (the
         # accumulation point of Zeno bouncing, where no step-resolved flight is left, or a body at
@@ -74,17 +87,11 @@ class ContactMechanics:
         self.gap_row = ca.Function("c_gap", [qk], [phi(qk)])
         w = sym("w")
         self.split = ca.Function("c_split", [b, w], [w * b * b])
-        # a catch that must hold: the law weighted by φ(q_{k+1})/δ + κ φ(q_{k+2}) (κ per contact, 1/ℓ
-        # where the solution used the waiver for a catch that lifts off again, ContactNLP.loopholes)
-        qk2, kap = sym("qk2", n), sym("kappa", c)
-        self.impact_law_next, self.law_slack_next = self._law_functions(
-            "_next", [qk, qs, qk1, qk2, b, mu], [h, ell, kap], mu * r * (phi(qk1) / ell + kap * phi(qk2)))
         self._objective_functions()
         self.p_minus = ca.Function("p_minus_sub", [qk, qs, b, h], [pm])
         self.p_plus = ca.Function("p_plus_sub", [qs, qk1, b, h], [pp])
         self.p_node_plus = ca.Function("p_node_plus", [qk, qs, b, h], [-D1(qk, qs, a * h)])
         self.p_node_minus = ca.Function("p_node_minus", [qsm, bm, qk, h], [D2(qsm, qk, (1 - am) * h)])
-        self._generic_functions(J, phi)
         # a held step of the guess (α = ½): the node row with the incoming momentum p, the sub-node row,
         # and, for the contacts held (mask 1), both gaps closed; the others' force and impulse pinned
         # to 0.  Square in (q̃, q_{k+1}, ν, μ): the discrete motion with the held contacts as
@@ -92,7 +99,7 @@ class ContactMechanics:
         mask = sym("mask", c)
         xh = ca.vertcat(qs, qk1, nu, mu)
         Rh = ca.vertcat((p0 + D1(qk, qs, 0.5 * h)) / h + ca.mtimes(J(qk).T, nu * mask),
-                        self.sub(qk, qs, qk1, 0.0, mu * mask, h),
+                        self.sub(qk, qs, qk1, 0.0, mu * mask, h, *([ca.SX.zeros(m)] if m else [])),
                         mask * phi(qs) + (1 - mask) * mu, mask * phi(qk1) + (1 - mask) * nu)
         self.held_step = ca.Function("held_step", [xh, qk, p0, mask, h], [Rh, ca.jacobian(Rh, xh)])
         # free sub-node (no impact, α = ½): Newton function for the guess
@@ -114,7 +121,8 @@ class ContactMechanics:
     def _march_function(self, D1, D2, J, phi):
         """One step of the transcription's own rows, each contact in a mode given by masks (the march).
 
-        Unknowns ``x = (q̃, q_{k+1}, β, ν, μ)``; inputs the node ``q_k``, its incoming momentum
+        Unknowns ``x = (q̃, q_{k+1}, β, ν, μ, λ_k, λ̃_k)`` (the multipliers of the holonomic constraints,
+        whose rows ``c(q̃) = 0``, ``c(q_{k+1}) = 0`` close the step; none without constraints); inputs the node ``q_k``, its incoming momentum
         ``p_k⁻``, ``h``, the length ``ℓ`` and the scales of ν and μ, and per contact the masks
         ``t`` (the contact that times the sub-node: ``φ_t(q̃) = 0`` replaces ``β = β_fix``),
         ``held`` (``φ(q̃) = 0`` replaces ``ν = 0``), ``closed`` (``φ(q_{k+1}) = 0`` replaces
@@ -122,10 +130,13 @@ class ContactMechanics:
         and sub-node rows of the transcription, so a point solved step by step satisfies the whole
         program's rows (``docs/derivations.md``, "Contact trajectories", "The march").
         """
-        n, c, sym = self.n, self.c, ca.SX.sym
-        x = sym("x", 2 * n + 1 + 2 * c)
+        n, c, m, sym = self.n, self.c, self.m, ca.SX.sym
+        C = self._C
+        x = sym("x", 2 * n + 1 + 2 * c + 2 * m)
         qs, qn, b = x[:n], x[n:2 * n], x[2 * n]
-        nu, mu = x[2 * n + 1:2 * n + 1 + c], x[2 * n + 1 + c:]
+        o = 2 * n + 1
+        nu, mu, lam, lams = x[o:o + c], x[o + c:o + 2 * c], x[o + 2 * c:o + 2 * c + m], x[o + 2 * c + m:]
+        con = self.constraint_row
         qk, p, h, ell = sym("q", n), sym("p", n), sym("h"), sym("ell")
         snu, smu, vref, bfix = sym("snu"), sym("smu"), sym("vref"), sym("bfix")
         t, held, closed, law = sym("t", c), sym("held", c), sym("closed", c), sym("law", c)
@@ -133,11 +144,12 @@ class ContactMechanics:
         pm, pp, r = self._kinematics(qk, qs, qn, a * h, (1 - a) * h)
         free = 1 - held
         other = 1 - closed - law
-        R = ca.vertcat((p + D1(qk, qs, a * h)) / h + ca.mtimes(J(qk).T, nu),
-                       (pm - pp + ca.mtimes(J(qs).T, mu)) / h,
+        R = ca.vertcat((p + D1(qk, qs, a * h)) / h + ca.mtimes(J(qk).T, nu) - ca.mtimes(C(qk).T, lam),
+                       (pm - pp + ca.mtimes(J(qs).T, mu)) / h - ca.mtimes(C(qs).T, lams),
                        (1 - ca.sum1(t)) * (b - bfix) + ca.dot(t, phi(qs)) / ell,
                        held * phi(qs) / ell + free * nu / snu,
-                       closed * phi(qn) / ell + law * r / vref + other * mu / smu)
+                       closed * phi(qn) / ell + law * r / vref + other * mu / smu,
+                       con(qs), con(qn))
         self.march_step = ca.Function("march_step", [x, qk, p, h, ell, snu, smu, vref, bfix, t, held, closed, law],
                                       [R, ca.jacobian(R, x)])
 
@@ -163,30 +175,6 @@ class ContactMechanics:
         return (ca.Function(f"c_law{suffix}", head + tail, [law]),
                 ca.Function(f"c_law_slack{suffix}", head + [sp, sm] + tail + [scale], [law / scale - sp + sm]))
 
-    def _generic_functions(self, J, phi):
-        """Sub-node row, impact law and momenta of a sub-node between two arbitrary points.
-
-        Used for the steps with two sub-nodes (``ContactNLP`` with ``k2``): the chain
-        ``q_k → x₁ → x₂ → q_{k+1}``.  A point is given with ``b = α − ½`` (its time fraction in
-        the step): ``−½`` for the node ``q_k``, ``+½`` for ``q_{k+1}``; the sub-intervals are
-        ``(b − b_prev) h`` and ``(b_next − b) h``.  ``qn`` is the next node ``q_{k+1}``, whose gaps
-        weight the law as for one sub-node.
-        """
-        n, c, sym = self.n, self.c, ca.SX.sym
-        xp, x, xn, qn = sym("xp", n), sym("x", n), sym("xn", n), sym("qn", n)
-        bp, b, bn, h = sym("bp"), sym("b"), sym("bn"), sym("h")
-        mu, ell = sym("mu", c), sym("delta", c)
-        pm, pp, r = self._kinematics(xp, x, xn, (b - bp) * h, (bn - b) * h)
-        self.sub_g = ca.Function("c_sub_g", [xp, x, xn, bp, b, bn, mu, h],
-                                 [(pm - pp + ca.mtimes(J(x).T, mu)) / h])
-        self.impact_law_g, self.law_slack_g = self._law_functions(
-            "_g", [xp, x, xn, bp, b, bn, mu], [qn, h, ell], mu * r * phi(qn) / ell)
-        self.law_check_g = ca.Function("c_law_check_g", [xp, x, xn, bp, b, bn, mu, qn, h], [mu * r, phi(qn)])
-        self.p_minus_g = ca.Function("p_minus_g", [xp, x, bp, b, h], [pm])
-        self.p_plus_g = ca.Function("p_plus_g", [x, xn, b, bn, h], [pp])
-        b1, b2 = sym("b1"), sym("b2")
-        self.order = ca.Function("c_order", [b1, b2], [b2 - b1])
-
     def _objective_functions(self):
         """The objective terms (penalties), built once per system; scales are element arguments."""
         sym, c = ca.SX.sym, self.c
@@ -199,10 +187,20 @@ class ContactMechanics:
         self.slack_penalty = ca.Function("c_slack_pen", [sp, sm, rho], [rho * ca.sum1(sp + sm)])
 
 
-def _sub_node_kinematics(D1, D2, J, Mf, e, xp, x, xn, tau_m, tau_p):
+def _sub_node_kinematics(D1, D2, J, Mf, C, e, xp, x, xn, tau_m, tau_p):
     """Momenta on both sides of a sub-node ``x`` between ``xp`` and ``xn`` (sub-intervals ``tau_m``,
     ``tau_p``), ``p̃⁻ = D₂L_d(xp, x)`` and ``p̃⁺ = −D₁L_d(x, xn)``, and Newton's law residual
-    ``r = ∇φ(x) M(x)⁻¹ (p̃⁺ + e p̃⁻)`` (zero for every contact that obeys the law)."""
+    ``r = ∇φ(x) Π(x) (p̃⁺ + e p̃⁻)`` (zero for every contact that obeys the law).
+
+    ``Π = M⁻¹ − M⁻¹Cᵀ(CM⁻¹Cᵀ)⁻¹CM⁻¹`` maps a momentum to the velocity tangent to the holonomic
+    constraints (``M⁻¹`` without them): the law acts on the velocities the constraints allow, and for
+    ``e = 1`` their kinetic energy ``½ v̄ᵀMv̄`` is the same on both sides of the impact."""
     pm = D2(xp, x, tau_m)
     pp = -D1(x, xn, tau_p)
-    return pm, pp, ca.mtimes(J(x), ca.solve(Mf(x), pp + e * pm))
+    M = Mf(x)
+    v = ca.solve(M, pp + e * pm)
+    Cx = C(x)
+    if Cx.size1():
+        MiCt = ca.solve(M, Cx.T)
+        v = v - ca.mtimes(MiCt, ca.solve(ca.mtimes(Cx, MiCt), ca.mtimes(Cx, v)))
+    return pm, pp, ca.mtimes(J(x), v)

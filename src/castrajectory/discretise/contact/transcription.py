@@ -9,7 +9,7 @@ ladder, horizon windows) is :mod:`castrajectory.solve.contact`.
 Transcription (initial value, two-point schemes; derivation in
 ``docs/derivations.md``, "Contact trajectories")
 -----------------------------------------------------------------------------
-Every step ``k`` of the grid ``t_k = k h`` holds a *collision sub-node* ``q̃_k``
+Every step ``k`` of the grid (``t_{k+1} = t_k + h_k``; ``h_k = h`` unless refined) holds a *collision sub-node* ``q̃_k``
 at ``t_k + α_k h`` with ``α_k = ½ + β_k ∈ [ε, 1 − ε]`` (as in Fetecau, Marsden,
 Ortiz and West 2003, the impact time is an unknown, not a grid node; unlike
 their integrator, ``α_k`` is fixed by the gap and Newton's law below, not by
@@ -39,18 +39,17 @@ slot derivatives of ``L_d``:
   is about 1 also for an impact late in its step); the unweighted ``|μ r|`` of
   every impact whose next node is open is checked separately (:data:`LAW_TOL`);
 * centred splits: a tiny objective ``w_β Σ β_k²`` picks ``α_k = ½`` in steps without impact;
-* two sub-nodes in a step: in the steps ``k2`` where the event-located guess has two impacts (none:
-  the NLP above, unchanged), a second sub-node ``x₂`` at ``t_k + α₂ h`` (``α_k + ε ≤ α₂ ≤ 1 − ε``,
-  impulse ``μ₂``, its own law and slacks) makes the chain ``q_k → q̃_k → x₂ → q_{k+1}``: the sub-node
-  rows of ``q̃_k`` (next point ``x₂``) and ``x₂`` (previous point ``q̃_k``), and node ``k + 1`` takes
-  ``x₂`` as its previous point.  A third impact in the same step is not representable;
+* a non-uniform grid: the step lengths ``h_k`` may differ (the march halves a step that would hold two
+  impacts at different times, :mod:`castrajectory.solve.contact.march`); node ``k``'s row then reads
+  ``D₂L_d(q̃_{k−1}, q_k; (1 − α_{k−1}) h_{k−1}) + D₁L_d(q_k, q̃_k; α_k h_k) + h_k ∇φ(q_k)ᵀ ν_k = 0`` (divided
+  by ``h_k``), and every other row takes its own step's ``h_k``;
 * look-ahead step: the NLP has ``N + LOOKAHEAD`` steps and only the first ``N`` are reported, and
   the last node force is complementary to the end gap too (``ρ φ(q_L)·h ν_{L−1}``).  The end node
   of an NLP has no successor, so a force there could otherwise "launch" the body into it; with
   the look-ahead every reported node keeps its row, force and successor.
 
 Reported per node: ``Λ_k = h ν_k + (1 − α_k) μ_k + α_{k−1} μ_{k−1}`` (sub-node impulses shared
-between their two nodes by the hat-function weights of their time; a second sub-node's likewise), which for a ball is exactly
+between their two nodes by the hat-function weights of their time), which for a ball is exactly
 the lumped momentum balance ``m g h + m (q_{k+1} − 2 q_k + q_{k−1})/h`` whatever the sub-nodes do,
 and node momenta that are the mean of the one-sided ones at a closed contact.
 
@@ -117,7 +116,7 @@ class ContactTranscription:
 
     program = Program
 
-    def __init__(self, cm: ContactMechanics, L: int, h: float, scales, k2=None, held=None, steps=None):
+    def __init__(self, cm: ContactMechanics, L: int, h: float, scales, steps=None):
         self.cm, self.L, self.h = cm, L, h
         # step lengths h_k (a grid refined where impacts crowd, see solve.contact.march); h by default
         self.H = np.full(L, float(h)) if steps is None else np.asarray(steps, float).reshape(L)
@@ -127,18 +126,6 @@ class ContactTranscription:
         self.scales_ell = ell
         self.scales_law = pref * vref
         self.v_zeno = _v_zeno(cm, h, scales)
-        # steps with a second sub-node (sorted); empty: the one-sub-node NLP, unchanged
-        self.k2 = np.unique(np.asarray([] if k2 is None else k2, dtype=np.int64))
-        if self.k2.size and (self.k2[0] < 0 or self.k2[-1] >= L):
-            raise ValueError("second sub-node steps out of range")
-        # catches that must hold (ContactNLP.loopholes): per step and contact, the law also weighted by
-        # φ(q_{k+2})/ℓ; not in the steps with two sub-nodes nor in the last step (no q_{k+2})
-        self.held = np.zeros((L, cm.c), dtype=bool)
-        if held is not None:
-            self.held[:] = np.asarray(held, bool).reshape(L, cm.c)
-            self.held[self.k2] = False
-            self.held[L - 1] = False
-        self.k_next = np.where(np.any(self.held, axis=1))[0]
         # weight length of the law where the guess has no bounce: W = φ(q_{k+1})/δ with δ = ℓ
         # (law_lengths sets a shorter δ at the guess's bounces)
         self.delta = ell
@@ -151,6 +138,11 @@ class ContactTranscription:
         nlp.variable("nu", L * c, lb=0.0)
         nlp.variable("s_plus", L * c, lb=0.0)
         nlp.variable("s_minus", L * c, lb=0.0)
+        # multipliers of the holonomic constraints at the nodes 0..L-1 and the sub-nodes (none without)
+        m = cm.m
+        if m:
+            nlp.variable("lam", L * m)
+            nlp.variable("lam_sub", L * m)
         nlp.parameter("p0", n)
         nlp.parameter("rho", 1, value=PENALTY[0])
         # weight of the centred-split term (0 where every β is fixed or timed: a decided branch)
@@ -164,72 +156,33 @@ class ContactTranscription:
         NU = nlp.index("nu").reshape(L, c)
         SP = nlp.index("s_plus").reshape(L, c)
         SM = nlp.index("s_minus").reshape(L, c)
+        # the constraint multipliers' arguments (none without constraints)
+        LAM = (lambda i: [X(nlp.index("lam").reshape(L, m)[i])]) if m else (lambda i: [])  # noqa: E731
+        LAMS = (lambda i: [X(nlp.index("lam_sub").reshape(L, m)[i])]) if m else (lambda i: [])  # noqa: E731
         Hc = self.H.reshape(-1, 1)
         k = np.arange(L)
         rho = P(nlp.parameter_index("rho"))
         nlp.equal_elements("initial", cm.initial,
-                           [X(Q[0]), X(S[0]), X(B[0]), P(nlp.parameter_index("p0")), X(NU[0]), Hc[0]])
-        K2 = self.k2
-        # steps with one sub-node: the sub-node row and law as in the module docstring
-        KN = self.k_next
-        k1 = np.setdiff1d(k, np.union1d(K2, KN)) if K2.size or KN.size else k
-        # the point before node i: the last sub-node of step i − 1 (its second one in a K2 step)
-        S_last, B_last = S.copy(), B.copy()
-        if K2.size:
-            m2 = K2.size
-            nlp.variable("qs2", m2 * n)
-            nlp.variable("beta2", m2, lb=ALPHA_MIN - 0.5, ub=0.5 - ALPHA_MIN)
-            nlp.variable("mu2", m2 * c, lb=0.0)
-            nlp.variable("s_plus2", m2 * c, lb=0.0)
-            nlp.variable("s_minus2", m2 * c, lb=0.0)
-            nlp.parameter("law_length2", m2 * c, value=self.delta)
-            S2 = nlp.index("qs2").reshape(m2, n)
-            B2 = nlp.index("beta2").reshape(m2, 1)
-            MU2 = nlp.index("mu2").reshape(m2, c)
-            SP2 = nlp.index("s_plus2").reshape(m2, c)
-            SM2 = nlp.index("s_minus2").reshape(m2, c)
-            S_last[K2], B_last[K2] = S2, B2
+                           [X(Q[0]), X(S[0]), X(B[0]), P(nlp.parameter_index("p0")), X(NU[0]), Hc[0]] + LAM(0))
         if L > 1:
             i = np.arange(1, L)
-            nlp.equal_elements("node", cm.node, [X(S_last[i - 1]), X(B_last[i - 1]), X(Q[i]), X(S[i]), X(B[i]),
-                                                 X(NU[i]), Hc[i - 1], Hc[i]])
-        nlp.equal_elements("sub", cm.sub, [X(Q[k1]), X(S[k1]), X(Q[k1 + 1]), X(B[k1]), X(MU[k1]), Hc[k1]])
+            nlp.equal_elements("node", cm.node, [X(S[i - 1]), X(B[i - 1]), X(Q[i]), X(S[i]), X(B[i]),
+                                                 X(NU[i]), Hc[i - 1], Hc[i]] + LAM(i))
+        nlp.equal_elements("sub", cm.sub, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), Hc] + LAMS(k))
+        if m:
+            nlp.equal_elements("node_constraint", cm.constraint_row, [X(Q[1:])])
+            nlp.equal_elements("sub_constraint", cm.constraint_row, [X(S)])
         nlp.inequality_elements("node_gap", cm.gap_row, [X(Q[1:])], lb=0.0)
         nlp.inequality_elements("sub_gap", cm.gap_row, [X(S)], lb=0.0)
         LL = P(nlp.parameter_index("law_length").reshape(L, c))
-        law_args = [X(Q[k1]), X(S[k1]), X(Q[k1 + 1]), X(B[k1]), X(MU[k1]), X(SP[k1]), X(SM[k1]), Hc[k1],
-                    LL if not (K2.size or KN.size) else P(LL.index[k1]), np.array([self.scales_law])]
-        nlp.equal_elements("impact_law", cm.law_slack, law_args)
-        if KN.size:
-            self.kappa = np.where(self.held, 1.0 / ell, 0.0)
-            nlp.equal_elements("impact_law_next", cm.law_slack_next,
-                               [X(Q[KN]), X(S[KN]), X(Q[KN + 1]), X(Q[KN + 2]), X(B[KN]), X(MU[KN]), X(SP[KN]),
-                                X(SM[KN]), Hc[KN], P(LL.index[KN]), self.kappa[KN], np.array([self.scales_law])])
-        if K2.size:
-            lo, hi = np.array([-0.5]), np.array([0.5])
-            LL2 = P(nlp.parameter_index("law_length2").reshape(m2, c))
-            # x₁ between q_k and x₂, x₂ between x₁ and q_{k+1}; both laws weighted by φ(q_{k+1})
-            nlp.equal_elements("sub_first", cm.sub_g,
-                               [X(Q[K2]), X(S[K2]), X(S2), lo, X(B[K2]), X(B2), X(MU[K2]), Hc[K2]])
-            nlp.equal_elements("sub_second", cm.sub_g,
-                               [X(S[K2]), X(S2), X(Q[K2 + 1]), X(B[K2]), X(B2), hi, X(MU2), Hc[K2]])
-            nlp.inequality_elements("sub_gap2", cm.gap_row, [X(S2)], lb=0.0)
-            nlp.inequality_elements("sub_order", cm.order, [X(B[K2]), X(B2)], lb=ALPHA_MIN)
-            scl = np.array([self.scales_law])
-            nlp.equal_elements("impact_law_first", cm.law_slack_g,
-                               [X(Q[K2]), X(S[K2]), X(S2), lo, X(B[K2]), X(B2), X(MU[K2]), X(SP[K2]), X(SM[K2]),
-                                X(Q[K2 + 1]), Hc[K2], P(LL.index[K2]), scl])
-            nlp.equal_elements("impact_law_second", cm.law_slack_g,
-                               [X(S[K2]), X(S2), X(Q[K2 + 1]), X(B[K2]), X(B2), hi, X(MU2), X(SP2), X(SM2),
-                                X(Q[K2 + 1]), Hc[K2], LL2, scl])
+        nlp.equal_elements("impact_law", cm.law_slack,
+                           [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), X(SP[k]), X(SM[k]), Hc, LL,
+                            np.array([self.scales_law])])
         # exact (l1) penalties: complementarity products and the impact-law slacks
         nlp.minimize_elements("node_penalty", cm.product_penalty, [X(Q[k]), X(NU[k]), rho, ell * pref / Hc])
         nlp.minimize_elements("sub_penalty", cm.product_penalty, [X(S[k]), X(MU[k]), rho, np.array([ell * pref])])
         nlp.minimize_elements("law_penalty", cm.slack_penalty, [X(SP[k]), X(SM[k]), rho])
         nlp.minimize_elements("split", cm.split, [X(B[k]), P(nlp.parameter_index("split"))])
-        if K2.size:
-            nlp.minimize_elements("sub_penalty2", cm.product_penalty, [X(S2), X(MU2), rho, np.array([ell * pref])])
-            nlp.minimize_elements("law_penalty2", cm.slack_penalty, [X(SP2), X(SM2), rho])
         # terminal condition: the last node force may not launch the body (its gap at the end node
         # q_L would otherwise be free; see the module docstring, "Look-ahead step")
         nlp.minimize_elements("end_penalty", cm.product_penalty, [X(Q[L]), X(NU[L - 1]), rho, ell * pref / Hc[L - 1]])
@@ -260,32 +213,6 @@ class ContactTranscription:
         out[bounce] = np.clip(gnext[bounce], self.open_gap, self.delta)
         return out
 
-    def law_lengths2(self, guess) -> np.ndarray:
-        """δ of the second sub-nodes' laws (steps ``k2``): as :meth:`law_lengths`, from the guess's
-        ``bounced2`` (its second impacts) and next-node gaps; ℓ without them."""
-        n, c, L = self.cm.n, self.cm.c, self.L
-        out = np.full((self.k2.size, c), self.delta)
-        if "q" not in guess or "bounced2" not in guess:
-            return out
-        Q = np.asarray(guess["q"], float).reshape(L + 1, n)
-        gnext = np.asarray(self.cm.gap_row.map(self.k2.size)(Q[self.k2 + 1].T)).reshape(c, -1).T
-        bounce = np.asarray(guess["bounced2"], bool).reshape(-1, c) & (gnext > TOUCH_TOL * self.scales_ell)
-        out[bounce] = np.clip(gnext[bounce], self.open_gap, self.delta)
-        return out
-
-    def loopholes(self, values) -> np.ndarray:
-        """Where the residual's unweighted check of Newton's law rejects ``values``, per step and
-        contact: an impulse after which the contact is open at node k + 1 or k + 2 (beyond the hop
-        a h²/8 of a resting body) whose law misses by more than :data:`LAW_TOL`.  Either the weight
-        ``φ(q_{k+1})/δ`` is small there, or the waiver was used for a catch that does not hold
-        (closed at node k + 1, open again at k + 2).  Steps with two sub-nodes and the last step are
-        left out."""
-        raw, leaves = self._raw_law(values)
-        out = (np.abs(raw) > LAW_TOL * self.scales_law) & leaves
-        out[self.k2] = False
-        out[self.L - 1] = False
-        return out
-
     def _raw_law(self, values):
         """Unweighted Newton law ``μ r`` per step and contact (one-sub-node form), and where the body
         leaves after the impulse: one of the next two nodes open by more than the hop of a resting
@@ -311,31 +238,6 @@ class ContactTranscription:
                 leaves[k] &= -vn > self.v_zeno
         return raw, leaves
 
-    def _second(self, values):
-        """The second sub-nodes' arrays (steps ``k2``): x₂, β₂, μ₂ and, per step, x₁, β₁, μ₁, q_k, q_{k+1}."""
-        n, c, K2 = self.cm.n, self.cm.c, self.k2
-        m2 = K2.size
-        Q = values["q"].reshape(self.L + 1, n)
-        return (values["qs2"].reshape(m2, n), values["beta2"].reshape(m2), values["mu2"].reshape(m2, c),
-                values["qs"].reshape(self.L, n)[K2], values["beta"].reshape(self.L)[K2],
-                values["mu"].reshape(self.L, c)[K2], Q[K2], Q[K2 + 1])
-
-    def _residual2(self, values):
-        """Terms of the residual at the steps with two sub-nodes: (|φ(x₂) μ₂|, weighted law, raw law, next gaps)
-        over both sub-nodes of those steps, and the raw law of x₁ (which :meth:`residual` replaces)."""
-        cm, c, m2 = self.cm, self.cm.c, self.k2.size
-        h = self.H[self.k2]
-        S2, B2, MU2, S1, B1, MU1, Qk, Qk1 = self._second(values)
-        lo, hi = -0.5 * np.ones(m2), 0.5 * np.ones(m2)
-        gs2 = np.asarray(cm.gap_row.map(m2)(S2.T)).reshape(c, m2).T
-        F = cm.impact_law_g.map(m2)
-        w1 = np.asarray(F(Qk.T, S1.T, S2.T, lo, B1, B2, MU1.T, Qk1.T, h, self._law_length[self.k2].T)).reshape(c, m2).T
-        w2 = np.asarray(F(S1.T, S2.T, Qk1.T, B1, B2, hi, MU2.T, Qk1.T, h, self._law_length2.T)).reshape(c, m2).T
-        G = cm.law_check_g.map(m2)
-        raw1, _ = (np.asarray(v).reshape(c, m2).T for v in G(Qk.T, S1.T, S2.T, lo, B1, B2, MU1.T, Qk1.T, h))
-        raw2, _ = (np.asarray(v).reshape(c, m2).T for v in G(S1.T, S2.T, Qk1.T, B1, B2, hi, MU2.T, Qk1.T, h))
-        return gs2 * MU2, w1, w2, raw1, raw2
-
     def residual(self, values) -> float:
         """Largest complementarity violation: |φ ν h|, |φ μ| and |μ r| (scaled as in the penalties)."""
         cm, L, H = self.cm, self.L, self.H
@@ -349,26 +251,11 @@ class ContactTranscription:
         gs = np.asarray(cm.gap_row.map(L)(S.T)).reshape(c, L).T
         law = np.asarray(cm.impact_law.map(L)(Q[:-1].T, S.T, Q[1:].T, B, MU.T, H,
                                               self._law_length.T)).reshape(c, L).T
-        if self.k_next.size:
-            KN = self.k_next
-            law[KN] = np.asarray(cm.impact_law_next.map(KN.size)(
-                Q[KN].T, S[KN].T, Q[KN + 1].T, Q[KN + 2].T, B[KN], MU[KN].T, H[KN], self._law_length[KN].T,
-                self.kappa[KN].T)).reshape(c, KN.size).T
         # Newton's law of every impact after which the body leaves, unweighted (_raw_law)
         raw, leaves = self._raw_law(values)
-        extra = []
-        if self.k2.size:
-            # steps with two sub-nodes: x₁'s law has x₂ as its next point (replacing the one-sub-node
-            # terms), x₂'s pair and law are added; both are checked when the body leaves after the step
-            pair2, w1, w2, raw1, raw2 = self._residual2(values)
-            law[self.k2], raw[self.k2] = w1, raw1
-            l2 = leaves[self.k2]
-            extra = [np.max(np.abs(pair2)) / self.scales_p, np.max(np.abs(w2)) / self.scales_law,
-                     (float(np.max(np.abs(raw2[l2]))) if np.any(l2) else 0.0)
-                     / self.scales_law * COMPLEMENTARITY_TOL / LAW_TOL]
         raw_max = float(np.max(np.abs(raw[leaves]))) if np.any(leaves) else 0.0
         g_end = np.asarray(cm.gap_row(Q[L])).reshape(-1)
         return float(max(np.max(np.abs(gq * NU * H[:, None])) / self.scales_p, np.max(np.abs(gs * MU)) / self.scales_p,
                          float(np.max(np.abs(g_end * NU[L - 1] * H[L - 1]))) / self.scales_p,
                          np.max(np.abs(law)) / self.scales_law,
-                         raw_max / self.scales_law * COMPLEMENTARITY_TOL / LAW_TOL, *extra))
+                         raw_max / self.scales_law * COMPLEMENTARITY_TOL / LAW_TOL))

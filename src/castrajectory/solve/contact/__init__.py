@@ -1,4 +1,4 @@
-"""Contact trajectories solved: the event-located guess, the penalty ladder, held catches and windows.
+"""Contact trajectories solved: the discrete march and its certificate, else the guess's branch and the penalty ladder.
 
 The program is written by :class:`castrajectory.discretise.contact.transcription.ContactTranscription`
 (its docstring states the transcription); :func:`solve_contact` solves it.  A system without a
@@ -7,43 +7,33 @@ dispatches).
 
 Solution strategy (chosen by the library)
 -----------------------------------------
-1. **Event-located guess.**  The smooth equations of motion are integrated
-   (RK4) from the start; every gap crossing is located by bisection, the
-   impact law of :func:`castrajectory.models.collision.impact_law` is applied
-   there and the flight continues.  The sub-node of that step is placed at the
-   crossing with the impact's ``μ``; a second crossing in the rest of that step gets a second
-   impact and sub-node (whole solve only).  A slow arrival (normal speed below
-   ``v_z = max(2, 1/e) a h``, ``a`` the scene's acceleration scale) while every
-   contact of the body moves slowly along the normal is caught instead (the
-   accumulation point of Zeno bouncing): a plastic impact, after which the
-   caught contacts are *held* (each RK4 step projected back onto ``φ_j = 0``,
-   ``J_j v = 0``: the body rests or slides) until the free flight would lift one off.
-2. **The branch the guess identifies** (:meth:`ContactNLP.solve_branch`): every complementarity
-   pair decided by the guess (touching contacts keep their gap rows as equalities, open ones have no
-   force or impulse; Newton's law exact at the guess's bounces), a nearly square NLP whose solution is
-   a solution of the complementarity problem.  From the event-located guess it converges in a few
-   iterations; a wrong decision stops it within :data:`BRANCH_IPOPT`'s budget.
-3. Otherwise the **whole solve** of all ``N`` steps from that guess with the penalty ladder.
-   If it fails where the residual's unweighted check of Newton's law rejects
-   the last point Ipopt solved (a *loophole*: the law's weight small there, or
-   the waiver used for a catch that lifts off again), those laws are weighted
-   by ``φ(q_{k+2})/ℓ`` as well (a catch must hold) and the whole solve restarts
-   from the guess (at most :data:`HELD_ROUNDS` rounds; :meth:`ContactNLP.loopholes`).
-4. If that fails too, **horizon windows** (small contact NLPs marched over the
-   horizon, each with its own event-located guess and iteration budget, its branch first) whose
-   assembled solution starts a final whole solve (its branch first).  If every window converged
-   but that final solve does not, the assembled point itself is the answer
-   provided it satisfies the whole NLP (scaled rows within
-   :data:`ASSEMBLED_ROW_TOL`, residual within :data:`COMPLEMENTARITY_TOL`),
-   reported with the status ``Assembled_From_Windows``.
+1. **The discrete march** (:func:`.march.discrete_march`).  An initial-value program is block
+   lower-triangular in its steps, so it is solved step by step: each step's rows (node, sub-node,
+   one complementarity pair per contact) by Newton, each contact in a mode (open, held, released,
+   impact with Newton's law, caught) found by an active-set search on the most violated gap or
+   multiplier.  A step that would need two impacts at different times is halved (the grid adapts to
+   the impacts; at most :data:`.march.MAX_SPLITS` halvings), and contacts whose gaps agree to
+   ``1e-9 ℓ`` at an impact take one simultaneous impact.  A bounce that does not clear the next
+   node is caught there: the end of an accumulation that the grid does not resolve.
+2. **The certificate** (:meth:`ContactNLP.solve_modes`, :meth:`castrajectory.solve.nlp.NLP.certify`).
+   The march's modes decide every pair, so its branch of the program is a square feasibility
+   problem; the whole system takes one Newton step from the marched point (removing the march's
+   rounding drift), every row is checked with Ipopt's scaling, and the point is returned as a KKT
+   point of that branch (status ``Rows_Verified``, multipliers and objective included).  If the
+   check fails, Ipopt solves that branch from the marched point.
+3. Otherwise (the march failed, or its branch did not converge), **the branch of the event-located
+   guess** (:func:`.guess.event_guess`, RK4 flight with located impacts, on the uniform grid;
+   :meth:`ContactNLP.solve_branch`) and then **the penalty continuation** from that guess
+   (:meth:`ContactNLP.solve`): the one continuation loop, each rung recorded as a
+   :class:`~castrajectory.result.HomotopyStep`.
 
-Otherwise the reported status is that of the last whole-trajectory solve.
+The reported status is that of the last solve; ``attempts`` lists every stage.
 """
 from ...discretise.contact.elements import ContactMechanics  # noqa: F401
 from ...discretise.contact.transcription import COMPLEMENTARITY_TOL, PENALTY, TOUCH_TOL  # noqa: F401
 from ...models.impact import simultaneous_impact  # noqa: F401
 from .guess import GUESS_CHUNK, SIMULTANEOUS_TOL, event_guess  # noqa: F401
+from .march import MAX_SPLITS, discrete_march  # noqa: F401
 from .nlp import BRANCH_IPOPT, CONTACT_IPOPT, ContactNLP  # noqa: F401
 from .solution import IMPACT_SPEED_STEPS, IMPULSE_TOL, ContactTrajectory, SubNodeImpact  # noqa: F401
-from .strategy import (  # noqa: F401
-    ASSEMBLED_ROW_TOL, HELD_ROUNDS, MIN_WINDOW, WINDOW_MAX_ITER, WINDOWS_MAX_ITER_TOTAL, solve_contact)
+from .strategy import solve_contact  # noqa: F401

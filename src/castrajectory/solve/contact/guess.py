@@ -82,13 +82,11 @@ def _held_step(cm: ContactMechanics, q, p, active, h, v, iterations: int = 20):
 
 
 def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h: float,
-                length: float, v_zeno: float, two_impacts: bool = True) -> Dict[str, np.ndarray]:
+                length: float, v_zeno: float) -> Dict[str, np.ndarray]:
     """Guess for ``L`` steps from ``(q0, v0)``: RK4 flight with located impacts (see module docstring).
 
-    With ``two_impacts``, the rest of a bounce step is searched for a second crossing, which gets
-    a second impact (restitution e) in that step: the steps ``k2`` with their second sub-node
-    ``qs2``, ``beta2``, ``mu2``, ``bounced2`` (rows over ``k2``).  A third crossing in the same
-    step is not looked for (the flight continues through it).
+    One impact per step: a second crossing in the same step is not looked for (the flight continues
+    through it).
     """
     n, c, e = cm.n, cm.c, cm.e
     p0 = np.asarray(cm.system.mass_matrix(q0)) @ np.asarray(v0, float)
@@ -99,7 +97,6 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
     MU = np.zeros((L, c))
     event = np.zeros(L, dtype=bool)
     BOUNCED = np.zeros((L, c), dtype=bool)      # impacts resolved with restitution (not caught, not resting)
-    second: Dict[int, tuple] = {}               # step -> (β₂, x₂, μ₂ row, bounced₂ row)
     q, v = np.asarray(q0, float).copy(), np.asarray(v0, float).copy()
     Q[0] = q
     # contacts held closed (caught, or resting from the start): the guess then flies constrained
@@ -227,26 +224,6 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
                 BOUNCED[k, together] = mus > 0
                 imp.v_after = v_after
             qn, vn, ph = (np.asarray(x).reshape(-1) for x in cm.flow(qc, imp.v_after, h - tc))
-            # a second crossing in the rest of the step (another contact, or the same one again)
-            crossing2 = ~((phc <= tol) & (ph >= -tol))
-            if two_impacts and tc < (1 - 2 * ALPHA_MIN) * h and np.any(ph[crossing2] < -tol):
-                tc2 = tc + _bisect_crossing(cm, qc, imp.v_after, h - tc, crossing2)
-                tc2 = min(max(tc2, tc + ALPHA_MIN * h), (1 - ALPHA_MIN) * h)
-                qc2, vc2, phc2 = (np.asarray(x).reshape(-1) for x in cm.flow(qc, imp.v_after, tc2 - tc))
-                j2 = int(np.argmin(np.where(crossing2, phc2, np.inf)))
-                Jall2 = np.asarray(gapf(qc2)[1])
-                Mc2 = np.asarray(Mf(qc2))
-                imp2 = impact_law(Mc2, Jall2[j2], vc2, e)
-                mu2, b2 = np.zeros(c), np.zeros(c, dtype=bool)
-                mu2[j2], b2[j2] = imp2.mu, True
-                together = np.where(crossing2 & (phc2 <= phc2[j2] + SIMULTANEOUS_TOL * length))[0]
-                if together.size > 1:
-                    mus, v_after = simultaneous_impact(Mc2, Jall2[together], vc2, e)
-                    mu2[together] = mus
-                    b2[together] = mus > 0
-                    imp2.v_after = v_after
-                second[k] = (tc2 / h - 0.5, qc2, mu2, b2)
-                qn, vn, _ = (np.asarray(x).reshape(-1) for x in cm.flow(qc2, imp2.v_after, h - tc2))
         q, v = qn, vn
         Q[k + 1] = q
         k += 1
@@ -282,18 +259,11 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
         if k == 0:
             r = np.asarray(cm.initial(Q[0], S[0], B[0], p0, np.zeros(c), h)).reshape(-1)
         else:
-            sp, bp = (second[k - 1][1], second[k - 1][0]) if k - 1 in second else (S[k - 1], B[k - 1])
-            r = np.asarray(cm.node(sp, bp, Q[k], S[k], B[k], np.zeros(c), h, h)).reshape(-1)
+            r = np.asarray(cm.node(S[k - 1], B[k - 1], Q[k], S[k], B[k], np.zeros(c), h, h)).reshape(-1)
         J = np.asarray(gapf(Q[k])[1])
         act = gq[k] <= tol
         sol = np.linalg.lstsq(J[act].T, -r, rcond=None)[0]
         NU[k, act] = np.maximum(sol, 0.0)
     out = {"q": Q.reshape(-1), "qs": S.reshape(-1), "beta": B, "mu": MU.reshape(-1), "nu": NU.reshape(-1),
            "bounced": BOUNCED}
-    if second:
-        k2 = np.array(sorted(second), dtype=np.int64)
-        out.update(k2=k2, beta2=np.array([second[k][0] for k in k2]),
-                   qs2=np.array([second[k][1] for k in k2]).reshape(-1),
-                   mu2=np.array([second[k][2] for k in k2]).reshape(-1),
-                   bounced2=np.array([second[k][3] for k in k2]))
     return out

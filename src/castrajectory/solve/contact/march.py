@@ -28,6 +28,7 @@ from typing import Dict, Optional
 import numpy as np
 
 from ...discretise.contact.elements import ContactMechanics
+from .. import jit
 from ...discretise.contact.transcription import ALPHA_MIN, TOUCH_TOL
 
 #: Newton iterations of one step solve, and the largest row residual accepted (each row divided by
@@ -48,8 +49,13 @@ class _Step:
 
     def __init__(self, cm: ContactMechanics, scales):
         self.cm = cm
+        # evaluated once per Newton step of every marched step: compiled once per system (jit's disk
+        # cache; CasADi's VM where that is not possible)
+        if not hasattr(cm, "_march_compiled"):
+            cm._march_compiled = jit.compiled(cm.march_step)
+        self.fn = cm._march_compiled
         self.ell, self.pref, self.vref = scales[0], scales[1], scales[2]
-        self.n, self.c = cm.n, cm.c
+        self.n, self.c, self.m = cm.n, cm.c, cm.m
 
     def masks(self, modes):
         c = self.c
@@ -79,7 +85,7 @@ class _Step:
                 t, held, closed, law)
         small = 0
         for _ in range(NEWTON_ITER):
-            r, Jr = self.cm.march_step(x, *args)
+            r, Jr = self.fn(x, *args)
             r = np.asarray(r).reshape(-1)
             Jr = np.asarray(Jr)
             # rows and columns equilibrated (momentum rows ~ 1/h², gap rows ~ 1/ℓ): the step's
@@ -98,7 +104,7 @@ class _Step:
             small = small + 1 if np.max(np.abs(dx)) <= 1e-14 * (1.0 + float(np.max(np.abs(x)))) else 0
             if small == 2:
                 break
-        r, Jr = self.cm.march_step(x, *args)
+        r, Jr = self.fn(x, *args)
         # each row in units of the unknowns (divided by its largest derivative): rows that go like
         # 1/α near α = 0 are then held to the rounding of the point, not of their size
         r = np.asarray(r).reshape(-1) / np.maximum(np.max(np.abs(np.asarray(Jr)), axis=1), 1e-300)
@@ -173,7 +179,8 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales,
     ell = scales[0]
     tol = TOUCH_TOL * ell          # touching: gap within this
     gapf = cm.system.gap
-    rows = {key: [] for key in ("q", "qs", "beta", "nu", "mu", "bounced", "steps", "base", "modes")}
+    rows = {key: [] for key in ("q", "qs", "beta", "nu", "mu", "lam", "lam_sub", "bounced", "steps", "base",
+                                "modes")}
     q, p = np.asarray(q0, float).copy(), np.asarray(p0, float).copy()
     g_q = np.asarray(gapf(q)[0]).reshape(-1)
     held_prev = g_q <= tol
@@ -190,17 +197,19 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales,
                 if trace is not None:
                     trace.append((k, hk) + out + (q, p, g_q, held_prev))
                 return None
-            qs, qn, b, nu, mu, modes, gn = out
-            for key, val in (("q", qn), ("qs", qs), ("beta", b), ("nu", nu), ("mu", mu),
-                             ("bounced", np.array([m == I for m in modes]) & (gn > tol)), ("steps", hk), ("base", k),
-                             ("modes", np.array(modes))):
+            qs, qn, b, nu, mu, lam, lams, modes, gn = out
+            for key, val in (("q", qn), ("qs", qs), ("beta", b), ("nu", nu), ("mu", mu), ("lam", lam),
+                             ("lam_sub", lams), ("bounced", np.array([m == I for m in modes]) & (gn > tol)),
+                             ("steps", hk), ("base", k), ("modes", np.array(modes))):
                 rows[key].append(val)
             p = np.asarray(cm.p_node_minus(qs, b, qn, hk)).reshape(-1)
             held_prev = np.array([m in (H, C) for m in modes])
             q, g_q = qn, gn
     out = {key: np.asarray(val) for key, val in rows.items()}
-    for key in ("q", "qs", "mu", "nu"):
+    for key in ("q", "qs", "mu", "nu", "lam", "lam_sub"):
         out[key] = out[key].reshape(-1)
+    if not cm.m:
+        del out["lam"], out["lam_sub"]
     return out
 
 
@@ -212,7 +221,7 @@ def _march_step(step: _Step, q, p, h, g_q, held_prev, tol, finest: bool):
     pen = 1e-12 * step.ell
     touch = g_q <= tol
     v = np.linalg.solve(np.asarray(Mf(q)), p)
-    x0 = np.concatenate([q + 0.5 * h * v, q + h * v, [0.0], np.zeros(2 * c)])
+    x0 = np.concatenate([q + 0.5 * h * v, q + h * v, [0.0], np.zeros(2 * c + 2 * step.m)])
     modes = [H if (touch[j] and held_prev[j]) else O for j in range(c)]
     tried = set()
     x, frac = x0, None
@@ -238,12 +247,13 @@ def _march_step(step: _Step, q, p, h, g_q, held_prev, tol, finest: bool):
             if not ok:
                 return ("newton", key)
         qs, qn, b = x[:n], x[n:2 * n], float(x[2 * n])
-        nu, mu = x[2 * n + 1:2 * n + 1 + c], x[2 * n + 1 + c:]
+        o = 2 * n + 1
+        nu, mu = x[o:o + c], x[o + c:o + 2 * c]
         gs = np.asarray(gapf(qs)[0]).reshape(-1)
         gn = np.asarray(gapf(qn)[0]).reshape(-1)
         change = _next_modes(modes, touch, g_q, gs, gn, nu, mu, b, pen, tol, step, finest)
         if change is None:
-            return qs, qn, b, nu, mu, modes, gn
+            return qs, qn, b, nu, mu, x[o + 2 * c:o + 2 * c + step.m], x[o + 2 * c + step.m:], modes, gn
         if change == "split":
             return "split" if not finest else ("split at the finest step", key)
         modes, frac = change

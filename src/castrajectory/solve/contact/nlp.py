@@ -136,21 +136,8 @@ class ContactNLP(ContactTranscription):
             "node_gap": (zero, np.where(node_closed[1:].reshape(-1), 0.0, np.inf)),
             "sub_gap": (zero, np.where(hit.reshape(-1), 0.0, np.inf)),
         }
-        K2 = self.k2
-        k1 = np.setdiff1d(np.arange(L), np.union1d(K2, self.k_next))
-        on = bounced[k1].reshape(-1)
+        on = bounced.reshape(-1)
         bounds["impact_law"] = (np.where(on, 0.0, -np.inf), np.where(on, 0.0, np.inf))
-        if K2.size:
-            m2 = K2.size
-            MU2 = np.asarray(guess["mu2"], float).reshape(m2, c)
-            hit2 = MU2 > 0.0
-            b2 = hit2 & ~closed[K2 + 1]
-            z2 = np.zeros(m2 * c)
-            bounds.update({"mu2": (z2, np.where(hit2.reshape(-1), np.inf, 0.0)), "s_plus2": (z2, z2),
-                           "s_minus2": (z2, z2), "sub_gap2": (z2, np.where(hit2.reshape(-1), 0.0, np.inf))})
-            on1, on2 = bounced[K2].reshape(-1), b2.reshape(-1)
-            bounds["impact_law_first"] = (np.where(on1, 0.0, -np.inf), np.where(on1, 0.0, np.inf))
-            bounds["impact_law_second"] = (np.where(on2, 0.0, -np.inf), np.where(on2, 0.0, np.inf))
         init = self._start(q0, p0, guess)
         opts = {**CONTACT_IPOPT, **BRANCH_IPOPT, **(options or {})}
         opts["max_iter"] = min(int(opts["max_iter"]), BRANCH_IPOPT["max_iter"])
@@ -209,37 +196,4 @@ class ContactNLP(ContactTranscription):
         if "s_plus" not in init:
             init["s_plus"] = np.zeros(self.L * c)
             init["s_minus"] = np.zeros(self.L * c)
-        if self.k2.size:
-            self._law_length2 = self.law_lengths2(guess)
-            self.nlp.set_parameter("law_length2", self._law_length2.reshape(-1))
-            if "s_plus2" not in init:
-                init["s_plus2"] = np.zeros(self.k2.size * c)
-                init["s_minus2"] = np.zeros(self.k2.size * c)
         return init
-
-    def row_violation(self, p0, values) -> float:
-        """Largest scaled violation of this NLP's rows at ``values`` (all of its variables, e.g.
-        assembled from horizon windows): the momentum rows (``initial``, ``node``, ``sub``, ...)
-        relative to the force scale ``p_ref/h``, the gap rows relative to ``ℓ``, the law rows
-        (already scaled) as they are, and the bounds relative to ``ℓ``."""
-        nlp = self.nlp
-        nlp.set_parameter("p0", p0)
-        x = np.concatenate([np.asarray(values[b.name], float).reshape(-1) for b in nlp._vars])
-        p = np.concatenate([b.init for b in nlp._params])
-        g = np.asarray(nlp.functions()["jac_g"](x, p)[0]).reshape(-1)
-        lbg, ubg = np.concatenate(nlp._glb), np.concatenate(nlp._gub)
-        worst = 0.0
-        for name, con in nlp._cons.items():
-            sl = con.slice
-            v = np.maximum(lbg[sl] - g[sl], 0.0) + np.maximum(g[sl] - ubg[sl], 0.0)
-            if not v.size:
-                continue
-            if "gap" in name or name == "sub_order":
-                v = v / self.scales_ell
-            elif not name.startswith("impact_law"):
-                v = v / (self.scales_p / self.scales_ell / self.h)
-            worst = max(worst, float(np.max(v)))
-        lbx = np.concatenate([b.lb for b in nlp._vars])
-        ubx = np.concatenate([b.ub for b in nlp._vars])
-        bnd = np.maximum(lbx - x, 0.0) + np.maximum(x - ubx, 0.0)
-        return max(worst, float(np.max(bnd)) / self.scales_ell)

@@ -34,13 +34,10 @@ class SubNodeImpact:
     #: the contact is closed again at the next node: the body is caught (plastic, Newton's law
     #: waived; the accumulation of Zeno bouncing or rocking), not a bounce
     caught: bool = False
-    #: which sub-node of the step: 0 (the first, ``q_sub``), 1 (the second, ``q_sub2``)
-    sub: int = 0
 
     def as_dict(self) -> dict:
         return {"step": self.step, "t": self.t, "contact": self.contact, "mu": self.mu,
-                "q": self.q, "v_before": self.v_before, "v_after": self.v_after, "caught": self.caught,
-                "sub": self.sub}
+                "q": self.q, "v_before": self.v_before, "v_after": self.v_after, "caught": self.caught}
 
 
 @dataclass(kw_only=True)
@@ -66,14 +63,6 @@ class ContactTrajectory(Result):
     attempts: List[dict] = field(default_factory=list)
     mode: str = "initial_value"
     method: str = "whole"
-    #: Steps with a second sub-node (where the event-located guess found two impacts in one step;
-    #: empty otherwise) and, as rows over these steps, its time t_k + α₂ h, configuration, impulses
-    #: and gaps.  In those steps ``t_sub``, ``q_sub``, ``mu`` hold the first sub-node.
-    steps_sub2: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
-    t_sub2: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    q_sub2: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
-    mu_sub2: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
-    gap_sub2: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
 
     def as_dict(self) -> dict:
         return {**super().as_dict(), "solver_status": self.solver_status,
@@ -82,7 +71,6 @@ class ContactTrajectory(Result):
                 "node_impulse": self.node_impulse,
                 "gap": self.gap, "complementarity_residual": self.complementarity_residual,
                 "impacts": [i.as_dict() for i in self.impacts],
-                "steps_sub2": self.steps_sub2, "t_sub2": self.t_sub2, "mu_sub2": self.mu_sub2,
                 "homotopy": [vars(s) for s in self.homotopy], "attempts": self.attempts}
 
 
@@ -109,25 +97,12 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     # complementarity tolerance, left on p⁺ as before
     closed = np.asarray(sysm.gap.map(N + 1)(q.T)[0]).reshape(c, N + 1).T <= TOUCH_TOL * tn.scales_ell
     half = 0.5 * np.einsum("kcn,kc->kn", Jn, np.where(closed, nu_full[:N + 1], 0.0))
-    # second sub-nodes (steps tn.k2; only those of the reported horizon are reported)
-    K2 = tn.k2
-    m2 = K2.size
-    if m2:
-        S2a, B2a, MU2a = (res.values["qs2"].reshape(m2, n), res.values["beta2"].reshape(m2),
-                          res.values["mu2"].reshape(m2, c))
-    else:
-        S2a, B2a, MU2a = np.zeros((0, n)), np.zeros(0), np.zeros((0, c))
-    rep2 = K2 < N
-    last = {int(k): i for i, k in enumerate(K2)}
     pp = np.asarray(cm.p_node_plus.map(N)(q[:-1].T, S.T, B, hv)).T
-    if N - 1 in last:
-        pN = np.asarray(cm.p_node_minus(S2a[last[N - 1]], B2a[last[N - 1]], q[-1], H[N - 1])).reshape(1, -1)
-    else:
-        pN = np.asarray(cm.p_node_minus(S[-1], B[-1], q[-1], H[N - 1])).reshape(1, -1)
+    pN = np.asarray(cm.p_node_minus(S[-1], B[-1], q[-1], H[N - 1])).reshape(1, -1)
     p = np.vstack([pp - half[:N], pN + half[N:]])
     p[0] = p0
-    M = np.asarray(sysm.mass_matrix.map(N + 1)(q.T)).reshape(n, N + 1, n).transpose(1, 0, 2)
-    v = np.linalg.solve(M, p[..., None])[..., 0]
+    # velocities M⁻¹p, tangent to the holonomic constraints where there are any
+    v = cm.dm.velocities(q, p)
     energy = sysm.energies(q, v)
     gap = np.asarray(sysm.gap.map(N + 1)(q.T)[0]).reshape(c, N + 1).T
     gap_sub = np.asarray(sysm.gap.map(N)(S.T)[0]).reshape(c, N).T
@@ -138,26 +113,11 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     # Impacts: sub-node impulses of a contact that approaches faster than a step's worth of its
     # normal acceleration (slower "impacts" are the discrete form of persistent contact).
     impacts = []
-    cands = [(int(k), 0, int(j)) for k, j in zip(*np.where(MU > IMPULSE_TOL * tn.scales_p / tn.scales_ell))]
-    cands += [(int(K2[i]), 1, int(j)) for i, j in zip(*np.where(MU2a > IMPULSE_TOL * tn.scales_p / tn.scales_ell))
-              if K2[i] < N]
-    for k, sub, j in sorted(cands):
-        if sub == 0 and k in last:          # first of two sub-nodes: its next point is the second
-            i = last[k]
-            x, tk, muk = S[k], float(t_sub[k]), float(MU[k, j])
-            pm = np.asarray(cm.p_minus(q[k], S[k], B[k], H[k])).reshape(-1)
-            pl = np.asarray(cm.p_plus_g(S[k], S2a[i], B[k], B2a[i], H[k])).reshape(-1)
-        elif sub == 1:
-            i = last[k]
-            x, tk, muk = S2a[i], float(t[k] + (0.5 + B2a[i]) * H[k]), float(MU2a[i, j])
-            pm = np.asarray(cm.p_minus_g(S[k], S2a[i], B[k], B2a[i], H[k])).reshape(-1)
-            pl = np.asarray(cm.p_plus_g(S2a[i], q[k + 1], B2a[i], 0.5, H[k])).reshape(-1)
-        else:
-            x, tk, muk = S[k], float(t_sub[k]), float(MU[k, j])
-            pm = np.asarray(cm.p_minus(q[k], S[k], B[k], H[k])).reshape(-1)
-            pl = np.asarray(cm.p_plus(S[k], q[k + 1], B[k], H[k])).reshape(-1)
-        Ms = np.asarray(sysm.mass_matrix(x))
-        vb, va = np.linalg.solve(Ms, pm), np.linalg.solve(Ms, pl)
+    for k, j in zip(*np.where(MU > IMPULSE_TOL * tn.scales_p / tn.scales_ell)):
+        x, tk, muk = S[k], float(t_sub[k]), float(MU[k, j])
+        pm = np.asarray(cm.p_minus(q[k], S[k], B[k], H[k])).reshape(-1)
+        pl = np.asarray(cm.p_plus(S[k], q[k + 1], B[k], H[k])).reshape(-1)
+        vb, va = cm.dm.velocities(np.array([x, x]), np.array([pm, pl]))
         Jj = np.asarray(sysm.gap(x)[1])[j]
         an = abs(float(np.asarray(cm.acc_normal(x, vb)).reshape(-1)[j]))
         if -float(Jj @ vb) > IMPACT_SPEED_STEPS * an * H[k]:
@@ -165,7 +125,7 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
             # transcription allows only where the contact is closed at the next node
             vn_b, vn_a = float(Jj @ vb), float(Jj @ va)
             impacts.append(SubNodeImpact(int(k), tk, int(j), muk, np.array(x, float).copy(), vb, va,
-                                  caught=bool(abs(vn_a + cm.e * vn_b) > CAUGHT_LAW * abs(vn_b)), sub=sub))
+                                  caught=bool(abs(vn_a + cm.e * vn_b) > CAUGHT_LAW * abs(vn_b))))
     # Impulse per node: Λ_k = h ν_k + (1 − α_k) μ_k + α_{k−1} μ_{k−1}, each sub-node impulse shared
     # between its two nodes by linear (hat-function) interpolation of its time; node N takes the
     # look-ahead step's node force and sub-node share (its dual cell reaches past T).  For a body
@@ -175,18 +135,7 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     mu_full = res.values["mu"][:NL * c].reshape(NL, c)
     lam = nu_full[:N + 1] + (1.0 - alpha_full[:N + 1, None]) * mu_full[:N + 1]
     lam[1:] += alpha_full[:N, None] * mu_full[:N]
-    for i, k in enumerate(K2):
-        # the second sub-node's impulse, shared by the hat weights of its time fraction α₂
-        a2 = 0.5 + B2a[i]
-        if k <= N:
-            lam[k] += (1.0 - a2) * MU2a[i]
-        if k + 1 <= N:
-            lam[k + 1] += a2 * MU2a[i]
     nu = nu_full[:N + 1].copy()
-    steps2 = K2[rep2]
-    t_sub2 = t[steps2] + (0.5 + B2a[rep2]) * H[steps2]
-    gap_sub2 = (np.asarray(sysm.gap.map(int(rep2.sum()))(S2a[rep2].T)[0]).reshape(c, -1).T if rep2.any()
-                else np.zeros((0, c)))
     total_iter = sum(a["iterations"] for a in attempts)
     return ContactTrajectory(
         t=t, q=q, p=p, v=v, energy=energy, t_sub=t_sub, q_sub=S, mu=MU, nu=nu, gap=gap, gap_sub=gap_sub,
@@ -195,5 +144,4 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
         iterations=int(total_iter),
         build_time_s=float(sum(a["build_time_s"] for a in attempts)),
         solve_time_s=float(guess_time + sum(a["solve_time_s"] for a in attempts)),
-        scheme=cm.dm.scheme.name, homotopy=list(res.homotopy), attempts=attempts,
-        steps_sub2=steps2, t_sub2=t_sub2, q_sub2=S2a[rep2], mu_sub2=MU2a[rep2], gap_sub2=gap_sub2)
+        scheme=cm.dm.scheme.name, homotopy=list(res.homotopy), attempts=attempts)
