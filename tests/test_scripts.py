@@ -326,6 +326,25 @@ def test_bowl_json_keys():
     assert max(abs(e - d["energy"][0]) for e in d["energy"]) < 1e-5 * abs(d["energy"][0])
 
 
+def test_bowl3d_json_keys_and_animation(tmp_path):
+    """The 3-D bowl from the command line: its JSON keys, a no-penetration and energy reading, and a
+    3-D animation with as many frames as asked for."""
+    gif = tmp_path / "bowl3d.gif"
+    p = run([script("bowl3d"), "--T", "0.6", "--n", "240", "--json", "--animate", str(gif)])
+    assert p.returncode == 0, p.stderr
+    d = json.loads(p.stdout)
+    for key in ("status", "t", "position", "quaternion", "gap", "mu", "energy", "impacts"):
+        assert key in d
+    K = len(d["t"])
+    assert len(d["position"]) == K and len(d["position"][0]) == 3
+    assert len(d["quaternion"]) == K and len(d["quaternion"][0]) == 4
+    assert len(d["mu"]) == K and len(d["mu"][0]) == 8          # nodes x corners
+    assert min(d["gap"]) > -1e-12 and len(d["impacts"]) >= 1
+    assert max(abs(e - d["energy"][0]) for e in d["energy"]) < 1e-6 * abs(d["energy"][0])
+    from PIL import Image
+    assert Image.open(gif).n_frames >= 30
+
+
 CONTACT_BAD = [
     ("bouncing_ball", ["--height", "-1"], "inside the ground"),
     ("bouncing_ball", ["--restitution", "1.5"], "restitution must be between 0 and 1"),
@@ -340,6 +359,11 @@ CONTACT_BAD = [
     ("rectangle_drop", ["--mass", "-2"], "mass must be positive"),
     ("bowl", ["--radius", "0"], "radius must be positive"),
     ("bowl", ["--y", "-1"], "inside the ground"),
+    ("bowl3d", ["--radius", "0"], "radius must be positive"),
+    ("bowl3d", ["--position", "0", "0", "0"], "inside the ground"),
+    ("bowl3d", ["--axis", "0", "0", "0"], "axis must not be zero"),
+    ("bowl3d", ["--size", "0.4", "-1", "0.2"], "box edge 2 must be positive"),
+    ("bowl3d", ["--omega", "1", "nan", "0"], "omega 2 must be finite"),
 ]
 
 

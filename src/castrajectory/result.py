@@ -47,8 +47,9 @@ from typing import Dict, List, Optional
 import numpy as np
 
 #: Statuses counted as converged: Ipopt's, and ``Rows_Verified`` (:meth:`NLP.check
-#: <castrajectory.solve.nlp.NLP.check>`: every row of a square feasibility problem holds to the
-#: tolerance at a point computed piecewise, so it is a KKT point with zero multipliers).
+#: <castrajectory.solve.nlp.NLP.check>`, :meth:`NLP.certify <castrajectory.solve.nlp.NLP.certify>`:
+#: every row of a square problem holds to the tolerance at a point computed piecewise, and its
+#: multipliers follow from stationarity, so it is a KKT point).
 SUCCESS_STATUSES = frozenset({"Solve_Succeeded", "Rows_Verified"})
 
 _ADVICE = {
@@ -168,7 +169,8 @@ class NLPResult(Result):
     def describe_status(status: str) -> str:
         """A one-line message for an Ipopt return status, with advice when it failed."""
         if status == "Rows_Verified":
-            return "every row holds to the requested tolerance at the assembled point (checked, no Ipopt iteration)"
+            return ("every row holds to the requested tolerance at a point solved outside Ipopt (piece by piece, "
+                    "or step by step), checked as a KKT point of its square problem; no Ipopt iteration")
         if status in SUCCESS_STATUSES:
             return "Ipopt converged to the requested tolerance"
         advice = _ADVICE.get(status, "see Ipopt's documentation of this status")

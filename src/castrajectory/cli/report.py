@@ -61,6 +61,7 @@ CONTACT_SCENES = [
      "bouncing ball, e = 0.7, T = 5 s (settles)", False),
     ("rectangle_drop", "rectangle_drop", [], "rectangle drop, θ₀ = 0.3, e = 1", True),
     ("bowl", "bowl", [], "rectangle in a bowl y = x²/(2R), e = 1", True),
+    ("bowl3d", "bowl3d", [], "box on SO(3) in the bowl z = (x² + y²)/(2R), e = 1, eight corners", False),
 ]
 
 #: Rigid-body scenes in the report (same tuple layout); their plot is the scene's own.

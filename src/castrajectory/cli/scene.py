@@ -41,6 +41,7 @@ SCENES = {
     "bouncing_ball": "castrajectory.problems.bouncing_ball",
     "rectangle_drop": "castrajectory.problems.rectangle_drop",
     "bowl": "castrajectory.problems.bowl",
+    "bowl3d": "castrajectory.problems.bowl3d",
     "dzhanibekov": "castrajectory.problems.dzhanibekov",
     "heavy_top": "castrajectory.problems.heavy_top",
 }

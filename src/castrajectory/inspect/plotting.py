@@ -563,14 +563,15 @@ _BOX_EDGES = [(0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4), (0
 
 
 def animate_rigid_body(t, rotations, path: str, size, momentum=None, center=None, fps: int = 30,
-                       max_frames: int = 150, title: Optional[str] = None, dpi: int = 80) -> str:
+                       max_frames: int = 150, title: Optional[str] = None, dpi: int = 80, surface=None) -> str:
     """Animate a box tumbling in 3-D (matplotlib's mplot3d) and write a GIF or an MP4.
 
     ``rotations`` (K, 3, 3) are the body-to-space rotations at times ``t``; the box has edges
     ``size`` along the body axes, centred at ``center`` (K, 3; the origin by default).  The body
     axes are drawn from the centre (red, green, blue for 1, 2, 3) and ``momentum`` (a fixed
-    spatial vector, e.g. the angular momentum) as a black arrow.  Frames are subsampled evenly
-    in time to at most ``max_frames``.  Returns ``path``.
+    spatial vector, e.g. the angular momentum) as a black arrow.  ``surface`` ``(X, Y, Z)`` (2-D
+    arrays) is drawn as a fixed wireframe, e.g. the ground under the body.  Frames are subsampled
+    evenly in time to at most ``max_frames``.  Returns ``path``.
     """
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
@@ -588,9 +589,17 @@ def animate_rigid_body(t, rotations, path: str, size, momentum=None, center=None
     fig = Figure(figsize=(4.4, 4.4), dpi=dpi)
     FigureCanvasAgg(fig)
     ax = fig.add_subplot(projection="3d")
-    ax.set_xlim(-reach, reach)
-    ax.set_ylim(-reach, reach)
-    ax.set_zlim(-reach, reach)
+    mid = np.zeros(3)
+    if surface is not None:
+        # the view around the body's path, the surface clipped to it
+        lo, hi = C.min(axis=0) - float(np.linalg.norm(half)), C.max(axis=0) + float(np.linalg.norm(half))
+        mid, reach = 0.5 * (lo + hi), 0.5 * float(np.max(hi - lo)) * 1.1
+        X, Y, Z = (np.asarray(a, float) for a in surface)
+        Z = np.where((Z >= mid[2] - reach) & (Z <= mid[2] + reach), Z, np.nan)
+        ax.plot_wireframe(X, Y, Z, color="0.7", lw=0.5, rstride=1, cstride=1)
+    ax.set_xlim(mid[0] - reach, mid[0] + reach)
+    ax.set_ylim(mid[1] - reach, mid[1] + reach)
+    ax.set_zlim(mid[2] - reach, mid[2] + reach)
     ax.set_box_aspect((1, 1, 1))
     ax.tick_params(labelsize=6)
     if title:

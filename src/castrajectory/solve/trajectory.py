@@ -487,18 +487,19 @@ def _validate(system, T, N):
 
 def solve_initial_value(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str = "midpoint",
                         options: Optional[dict] = None, verbose: bool = False,
-                        coarsest: int = 32) -> Trajectory:
+                        coarsest: int = 32, contact=None) -> Trajectory:
     """Solve the initial-value problem as one whole-trajectory NLP (robust strategy in the module doc).
 
     A system with a :class:`~castrajectory.models.mechanics.Contact` term is transcribed by
     :func:`castrajectory.solve.contact.solve_contact` (collision sub-nodes and complementarity)
-    and returns a :class:`~castrajectory.solve.contact.ContactTrajectory`.
+    and returns a :class:`~castrajectory.solve.contact.ContactTrajectory`; ``contact`` (a
+    :class:`~castrajectory.solve.contact.ContactOptions`) sets that solve.
     """
     T, N = _validate(system, T, N)
     if system.contact is not None:
         from .contact import solve_contact
         return solve_contact(system, _check_state("q0", q0, system.nq), _check_state("qd0", qd0, system.nq),
-                             T, N, scheme, options=options, verbose=verbose)
+                             T, N, scheme, options=options, verbose=verbose, contact=contact)
     q0 = _check_state("q0", q0, system.nq)
     qd0 = _check_state("qd0", qd0, system.nq)
     if system.nc:

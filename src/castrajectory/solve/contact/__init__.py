@@ -27,7 +27,8 @@ Solution strategy (chosen by the library)
    (:meth:`ContactNLP.solve`): the one continuation loop, each rung recorded as a
    :class:`~castrajectory.result.HomotopyStep`.
 
-The reported status is that of the last solve; ``attempts`` lists every stage.
+Every setting of these stages is a field of :class:`.options.ContactOptions` (``solve_contact(...,
+contact=ContactOptions(...))``).  The reported status is that of the last solve; ``attempts`` lists every stage.
 """
 from ...discretise.contact.elements import ContactMechanics  # noqa: F401
 from ...discretise.contact.transcription import COMPLEMENTARITY_TOL, PENALTY, TOUCH_TOL  # noqa: F401
@@ -35,5 +36,6 @@ from ...models.impact import simultaneous_impact  # noqa: F401
 from .guess import GUESS_CHUNK, SIMULTANEOUS_TOL, event_guess  # noqa: F401
 from .march import MAX_SPLITS, discrete_march  # noqa: F401
 from .nlp import BRANCH_IPOPT, CONTACT_IPOPT, ContactNLP  # noqa: F401
+from .options import ContactOptions  # noqa: F401
 from .solution import IMPACT_SPEED_STEPS, IMPULSE_TOL, ContactTrajectory, SubNodeImpact  # noqa: F401
 from .strategy import solve_contact  # noqa: F401

@@ -165,11 +165,12 @@ def _crossing_fraction(g0, gs, gn, alpha):
     return alpha + (1.0 - alpha) * gs / (gs - gn) if gn < 0.0 else 1.0
 
 
-#: Halvings of a step allowed where impacts crowd (the finest step is h / 2**MAX_SPLITS).
+#: Halvings of a step allowed where impacts crowd (the finest step is h / 2**MAX_SPLITS; the default
+#: of ContactOptions.max_splits).
 MAX_SPLITS = 20
 
 
-def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales,
+def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_splits: int = MAX_SPLITS,
                    trace: Optional[list] = None) -> Optional[Dict[str, np.ndarray]]:
     """The contact program's point for ``L`` steps of ``h`` from ``(q0, p0)``, solved step by step (module
     docstring), on a grid refined where a step would hold two impacts: the point's arrays, ``steps``
@@ -189,7 +190,7 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales,
         pending = [h]
         while pending:
             hk = pending.pop(0)
-            out = _march_step(step, q, p, hk, g_q, held_prev, tol, finest=hk < h / 2 ** MAX_SPLITS * 1.5)
+            out = _march_step(step, q, p, hk, g_q, held_prev, tol, finest=hk < h / 2 ** max_splits * 1.5)
             if out == "split":
                 pending[:0] = [0.5 * hk, 0.5 * hk]
                 continue

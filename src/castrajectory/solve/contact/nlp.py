@@ -42,7 +42,8 @@ class ContactNLP(ContactTranscription):
         return self._ladder(self._start(q0, p0, guess), opts, {"q": self._q_bounds(q0)}, penalties or PENALTY,
                             verbose, "rho", "Ipopt")
 
-    def solve_modes(self, q0, p0, point: Dict[str, np.ndarray], options=None, verbose=False) -> NLPResult:
+    def solve_modes(self, q0, p0, point: Dict[str, np.ndarray], options=None, verbose=False,
+                    certify_tol: float = CERTIFY_TOL, max_iter: int = BRANCH_IPOPT["max_iter"]) -> NLPResult:
         """Solve the branch of the discrete march's modes (``point["modes"]``, one letter per step and
         contact, :mod:`.march`): every pair decided, a square system whose solution ``point`` already is
         (to the march's Newton tolerance).  Held and caught contacts keep their gap rows as equalities
@@ -74,13 +75,13 @@ class ContactNLP(ContactTranscription):
         }
         init = self._start(q0, p0, point)
         opts = {**CONTACT_IPOPT, **BRANCH_IPOPT, **(options or {})}
-        opts["max_iter"] = min(int(opts["max_iter"]), BRANCH_IPOPT["max_iter"])
+        opts["max_iter"] = min(int(opts["max_iter"]), max_iter)
         # every pair decided with exact zero products and every β fixed or timed: a square feasibility
         # problem, no penalty and no selection term (its point is then a KKT point with zero multipliers)
         self.nlp.set_parameter("rho", 0.0)
         self.nlp.set_parameter("split", 0.0)
         self.nlp.build(opts, verbose)
-        res = self.nlp.certify(init, CERTIFY_TOL, bounds)
+        res = self.nlp.certify(init, certify_tol, bounds)
         if res.success:
             resid = self.residual(res.values)
             res.complementarity_residual = resid
@@ -92,7 +93,8 @@ class ContactNLP(ContactTranscription):
         finally:
             self.nlp.set_parameter("split", SPLIT_WEIGHT)
 
-    def solve_branch(self, q0, p0, guess: Dict[str, np.ndarray], options=None, verbose=False) -> NLPResult:
+    def solve_branch(self, q0, p0, guess: Dict[str, np.ndarray], options=None, verbose=False,
+                     max_iter: int = BRANCH_IPOPT["max_iter"], penalties=PENALTY) -> NLPResult:
         """Solve the branch of the complementarity problem that ``guess`` identifies.
 
         Each pair is decided by the event-located guess: a contact that touches at a node (gap within
@@ -140,9 +142,9 @@ class ContactNLP(ContactTranscription):
         bounds["impact_law"] = (np.where(on, 0.0, -np.inf), np.where(on, 0.0, np.inf))
         init = self._start(q0, p0, guess)
         opts = {**CONTACT_IPOPT, **BRANCH_IPOPT, **(options or {})}
-        opts["max_iter"] = min(int(opts["max_iter"]), BRANCH_IPOPT["max_iter"])
+        opts["max_iter"] = min(int(opts["max_iter"]), max_iter)
         # the undecided pairs (if any) by the penalty ladder, warm-started; decided ones are exact
-        ladder = PENALTY if (np.any(node_free) or np.any(sub_free)) else PENALTY[:1]
+        ladder = penalties if (np.any(node_free) or np.any(sub_free)) else penalties[:1]
         return self._ladder(init, opts, bounds, ladder, verbose, "branch", "the branch")
 
     def _ladder(self, init, opts, bounds, penalties, verbose, parameter: str, who: str) -> NLPResult:

@@ -15,6 +15,7 @@ from ...discretise.contact.transcription import LOOKAHEAD, TOUCH_TOL, _v_zeno
 from .guess import event_guess
 from .march import discrete_march
 from .nlp import ContactNLP
+from .options import ContactOptions
 from .solution import ContactTrajectory, _finish
 
 
@@ -34,8 +35,14 @@ def _scales(system: LagrangianSystem, q0, qd0, length: float):
 
 def solve_contact(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str = "midpoint",
                   options: Optional[dict] = None, verbose: bool = False,
-                  penalties: Optional[List[float]] = None) -> ContactTrajectory:
-    """Initial-value contact trajectory over ``[0, T]`` on ``N`` steps (strategy in the module docstring)."""
+                  contact: Optional[ContactOptions] = None) -> ContactTrajectory:
+    """Initial-value contact trajectory over ``[0, T]`` on ``N`` steps (strategy in the module docstring).
+
+    ``options`` are Ipopt's (for the solves that use it), ``contact`` the contact solve's own settings
+    (:class:`ContactOptions`; the library's defaults when omitted)."""
+    co = ContactOptions() if contact is None else contact
+    if not isinstance(co, ContactOptions):
+        raise InputError("contact must be a ContactOptions")
     cm = ContactMechanics(system, scheme)
     q0, qd0 = np.asarray(q0, float), np.asarray(qd0, float)
     phi0 = np.asarray(system.gap(q0)[0]).reshape(-1)
@@ -55,13 +62,13 @@ def solve_contact(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: s
     scales = _scales(system, q0, qd0, length)
     attempts: List[dict] = []
     t_march = time.perf_counter()
-    point = discrete_march(cm, q0, p0, N + LOOKAHEAD, h, scales)
+    point = discrete_march(cm, q0, p0, N + LOOKAHEAD, h, scales, co.max_splits) if co.march else None
     march_time = time.perf_counter() - t_march
     if point is not None:
         # the grid refined where impacts crowd: the steps of the first N base steps are reported
         steps, base = point.pop("steps"), point.pop("base")
         marched = ContactNLP(cm, steps.size, h, scales, steps=steps)
-        res = marched.solve_modes(q0, p0, point, options, verbose)
+        res = marched.solve_modes(q0, p0, point, options, verbose, co.certify_tol, co.branch_max_iter)
         attempts.append(_attempt("march", res))
         if res.success:
             return _finish(cm, marched, res, int(np.sum(base < N)), h, attempts, march_time, p0)
@@ -71,10 +78,10 @@ def solve_contact(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: s
     guess = event_guess(cm, q0, qd0, N + LOOKAHEAD, h, length, _v_zeno(cm, h, scales))
     guess_time = time.perf_counter() - t_guess + march_time
     whole = ContactNLP(cm, N + LOOKAHEAD, h, scales)
-    res = whole.solve_branch(q0, p0, guess, options, verbose)
+    res = whole.solve_branch(q0, p0, guess, options, verbose, co.branch_max_iter, co.penalties)
     attempts.append(_attempt("branch", res))
     if not res.success:
-        res = whole.solve(q0, p0, guess, penalties, options, verbose)
+        res = whole.solve(q0, p0, guess, co.penalties, options, verbose)
         attempts.append(_attempt("penalty", res))
     return _finish(cm, whole, res, N, h, attempts, guess_time, p0)
 
