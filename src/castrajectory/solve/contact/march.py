@@ -25,6 +25,7 @@ from __future__ import annotations
 
 from typing import Dict, Optional
 
+import casadi as ca
 import numpy as np
 
 from ...discretise.contact.elements import ContactMechanics
@@ -54,8 +55,35 @@ class _Step:
         if not hasattr(cm, "_march_compiled"):
             cm._march_compiled = jit.compiled(cm.march_step)
         self.fn = cm._march_compiled
+        if not hasattr(cm, "_chunk_fns"):
+            cm._chunk_fns = {}
+        self._chunks = cm._chunk_fns
         self.ell, self.pref, self.vref = scales[0], scales[1], scales[2]
         self.n, self.c, self.m = cm.n, cm.c, cm.m
+
+    def chunk(self, K: int, q, p, h, held):
+        """``K`` steps from ``(q, p)`` in one call, the ``held`` contacts held (mode H) and the others
+        open (β = 0): columns of the nodes ``q_{k+1}``, momenta ``p_{k+1}⁻``, unknowns, sub-node and node
+        gaps, and each step's largest row residual in units of the unknowns (as :meth:`solve` measures
+        it).  ``CHUNK_NEWTON`` Newton steps from the previous step's flight."""
+        if K not in self._chunks:
+            cm, n, c, m = self.cm, self.n, self.c, self.m
+            qs, ps, hs, hm = ca.MX.sym("q", n), ca.MX.sym("p", n), ca.MX.sym("h"), ca.MX.sym("held", c)
+            sc = [ca.MX.sym(name) for name in ("ell", "snu", "smu", "vref")]
+            zero = ca.DM.zeros(c)
+            v = ca.solve(cm.system.mass_matrix(qs), ps)
+            x = ca.vertcat(qs + 0.5 * hs * v, qs + hs * v, ca.DM.zeros(1 + 2 * c + 2 * m))
+            for _ in range(CHUNK_NEWTON):
+                r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero)
+                x = x - ca.solve(J, r)
+            r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero)
+            res = ca.mmax(ca.fabs(r) / ca.fmax(_row_max(J), 1e-300))
+            qn, qt = x[n:2 * n], x[:n]
+            one = ca.Function("chunk_step", [qs, ps, hs, hm] + sc,
+                              [qn, cm.p_node_minus(qt, 0.0, qn, hs), x, cm.gap_row(qt), cm.gap_row(qn), res])
+            self._chunks[K] = one.mapaccum("chunk_steps", K, [0, 1], [0, 1])
+        out = self._chunks[K](q, p, h, held.astype(float), self.ell, self.pref / h, self.pref, self.vref)
+        return tuple(np.asarray(a) for a in out)
 
     def masks(self, modes):
         c = self.c
@@ -109,6 +137,11 @@ class _Step:
         # 1/α near α = 0 are then held to the rounding of the point, not of their size
         r = np.asarray(r).reshape(-1) / np.maximum(np.max(np.abs(np.asarray(Jr)), axis=1), 1e-300)
         return x, bool(np.max(np.abs(r)) <= STEP_TOL * (1.0 + float(np.max(np.abs(x)))))
+
+
+def _row_max(J):
+    """Largest ``|J_ij|`` of each row of the MX matrix ``J`` (a column)."""
+    return ca.vertcat(*[ca.mmax(ca.fabs(J[i, :])) for i in range(J.size1())])
 
 
 def _timed_by_bracket(step: _Step, x, q, p, h, modes, j: int):
@@ -165,6 +198,10 @@ def _crossing_fraction(g0, gs, gn, alpha):
     return alpha + (1.0 - alpha) * gs / (gs - gn) if gn < 0.0 else 1.0
 
 
+#: Steps that keep their modes (open or held) marched in one call, and the Newton iterations of each
+#: such step (its rows are those of the march step; each is checked after).
+CHUNK_STEPS = 64
+CHUNK_NEWTON = 3
 #: Halvings of a step allowed where impacts crowd (the finest step is h / 2**MAX_SPLITS; the default
 #: of ContactOptions.max_splits).
 MAX_SPLITS = 20
@@ -186,7 +223,37 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
     g_q = np.asarray(gapf(q)[0]).reshape(-1)
     held_prev = g_q <= tol
     rows["q"].append(q)
-    for k in range(L):
+    k = 0
+    while k < L:
+        touch = g_q <= tol
+        if L - k >= 2 and np.all(~touch | held_prev):
+            # steps that keep their modes (open contacts stay open, held ones held: free flight, a body
+            # resting or sliding), many in one call: the march's step with those modes (the same rows,
+            # Newton to rounding), accepted up to the first step that touches or crosses with an open
+            # contact, pulls on a held one, or does not converge
+            held = touch & held_prev
+            K = min(CHUNK_STEPS, L - k)
+            Qn, Pn, X, Gs, Gn, Rr = step.chunk(K, q, p, h, held)
+            n, c, m = cm.n, cm.c, cm.m
+            o = 2 * n + 1
+            NU, MU = X[o:o + c], X[o + c:o + 2 * c]
+            NU[~held], MU[~held] = 0.0, 0.0          # open: their rows ν = μ = 0, exactly
+            ok = (Rr <= STEP_TOL * (1.0 + np.max(np.abs(X), axis=0)))
+            ok &= np.all((Gs > tol) & (Gn > tol) | held[:, None], axis=0)
+            ok &= np.all((NU >= 0.0) & (MU >= 0.0) | ~held[:, None], axis=0)
+            i = int(np.argmin(ok)) if not np.all(ok) else K
+            if i:
+                modes = np.array([H if hj else O for hj in held])
+                for j in range(i):
+                    for key, val in (("q", Qn[:, j]), ("qs", X[:n, j]), ("beta", 0.0), ("nu", NU[:, j]),
+                                     ("mu", MU[:, j]), ("lam", X[o + 2 * c:o + 2 * c + m, j]),
+                                     ("lam_sub", X[o + 2 * c + m:, j]), ("bounced", np.zeros(c, bool)),
+                                     ("steps", h), ("base", k + j), ("modes", modes)):
+                        rows[key].append(val)
+                q, p, g_q = Qn[:, i - 1].copy(), Pn[:, i - 1].copy(), Gn[:, i - 1].copy()
+                held_prev = held.copy()
+                k += i
+                continue
         pending = [h]
         while pending:
             hk = pending.pop(0)
@@ -206,6 +273,7 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
             p = np.asarray(cm.p_node_minus(qs, b, qn, hk)).reshape(-1)
             held_prev = np.array([m in (H, C) for m in modes])
             q, g_q = qn, gn
+        k += 1
     out = {key: np.asarray(val) for key, val in rows.items()}
     for key in ("q", "qs", "mu", "nu", "lam", "lam_sub"):
         out[key] = out[key].reshape(-1)
