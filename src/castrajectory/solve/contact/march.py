@@ -76,8 +76,9 @@ class _Step:
             for _ in range(CHUNK_NEWTON):
                 r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero)
                 x = x - ca.solve(J, r)
+            # the size of one more Newton step: the rows' residual in units of the unknowns
             r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero)
-            res = ca.mmax(ca.fabs(r) / ca.fmax(_row_max(J), 1e-300))
+            res = ca.mmax(ca.fabs(ca.solve(J, r)))
             qn, qt = x[n:2 * n], x[:n]
             one = ca.Function("chunk_step", [qs, ps, hs, hm] + sc,
                               [qn, cm.p_node_minus(qt, 0.0, qn, hs), x, cm.gap_row(qt), cm.gap_row(qn), res])
@@ -137,11 +138,6 @@ class _Step:
         # 1/α near α = 0 are then held to the rounding of the point, not of their size
         r = np.asarray(r).reshape(-1) / np.maximum(np.max(np.abs(np.asarray(Jr)), axis=1), 1e-300)
         return x, bool(np.max(np.abs(r)) <= STEP_TOL * (1.0 + float(np.max(np.abs(x)))))
-
-
-def _row_max(J):
-    """Largest ``|J_ij|`` of each row of the MX matrix ``J`` (a column)."""
-    return ca.vertcat(*[ca.mmax(ca.fabs(J[i, :])) for i in range(J.size1())])
 
 
 def _timed_by_bracket(step: _Step, x, q, p, h, modes, j: int):
@@ -223,7 +219,7 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
     g_q = np.asarray(gapf(q)[0]).reshape(-1)
     held_prev = g_q <= tol
     rows["q"].append(q)
-    k = 0
+    k, span = 0, 8
     while k < L:
         touch = g_q <= tol
         if L - k >= 2 and np.all(~touch | held_prev):
@@ -232,8 +228,10 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
             # Newton to rounding), accepted up to the first step that touches or crosses with an open
             # contact, pulls on a held one, or does not converge
             held = touch & held_prev
-            K = min(CHUNK_STEPS, L - k)
-            Qn, Pn, X, Gs, Gn, Rr = step.chunk(K, q, p, h, held)
+            # (chunks of 8 to CHUNK_STEPS steps: doubled after a chunk accepted whole, back to 8 after a
+            # break; one function per length and system, the steps past L not used)
+            K = min(span, L - k)
+            Qn, Pn, X, Gs, Gn, Rr = (a[:, :K] if a.ndim == 2 else a[:K] for a in step.chunk(span, q, p, h, held))
             n, c, m = cm.n, cm.c, cm.m
             o = 2 * n + 1
             NU, MU = X[o:o + c], X[o + c:o + 2 * c]
@@ -242,6 +240,7 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
             ok &= np.all((Gs > tol) & (Gn > tol) | held[:, None], axis=0)
             ok &= np.all((NU >= 0.0) & (MU >= 0.0) | ~held[:, None], axis=0)
             i = int(np.argmin(ok)) if not np.all(ok) else K
+            span = min(2 * span, CHUNK_STEPS) if i == K else 8
             if i:
                 modes = np.array([H if hj else O for hj in held])
                 for j in range(i):
