@@ -58,8 +58,9 @@ stats: Dict[str, int] = {"compiled": 0, "cache_hits": 0, "memory_hits": 0, "fall
 #: Generated C code longer than this (characters) is not compiled: the VM evaluates it.  The exact
 #: Hessian of Newton's law for a box on SO(3) (a 7 × 7 mass matrix solved symbolically, projected on
 #: the quaternion constraint) is 2 MB of C that took 34 s to compile, once as the element and once as
-#: its chunk.  The marched step of that box (its rows and Jacobian, 444 kB) compiles in about 8 s, once.
-MAX_CODE_CHARS = 1_000_000
+#: its chunk; the marched step of that box (444 kB) took 11 s to compile for a 20 % faster march, paid
+#: again for every new box size (its edges are constants of the code).
+MAX_CODE_CHARS = 400_000
 #: Largest number of compiled libraries kept in the cache (least recently used ones are deleted).
 MAX_ENTRIES = 2000
 

@@ -38,15 +38,20 @@ def _bisect_crossing(cm: ContactMechanics, q, v, tau_hi, active):
 
 def _hold(cm: ContactMechanics, q, v, active, iterations: int = 4):
     """Project ``(q, v)`` onto the held contacts: ``φ_j(q) = 0`` (Newton, M-metric) and ``J_j v = 0``."""
+    if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
+        return q, v          # a guess that left the reals: the branch solve will say so
     M = np.asarray(cm.system.mass_matrix(q))
-    for _ in range(iterations):
-        phi, J = (np.asarray(x) for x in cm.system.gap(q))
-        phi, J = phi.reshape(-1)[active], J[active]
+    try:
+        for _ in range(iterations):
+            phi, J = (np.asarray(x) for x in cm.system.gap(q))
+            phi, J = phi.reshape(-1)[active], J[active]
+            MiJt = np.linalg.solve(M, J.T)
+            q = q - MiJt @ np.linalg.lstsq(J @ MiJt, phi, rcond=None)[0]
+        J = np.asarray(cm.system.gap(q)[1])[active]
         MiJt = np.linalg.solve(M, J.T)
-        q = q - MiJt @ np.linalg.lstsq(J @ MiJt, phi, rcond=None)[0]
-    J = np.asarray(cm.system.gap(q)[1])[active]
-    MiJt = np.linalg.solve(M, J.T)
-    v = v - MiJt @ np.linalg.lstsq(J @ MiJt, J @ v, rcond=None)[0]
+        v = v - MiJt @ np.linalg.lstsq(J @ MiJt, J @ v, rcond=None)[0]
+    except np.linalg.LinAlgError:
+        pass
     return q, v
 
 
@@ -89,6 +94,8 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
     through it).
     """
     n, c, e = cm.n, cm.c, cm.e
+    # (holonomic constraints: the guess leaves their multipliers at 0; the branch solve forms them)
+    lam0 = [np.zeros(cm.m)] if cm.m else []
     p0 = np.asarray(cm.system.mass_matrix(q0)) @ np.asarray(v0, float)
     Mf, gapf = cm.system.mass_matrix, cm.system.gap
     Q = np.zeros((L + 1, n))
@@ -246,7 +253,7 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
     # one has no motion at all between the nodes (docs/derivations.md, "Contact trajectories", §2, "A resting ball")
     for k in np.where(~event & (np.min(gq[:-1], axis=1) <= tol) & (np.min(gq[1:], axis=1) <= tol))[0]:
         S[k] = 0.5 * (Q[k] + Q[k + 1])
-        r = np.asarray(cm.sub(Q[k], S[k], Q[k + 1], B[k], np.zeros(c), h)).reshape(-1) * h
+        r = np.asarray(cm.sub(Q[k], S[k], Q[k + 1], B[k], np.zeros(c), h, *lam0)).reshape(-1) * h
         Js = np.asarray(gapf(S[k])[1])
         act = np.asarray(gapf(S[k])[0]).reshape(-1) <= tol
         if np.any(act):
@@ -257,9 +264,9 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
     touching = np.where(np.min(gq, axis=1) <= tol)[0]
     for k in touching:
         if k == 0:
-            r = np.asarray(cm.initial(Q[0], S[0], B[0], p0, np.zeros(c), h)).reshape(-1)
+            r = np.asarray(cm.initial(Q[0], S[0], B[0], p0, np.zeros(c), h, *lam0)).reshape(-1)
         else:
-            r = np.asarray(cm.node(S[k - 1], B[k - 1], Q[k], S[k], B[k], np.zeros(c), h, h)).reshape(-1)
+            r = np.asarray(cm.node(S[k - 1], B[k - 1], Q[k], S[k], B[k], np.zeros(c), h, h, *lam0)).reshape(-1)
         J = np.asarray(gapf(Q[k])[1])
         act = gq[k] <= tol
         sol = np.linalg.lstsq(J[act].T, -r, rcond=None)[0]

@@ -23,6 +23,7 @@ caller then falls back to the event-located guess).
 """
 from __future__ import annotations
 
+from itertools import product
 from typing import Dict, Optional
 
 import casadi as ca
@@ -122,10 +123,15 @@ class _Step:
             rs = 1.0 / np.maximum(np.max(np.abs(Jr), axis=1), 1e-300)
             cs = 1.0 / np.maximum(np.max(np.abs(Jr * rs[:, None]), axis=0), 1e-300)
             A = Jr * rs[:, None] * cs[None, :]
+            if not (np.all(np.isfinite(A)) and np.all(np.isfinite(r))):
+                return x, False
             try:
                 dx = cs * np.linalg.solve(A, -r * rs)
             except np.linalg.LinAlgError:
-                dx = cs * np.linalg.lstsq(A, -r * rs, rcond=None)[0]
+                try:
+                    dx = cs * np.linalg.lstsq(A, -r * rs, rcond=None)[0]
+                except np.linalg.LinAlgError:
+                    return x, False
             x = x + dx
             if not np.all(np.isfinite(x)):
                 return x, False
@@ -198,6 +204,11 @@ def _crossing_fraction(g0, gs, gn, alpha):
 #: such step (its rows are those of the march step; each is checked after).
 CHUNK_STEPS = 64
 CHUNK_NEWTON = 3
+#: ... and the size of one more Newton step accepted there, relative to the unknowns (the chunk's
+#: Jacobian is not equilibrated, so its rounding sits near 1e-11 for a box held on two corners in the
+#: bowl, where 1e-12 rejected 80 % of the chunks; the certificate's Newton step of the whole system
+#: polishes the point)
+CHUNK_TOL = 1e-10
 #: Halvings of a step allowed where impacts crowd (the finest step is h / 2**MAX_SPLITS; the default
 #: of ContactOptions.max_splits).
 MAX_SPLITS = 20
@@ -236,7 +247,7 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
             o = 2 * n + 1
             NU, MU = X[o:o + c], X[o + c:o + 2 * c]
             NU[~held], MU[~held] = 0.0, 0.0          # open: their rows ν = μ = 0, exactly
-            ok = (Rr <= STEP_TOL * (1.0 + np.max(np.abs(X), axis=0)))
+            ok = (Rr <= CHUNK_TOL * (1.0 + np.max(np.abs(X), axis=0)))
             ok &= np.all((Gs > tol) & (Gn > tol) | held[:, None], axis=0)
             ok &= np.all((NU >= 0.0) & (MU >= 0.0) | ~held[:, None], axis=0)
             i = int(np.argmin(ok)) if not np.all(ok) else K
@@ -282,50 +293,110 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
 
 
 def _march_step(step: _Step, q, p, h, g_q, held_prev, tol, finest: bool):
-    """One step from ``(q, p)``: ``(q̃, q_{k+1}, β, ν, μ, modes, gaps at q_{k+1})``, ``"split"`` if it
-    needs two impacts at different times (and is not the finest step), or ``(reason, detail)``."""
+    """One step from ``(q, p)``: ``(q̃, q_{k+1}, β, ν, μ, λ, λ̃, modes, gaps at q_{k+1})``, ``"split"`` if
+    it needs two impacts at different times (and is not the finest step), or ``(reason, detail)``.
+
+    The modes are searched greedily (one change per solve, at the most violated condition); if that
+    cycles or stalls, every combination of modes of the contacts involved (touching at ``q_k``, or seen
+    crossing) is tried, fewest changes first (:func:`_enumerate`)."""
     n, c = step.n, step.c
-    gapf, Mf = step.cm.system.gap, step.cm.system.mass_matrix
     pen = 1e-12 * step.ell
     touch = g_q <= tol
-    v = np.linalg.solve(np.asarray(Mf(q)), p)
+    v = np.linalg.solve(np.asarray(step.cm.system.mass_matrix(q)), p)
     x0 = np.concatenate([q + 0.5 * h * v, q + h * v, [0.0], np.zeros(2 * c + 2 * step.m)])
-    modes = [H if (touch[j] and held_prev[j]) else O for j in range(c)]
-    tried = set()
-    x, frac = x0, None
+    modes0 = [H if (touch[j] and held_prev[j]) else O for j in range(c)]
+    modes, tried, crossed = list(modes0), set(), set()
+    x, frac, why = x0, None, "rounds"
     for _ in range(MODE_ROUNDS):
         key = tuple(modes)
         if key in tried:
-            return ("cycle", key)
+            why = "cycle"
+            break
         tried.add(key)
-        start = x.copy()
-        if frac is not None:
-            # a newly timed impact: the sub-node starts at the estimated crossing
-            start[2 * n] = min(max(frac - 0.5, ALPHA_MIN - 0.5), 0.5 - ALPHA_MIN)
-            start[:n] = q + frac * (x[n:2 * n] - q)
-        xprev = x
-        x, ok = step.solve(start, q, p, h, modes)
-        timed = [j for j, m in enumerate(modes) if m in (I, C)]
-        if timed and not (ok and ALPHA_MIN - 0.5 <= x[2 * n] <= 0.5 - ALPHA_MIN):
-            # Newton on the timing row left the step (its rows go like 1/α near α = 0): the time
-            # of the impact by a bracketed search on the gap instead
-            x, ok = _timed_by_bracket(step, xprev, q, p, h, modes, timed[0])
-        if not ok:
-            x, ok = step.solve(x0.copy(), q, p, h, modes)
-            if not ok:
-                return ("newton", key)
-        qs, qn, b = x[:n], x[n:2 * n], float(x[2 * n])
-        o = 2 * n + 1
-        nu, mu = x[o:o + c], x[o + c:o + 2 * c]
-        gs = np.asarray(gapf(qs)[0]).reshape(-1)
-        gn = np.asarray(gapf(qn)[0]).reshape(-1)
+        got = _try(step, q, p, h, modes, x0, x, frac)
+        if got is None:
+            why = "newton"
+            break
+        x, gs, gn, nu, mu, b = got
+        crossed |= set(np.where((gs < -pen) | (gn < -pen))[0].tolist())
         change = _next_modes(modes, touch, g_q, gs, gn, nu, mu, b, pen, tol, step, finest)
         if change is None:
-            return qs, qn, b, nu, mu, x[o + 2 * c:o + 2 * c + step.m], x[o + 2 * c + step.m:], modes, gn
+            return _result(step, x, modes, gn)
         if change == "split":
             return "split" if not finest else ("split at the finest step", key)
         modes, frac = change
-    return ("rounds", tuple(modes))
+    found = _enumerate(step, q, p, h, g_q, touch, modes0, crossed, x0, pen, tol, finest)
+    if found is not None:
+        return found
+    return "split" if not finest else (why, tuple(modes))
+
+
+def _try(step: _Step, q, p, h, modes, x0, x, frac):
+    """Solve the step in ``modes`` (from ``x``; a newly timed impact from its estimated crossing
+    fraction ``frac``): ``(x, gaps at q̃, gaps at q_{k+1}, ν, μ, β)``, or None if Newton fails."""
+    n, c = step.n, step.c
+    gapf = step.cm.system.gap
+    start = x.copy()
+    if frac is not None:
+        # a newly timed impact: the sub-node starts at the estimated crossing
+        start[2 * n] = min(max(frac - 0.5, ALPHA_MIN - 0.5), 0.5 - ALPHA_MIN)
+        start[:n] = q + frac * (x[n:2 * n] - q)
+    xn, ok = step.solve(start, q, p, h, modes)
+    timed = [j for j, m in enumerate(modes) if m in (I, C)]
+    if timed and not (ok and ALPHA_MIN - 0.5 <= xn[2 * n] <= 0.5 - ALPHA_MIN):
+        # Newton on the timing row left the step (its rows go like 1/α near α = 0): the time
+        # of the impact by a bracketed search on the gap instead
+        xn, ok = _timed_by_bracket(step, x, q, p, h, modes, timed[0])
+    if not ok:
+        xn, ok = step.solve(x0.copy(), q, p, h, modes)
+        if not ok:
+            return None
+    o = 2 * n + 1
+    return (xn, np.asarray(gapf(xn[:n])[0]).reshape(-1), np.asarray(gapf(xn[n:2 * n])[0]).reshape(-1),
+            xn[o:o + c], xn[o + c:o + 2 * c], float(xn[2 * n]))
+
+
+def _result(step: _Step, x, modes, gn):
+    n, c, m = step.n, step.c, step.m
+    o = 2 * n + 1
+    return (x[:n], x[n:2 * n], float(x[2 * n]), x[o:o + c], x[o + c:o + 2 * c], x[o + 2 * c:o + 2 * c + m],
+            x[o + 2 * c + m:], list(modes), gn)
+
+
+#: Combinations of modes tried at most when the greedy search fails.
+MAX_COMBINATIONS = 256
+
+
+def _enumerate(step: _Step, q, p, h, g_q, touch, modes0, crossed, x0, pen, tol, finest):
+    """Every combination of modes of the contacts involved -- touching at ``q_k`` (H, R or O) or seen
+    crossing (O, I or C; at most one timed) -- fewest changes from ``modes0`` first; the first whose
+    solve meets every condition, or None."""
+    n, c = step.n, step.c
+    cand = sorted(set(np.where(touch)[0].tolist()) | set(crossed))
+    opts = [(H, R, O) if touch[j] else (O, I, C) for j in cand]
+    combos = []
+    for choice in product(*opts):
+        if sum(1 for j, mj in zip(cand, choice) if not touch[j] and mj in (I, C)) > 1:
+            continue
+        modes = list(modes0)
+        for j, mj in zip(cand, choice):
+            modes[j] = mj
+        combos.append((sum(a != b for a, b in zip(modes, modes0)), modes))
+    combos.sort(key=lambda t: t[0])
+    free = _try(step, q, p, h, modes0, x0, x0, None)
+    for _, modes in combos[:MAX_COMBINATIONS]:
+        timed = [j for j, mj in enumerate(modes) if mj in (I, C)]
+        frac = None
+        if timed and free is not None:
+            j = timed[0]
+            frac = _crossing_fraction(g_q[j], free[1][j], free[2][j], 0.5) if g_q[j] > 0 else ALPHA_MIN
+        got = _try(step, q, p, h, modes, x0, x0, frac)
+        if got is None:
+            continue
+        x, gs, gn, nu, mu, b = got
+        if _next_modes(modes, touch, g_q, gs, gn, nu, mu, b, pen, tol, step, finest) is None:
+            return _result(step, x, modes, gn)
+    return None
 
 
 def _next_modes(modes, touch, g0, gs, gn, nu, mu, b, pen, tol, step, finest):
