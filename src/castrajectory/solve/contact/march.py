@@ -299,7 +299,7 @@ def _march_step(step: _Step, q, p, h, g_q, held_prev, tol, finest: bool):
     The modes are searched greedily (one change per solve, at the most violated condition); if that
     cycles or stalls, every combination of modes of the contacts involved (touching at ``q_k``, or seen
     crossing) is tried, fewest changes first (:func:`_enumerate`)."""
-    n, c = step.n, step.c
+    c = step.c
     pen = 1e-12 * step.ell
     touch = g_q <= tol
     v = np.linalg.solve(np.asarray(step.cm.system.mass_matrix(q)), p)
@@ -371,7 +371,6 @@ def _enumerate(step: _Step, q, p, h, g_q, touch, modes0, crossed, x0, pen, tol, 
     """Every combination of modes of the contacts involved -- touching at ``q_k`` (H, R or O) or seen
     crossing (O, I or C; at most one timed) -- fewest changes from ``modes0`` first; the first whose
     solve meets every condition, or None."""
-    n, c = step.n, step.c
     cand = sorted(set(np.where(touch)[0].tolist()) | set(crossed))
     opts = [(H, R, O) if touch[j] else (O, I, C) for j in cand]
     combos = []
