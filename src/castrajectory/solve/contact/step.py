@@ -1,0 +1,363 @@
+"""One step of the discrete march: the compiled step and its Newton solve, the chunk of steps that keep
+their modes, and the search for a step's contact modes (the march itself is :mod:`.march`)."""
+from __future__ import annotations
+
+from itertools import product
+
+import casadi as ca
+import numpy as np
+
+from ...discretise.contact.elements import ContactMechanics
+from ...discretise.contact.transcription import ALPHA_MIN
+from .. import jit
+
+#: Newton iterations of one step solve, and the largest row residual accepted (each row divided by
+#: its largest derivative, relative to the size of the unknowns).
+NEWTON_ITER = 30
+STEP_TOL = 1e-12
+#: Mode changes tried per step before the march gives up.
+MODE_ROUNDS = 12
+#: A contact whose gap at an impact's sub-node is within this (times the length scale) takes part in
+#: that impact (a flat landing: one simultaneous impact).
+SIMULTANEOUS_GAP = 1e-9
+
+O, H, R, I, C = "O", "H", "R", "I", "C"
+
+
+#: Newton steps of each step of a chunk (:meth:`_Step.chunk`).
+CHUNK_NEWTON = 3
+
+
+class _Step:
+    """The compiled step of ``cm`` (``ContactMechanics.march_step``) with the scene's scales."""
+
+    def __init__(self, cm: ContactMechanics, scales):
+        self.cm = cm
+        # evaluated once per Newton step of every marched step: compiled once per system (jit's disk
+        # cache; CasADi's VM where that is not possible)
+        if not hasattr(cm, "_march_compiled"):
+            cm._march_compiled = jit.compiled(cm.march_step)
+        self.fn = cm._march_compiled
+        if not hasattr(cm, "_chunk_fns"):
+            cm._chunk_fns = {}
+        self._chunks = cm._chunk_fns
+        self.ell, self.pref, self.vref = scales[0], scales[1], scales[2]
+        self.n, self.c, self.m = cm.n, cm.c, cm.m
+
+    def chunk(self, K: int, q, p, h, held):
+        """``K`` steps from ``(q, p)`` in one call, the ``held`` contacts held (mode H) and the others
+        open (β = 0): columns of the nodes ``q_{k+1}``, momenta ``p_{k+1}⁻``, unknowns, sub-node and node
+        gaps, and each step's largest row residual in units of the unknowns (as :meth:`solve` measures
+        it).  ``CHUNK_NEWTON`` Newton steps from the previous step's flight."""
+        if K not in self._chunks:
+            cm, n, c, m = self.cm, self.n, self.c, self.m
+            qs, ps, hs, hm = ca.MX.sym("q", n), ca.MX.sym("p", n), ca.MX.sym("h"), ca.MX.sym("held", c)
+            sc = [ca.MX.sym(name) for name in ("ell", "snu", "smu", "vref")]
+            zero = ca.DM.zeros(c)
+            v = ca.solve(cm.system.mass_matrix(qs), ps)
+            x = ca.vertcat(qs + 0.5 * hs * v, qs + hs * v, ca.DM.zeros(1 + 2 * c + 2 * m))
+            for _ in range(CHUNK_NEWTON):
+                r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero)
+                x = x - ca.solve(J, r)
+            # the size of one more Newton step: the rows' residual in units of the unknowns
+            r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero)
+            res = ca.mmax(ca.fabs(ca.solve(J, r)))
+            qn, qt = x[n:2 * n], x[:n]
+            one = ca.Function("chunk_step", [qs, ps, hs, hm] + sc,
+                              [qn, cm.p_node_minus(qt, 0.0, qn, hs), x, cm.gap_row(qt), cm.gap_row(qn), res])
+            self._chunks[K] = one.mapaccum("chunk_steps", K, [0, 1], [0, 1])
+        out = self._chunks[K](q, p, h, held.astype(float), self.ell, self.pref / h, self.pref, self.vref)
+        return tuple(np.asarray(a) for a in out)
+
+    def masks(self, modes):
+        c = self.c
+        t, held, closed, law = (np.zeros(c) for _ in range(4))
+        for j, m in enumerate(modes):
+            t[j] = m in (I, C)
+            held[j] = m in (H, R)
+            closed[j] = m in (H, C)
+            law[j] = m == I
+        # simultaneous impacts share one timing row: only the first timing contact times the sub-node
+        timing = np.where(t > 0)[0]
+        if timing.size > 1:
+            t[timing[1:]] = 0.0
+        return t, held, closed, law
+
+    def solve(self, x, q, p, h, modes, bfix=None):
+        """Newton on the step's rows in the given modes (with ``bfix``: the sub-node's ``β`` fixed
+        there instead of timed by a contact); ``(x, ok)``."""
+        n, c = self.n, self.c
+        self.snu, self.smu = self.pref / h, self.pref
+        t, held, closed, law = self.masks(modes)
+        if bfix is not None:
+            t = np.zeros(c)
+            x = x.copy()
+            x[2 * n] = bfix
+        args = (q, p, h, self.ell, self.snu, self.smu, self.vref, 0.0 if bfix is None else bfix,
+                t, held, closed, law)
+        small = 0
+        for _ in range(NEWTON_ITER):
+            r, Jr = self.fn(x, *args)
+            r = np.asarray(r).reshape(-1)
+            Jr = np.asarray(Jr)
+            # rows and columns equilibrated (momentum rows ~ 1/h², gap rows ~ 1/ℓ): the step's
+            # rounding then stays at the level of the unknowns, not of the Jacobian's condition
+            rs = 1.0 / np.maximum(np.max(np.abs(Jr), axis=1), 1e-300)
+            cs = 1.0 / np.maximum(np.max(np.abs(Jr * rs[:, None]), axis=0), 1e-300)
+            A = Jr * rs[:, None] * cs[None, :]
+            if not (np.all(np.isfinite(A)) and np.all(np.isfinite(r))):
+                return x, False
+            try:
+                dx = cs * np.linalg.solve(A, -r * rs)
+            except np.linalg.LinAlgError:
+                try:
+                    dx = cs * np.linalg.lstsq(A, -r * rs, rcond=None)[0]
+                except np.linalg.LinAlgError:
+                    return x, False
+            x = x + dx
+            if not np.all(np.isfinite(x)):
+                return x, False
+            # converged: two steps in a row at the level of rounding (the second refines the first)
+            small = small + 1 if np.max(np.abs(dx)) <= 1e-14 * (1.0 + float(np.max(np.abs(x)))) else 0
+            if small == 2:
+                break
+        r, Jr = self.fn(x, *args)
+        # each row in units of the unknowns (divided by its largest derivative): rows that go like
+        # 1/α near α = 0 are then held to the rounding of the point, not of their size
+        r = np.asarray(r).reshape(-1) / np.maximum(np.max(np.abs(np.asarray(Jr)), axis=1), 1e-300)
+        return x, bool(np.max(np.abs(r)) <= STEP_TOL * (1.0 + float(np.max(np.abs(x)))))
+
+def _timed_by_bracket(step: _Step, x, q, p, h, modes, j: int):
+    """The step with contact ``j`` timing its sub-node, by regula falsi (Illinois) on ``β``: each trial
+    solves the step with ``β`` fixed, and the sub-node's gap of ``j`` is positive at the step's start
+    (``α = ALPHA_MIN``) and negative at the crossing the free flight showed.  ``(x, ok)``."""
+    n = step.n
+    gapf = step.cm.system.gap
+
+    def f(b, start):
+        xb, ok = step.solve(start, q, p, h, modes, bfix=b)
+        return (float(np.asarray(gapf(xb[:n])[0]).reshape(-1)[j]) if ok else np.nan), xb
+
+    lo, hi = ALPHA_MIN - 0.5, 0.5 - ALPHA_MIN
+    flo, xlo = f(lo, x)
+    fhi, xhi = f(0.0, x)
+    if fhi >= 0.0:
+        lo, flo, xlo = 0.0, fhi, xhi
+        fhi, xhi = f(hi, x)
+    else:
+        hi = 0.0
+    if not (flo > 0.0 and fhi < 0.0):
+        return x, False
+    side = 0
+    for _ in range(100):
+        b = hi - fhi * (hi - lo) / (fhi - flo)
+        fb, xb = f(b, xlo if side <= 0 else xhi)
+        if not np.isfinite(fb):
+            return x, False
+        if abs(fb) <= 1e-15 * step.ell or hi - lo <= 1e-15:
+            break
+        if fb > 0.0:
+            lo, flo, xlo = b, fb, xb
+            if side > 0:
+                fhi *= 0.5
+            side = 1
+        else:
+            hi, fhi, xhi = b, fb, xb
+            if side < 0:
+                flo *= 0.5
+            side = -1
+    # the timed rows from there (one or two Newton steps); the bracket's point if Newton leaves it
+    xt, ok = step.solve(xb, q, p, h, modes)
+    if ok and ALPHA_MIN - 0.5 <= xt[2 * n] <= 0.5 - ALPHA_MIN:
+        return xt, True
+    return xb, abs(fb) <= 1e-12 * step.ell
+
+
+def _crossing_fraction(g0, gs, gn, alpha):
+    """Estimated time fraction in the step at which a gap that is positive at ``q_k`` crosses zero, from
+    its values at the node, the sub-node (fraction ``alpha``) and the next node (linear pieces)."""
+    if gs < 0.0:
+        return alpha * g0 / (g0 - gs)
+    return alpha + (1.0 - alpha) * gs / (gs - gn) if gn < 0.0 else 1.0
+
+
+def _march_step(step: _Step, q, p, h, g_q, held_prev, tol, finest: bool):
+    """One step from ``(q, p)``: ``(q̃, q_{k+1}, β, ν, μ, λ, λ̃, modes, gaps at q_{k+1})``, ``"split"`` if
+    it needs two impacts at different times (and is not the finest step), or ``(reason, detail)``.
+
+    The modes are searched greedily (one change per solve, at the most violated condition); if that
+    cycles or stalls, every combination of modes of the contacts involved (touching at ``q_k``, or seen
+    crossing) is tried, fewest changes first (:func:`_enumerate`)."""
+    c = step.c
+    pen = 1e-12 * step.ell
+    touch = g_q <= tol
+    v = np.linalg.solve(np.asarray(step.cm.system.mass_matrix(q)), p)
+    x0 = np.concatenate([q + 0.5 * h * v, q + h * v, [0.0], np.zeros(2 * c + 2 * step.m)])
+    modes0 = [H if (touch[j] and held_prev[j]) else O for j in range(c)]
+    modes, tried, crossed = list(modes0), set(), set()
+    x, frac, why = x0, None, "rounds"
+    for _ in range(MODE_ROUNDS):
+        key = tuple(modes)
+        if key in tried:
+            why = "cycle"
+            break
+        tried.add(key)
+        got = _try(step, q, p, h, modes, x0, x, frac)
+        if got is None:
+            why = "newton"
+            break
+        x, gs, gn, nu, mu, b = got
+        crossed |= set(np.where((gs < -pen) | (gn < -pen))[0].tolist())
+        change = _next_modes(modes, touch, g_q, gs, gn, nu, mu, b, pen, tol, step, finest)
+        if change is None:
+            return _result(step, x, modes, gn)
+        if change == "split":
+            return "split" if not finest else ("split at the finest step", key)
+        modes, frac = change
+    found = _enumerate(step, q, p, h, g_q, touch, modes0, crossed, x0, pen, tol, finest)
+    if found is not None:
+        return found
+    return "split" if not finest else (why, tuple(modes))
+
+
+def _try(step: _Step, q, p, h, modes, x0, x, frac):
+    """Solve the step in ``modes`` (from ``x``; a newly timed impact from its estimated crossing
+    fraction ``frac``): ``(x, gaps at q̃, gaps at q_{k+1}, ν, μ, β)``, or None if Newton fails."""
+    n, c = step.n, step.c
+    gapf = step.cm.system.gap
+    start = x.copy()
+    if frac is not None:
+        # a newly timed impact: the sub-node starts at the estimated crossing
+        start[2 * n] = min(max(frac - 0.5, ALPHA_MIN - 0.5), 0.5 - ALPHA_MIN)
+        start[:n] = q + frac * (x[n:2 * n] - q)
+    xn, ok = step.solve(start, q, p, h, modes)
+    timed = [j for j, m in enumerate(modes) if m in (I, C)]
+    if timed and not (ok and ALPHA_MIN - 0.5 <= xn[2 * n] <= 0.5 - ALPHA_MIN):
+        # Newton on the timing row left the step (its rows go like 1/α near α = 0): the time
+        # of the impact by a bracketed search on the gap instead
+        xn, ok = _timed_by_bracket(step, x, q, p, h, modes, timed[0])
+    if not ok:
+        xn, ok = step.solve(x0.copy(), q, p, h, modes)
+        if not ok:
+            return None
+    o = 2 * n + 1
+    return (xn, np.asarray(gapf(xn[:n])[0]).reshape(-1), np.asarray(gapf(xn[n:2 * n])[0]).reshape(-1),
+            xn[o:o + c], xn[o + c:o + 2 * c], float(xn[2 * n]))
+
+
+def _result(step: _Step, x, modes, gn):
+    n, c, m = step.n, step.c, step.m
+    o = 2 * n + 1
+    return (x[:n], x[n:2 * n], float(x[2 * n]), x[o:o + c], x[o + c:o + 2 * c], x[o + 2 * c:o + 2 * c + m],
+            x[o + 2 * c + m:], list(modes), gn)
+
+
+#: Combinations of modes tried at most when the greedy search fails.
+MAX_COMBINATIONS = 256
+
+
+def _enumerate(step: _Step, q, p, h, g_q, touch, modes0, crossed, x0, pen, tol, finest):
+    """Every combination of modes of the contacts involved -- touching at ``q_k`` (H, R or O) or seen
+    crossing (O, I or C; at most one timed) -- fewest changes from ``modes0`` first; the first whose
+    solve meets every condition, or None."""
+    cand = sorted(set(np.where(touch)[0].tolist()) | set(crossed))
+    opts = [(H, R, O) if touch[j] else (O, I, C) for j in cand]
+    combos = []
+    for choice in product(*opts):
+        if sum(1 for j, mj in zip(cand, choice) if not touch[j] and mj in (I, C)) > 1:
+            continue
+        modes = list(modes0)
+        for j, mj in zip(cand, choice):
+            modes[j] = mj
+        combos.append((sum(a != b for a, b in zip(modes, modes0)), modes))
+    combos.sort(key=lambda t: t[0])
+    free = _try(step, q, p, h, modes0, x0, x0, None)
+    for _, modes in combos[:MAX_COMBINATIONS]:
+        timed = [j for j, mj in enumerate(modes) if mj in (I, C)]
+        frac = None
+        if timed and free is not None:
+            j = timed[0]
+            frac = _crossing_fraction(g_q[j], free[1][j], free[2][j], 0.5) if g_q[j] > 0 else ALPHA_MIN
+        got = _try(step, q, p, h, modes, x0, x0, frac)
+        if got is None:
+            continue
+        x, gs, gn, nu, mu, b = got
+        if _next_modes(modes, touch, g_q, gs, gn, nu, mu, b, pen, tol, step, finest) is None:
+            return _result(step, x, modes, gn)
+    return None
+
+
+def _next_modes(modes, touch, g0, gs, gn, nu, mu, b, pen, tol, step, finest):
+    """The modes after one change (the most violated condition), ``None`` if the step is solved, or
+    ``"split"`` if it needs two impacts at different times."""
+    alpha = 0.5 + b
+    worst, pick = 0.0, None
+    # multipliers of free contacts (scaled)
+    for j, m in enumerate(modes):
+        if m in (H, R) and nu[j] < 0.0:
+            viol = -nu[j] / step.snu
+            if viol > worst:
+                worst, pick = viol, (j, O)
+        if m in (H, I, C) and mu[j] < 0.0:
+            viol = -mu[j] / step.smu
+            if viol > worst:
+                worst, pick = viol, (j, {H: R, I: O, C: I}[m])
+    if worst > 1e-12:
+        j, m = pick
+        out = list(modes)
+        out[j] = m
+        return out, None
+    if b < ALPHA_MIN - 0.5 - 1e-12 or b > 0.5 - ALPHA_MIN + 1e-12:
+        return "split"
+    # gaps
+    worst, pick = pen, None
+    crossing = []
+    for j, m in enumerate(modes):
+        if m == O and (gs[j] < -pen or gn[j] < -pen):
+            if touch[j]:
+                cand = R if gs[j] < -pen and gn[j] >= -pen else H
+                viol = -min(gs[j], gn[j])
+                if viol > worst:
+                    worst, pick = viol, (j, cand)
+            else:
+                crossing.append(j)
+        elif m == R and gn[j] < -pen:
+            viol = -gn[j]
+            if viol > worst:
+                worst, pick = viol, (j, H)
+        elif m == I and gn[j] < tol:
+            # the bounce does not clear the next node (its flight is shorter than the rest of the step:
+            # the end of a Zeno accumulation) or lands exactly on it: caught there
+            viol = tol - gn[j]
+            if viol > worst:
+                worst, pick = viol, (j, C)
+        elif m in (I, C, H, R) and gs[j] < -pen:
+            return "split"
+    if pick is not None:
+        j, m = pick
+        out = list(modes)
+        out[j] = m
+        return out, None
+    if crossing:
+        timed = [j for j, m in enumerate(modes) if m in (I, C)]
+        fr = {j: _crossing_fraction(g0[j], gs[j], gn[j], alpha) for j in crossing}
+        first = min(crossing, key=lambda j: fr[j])
+        if timed:
+            # a crossing after the sub-node's impact: simultaneous with it, or a second impact
+            out = list(modes)
+            if abs(gs[first]) <= SIMULTANEOUS_GAP * step.ell:
+                out[first] = I
+                return out, None
+            t = timed[0]
+            if not finest:
+                return "split"
+            if modes[t] == I:
+                # the bounce does not let the step end before another contact closes: caught (the
+                # accumulation of rocking, which the grid does not resolve)
+                out[t] = C
+                return out, None
+            return "split"
+        out = list(modes)
+        out[first] = I
+        return out, fr[first]
+    return None
