@@ -80,6 +80,8 @@ class ContactNLP(ContactTranscription):
         # problem, no penalty and no selection term (its point is then a KKT point with zero multipliers)
         self.nlp.set_parameter("rho", 0.0)
         self.nlp.set_parameter("split", 0.0)
+        # a few evaluations only (Ipopt, if it runs, evaluates the VM's kernels): nothing to compile
+        self.nlp.compile_elements = False
         self.nlp.build(opts, verbose)
         res = self.nlp.certify(init, certify_tol, bounds)
         if res.success:
