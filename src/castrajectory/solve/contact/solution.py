@@ -71,6 +71,9 @@ class ContactTrajectory(Result):
                 "node_impulse": self.node_impulse,
                 "gap": self.gap, "complementarity_residual": self.complementarity_residual,
                 "impacts": [i.as_dict() for i in self.impacts],
+                # JSON keys of the earlier second sub-node per step, kept for existing readers: a step
+                # now holds one sub-node (the grid is halved instead), so they are always empty
+                "steps_sub2": [], "t_sub2": [], "mu_sub2": [],
                 "homotopy": [vars(s) for s in self.homotopy], "attempts": self.attempts}
 
 
