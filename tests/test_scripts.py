@@ -396,3 +396,74 @@ def test_contact_battery_runs_and_checks_against_the_oracle(tmp_path):
     assert "solved with every residual check" in (tmp_path / "summary.md").read_text()
     p = run([str(ROOT / "scripts" / "contact_battery.py"), "--count", "0"])
     assert p.returncode == 2 and p.stderr.count("\n") == 1
+
+
+# ----------------------------------------------------------------------------- interrupts and output files
+def _interrupt_after(args, seconds: float, cwd=None):
+    """Start ``python args``, send a real SIGINT after ``seconds``; (returncode, stdout, stderr, seconds
+    from the signal to the exit)."""
+    import signal
+    import time
+    p = subprocess.Popen([sys.executable, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         env=ENV, cwd=cwd)
+    time.sleep(seconds)
+    assert p.poll() is None, "the run ended before the interrupt: pick a longer one"
+    t0 = time.perf_counter()
+    p.send_signal(signal.SIGINT)
+    out, err = p.communicate(timeout=120)
+    return p.returncode, out, err, time.perf_counter() - t0
+
+
+def test_sigint_stops_a_solve_at_once(tmp_path):
+    """Ctrl-C during Ipopt (a 12-link pendulum that takes ~9 s): exit 130 within seconds, one line, no
+    traceback, no retry of the interrupted solve, and the earlier picture untouched."""
+    keep = tmp_path / "keep.png"
+    keep.write_bytes(b"earlier output")
+    rc, out, err, dt = _interrupt_after([script("n_link_pendulum"), "--links", "12", "--n", "4000", "--T", "10",
+                                         "--plot", str(keep)], 3.0)
+    assert rc == 130, err
+    assert err.strip().splitlines() == ["n_link_pendulum.py: interrupted"] and out == ""
+    assert dt < 5.0          # stopped between Ipopt iterations (measured 0.08 s), not after more attempts
+    assert keep.read_bytes() == b"earlier output"
+    assert [f.name for f in tmp_path.iterdir()] == ["keep.png"]       # no temporary file left
+
+
+def test_sigint_stops_the_report_and_keeps_earlier_files(tmp_path):
+    """Ctrl-C during `castrajectory report`: exit 130 with one line; the summary of an earlier report
+    (written last) is as it was, no temporary file is left, and no interrupt is recorded as a result."""
+    out_dir = tmp_path / "report"
+    out_dir.mkdir()
+    (out_dir / "summary.md").write_text("an earlier report\n")
+    rc, out, err, dt = _interrupt_after(["-m", "castrajectory.cli", "report", "--out", str(out_dir), "--quick"], 6.0)
+    assert rc == 130, err
+    assert err.strip().splitlines() == ["castrajectory report: interrupted"]
+    assert (out_dir / "summary.md").read_text() == "an earlier report\n"
+    assert not [f for f in out_dir.iterdir() if ".tmp" in f.name]
+    for csv_file in out_dir.glob("*.csv"):
+        assert "interrupt" not in csv_file.read_text().lower()
+
+
+def test_output_paths_are_refused_before_the_solve(tmp_path):
+    """A --plot in a missing folder, or naming a folder, or without an extension: exit 2 and one line,
+    before any solve (N = 10⁸ would take minutes), and nothing created."""
+    for path, needle in [(tmp_path / "missing" / "x.png", "does not exist"), (tmp_path, "is a folder"),
+                         (tmp_path / "noext", "needs a file extension")]:
+        p = run([script("double_pendulum"), "--n", "100000000", "--plot", str(path)])
+        assert p.returncode == 2, p.stderr
+        lines = p.stderr.strip().splitlines()
+        assert len(lines) == 1 and needle in lines[0] and "Traceback" not in p.stderr
+    assert not (tmp_path / "missing").exists() and not (tmp_path / "noext").exists()
+
+
+def test_a_picture_that_cannot_be_written_keeps_the_answer(tmp_path):
+    """The solve succeeds but its picture cannot be written (a format matplotlib does not know): the
+    JSON is printed all the same, the failure gets its own line and exit 3, the earlier file stays."""
+    bad = tmp_path / "plot.unknownformat"
+    bad.write_bytes(b"earlier output")
+    p = run([script("double_pendulum"), "--T", "1", "--n", "100", "--json", "--plot", str(bad)])
+    assert p.returncode == 3, p.stderr
+    assert json.loads(p.stdout)["status"] == "ok"
+    lines = p.stderr.strip().splitlines()
+    assert len(lines) == 1 and "could not write --plot" in lines[0]
+    assert bad.read_bytes() == b"earlier output"
+    assert sorted(f.name for f in tmp_path.iterdir()) == ["plot.unknownformat"]

@@ -45,7 +45,14 @@ def main(argv: Optional[List[str]] = None) -> int:
             print(f"{name:16s} {doc[0] if doc else ''}")
         return 0
     from .report import write_report
-    return write_report(args.out, quick=args.quick)
+    from .scene import EXIT_INTERRUPTED, _interrupted
+    try:
+        return write_report(args.out, quick=args.quick)
+    except BaseException as exc:  # Ctrl-C: the report stops, files already written stay as they are
+        if isinstance(exc, SystemExit) or not _interrupted(exc):
+            raise
+        print("castrajectory report: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -14,16 +14,15 @@ from typing import List
 
 from ..solve import droplet
 from ..inspect import plotting
-from ..inspect import study
+from ..inspect import files, study
 from .scene import SCENES, jsonable
 
 
 def _droplet_entry(out: str, name: str, title: str, drop: droplet.Droplet, n: int, formulation: str):
     sol = droplet.solve(drop, n, formulation)
-    with open(os.path.join(out, f"{name}.json"), "w") as fh:
-        json.dump(jsonable(sol.as_dict()), fh, allow_nan=False)
+    files.write_text(os.path.join(out, f"{name}.json"), json.dumps(jsonable(sol.as_dict()), allow_nan=False))
     if sol.success:
-        plotting.droplet_shape(sol, os.path.join(out, f"{name}.png"))
+        files.write_atomically(os.path.join(out, f"{name}.png"), lambda p: plotting.droplet_shape(sol, p))
     e, r = sol.errors, sol.result
     row = (f"| {title} | {formulation} | {n} | {sol.status} | {r.iterations} | "
            f"{r.build_time_s:.3f} | {r.solve_time_s:.3f} | {math.degrees(sol.contact_angle):.6f} | "
@@ -158,8 +157,8 @@ def _contact_work_precision(out: str, quick: bool):
     ns = [250, 500, 1000] if quick else [250, 500, 1000, 2000, 4000]
     rows = study.contact_work_precision(ns)
     study.write_csv(rows, os.path.join(out, "contact_work_precision.csv"))
-    plotting.contact_work_precision(rows, title="bounce times against the analytic ones").savefig(
-        os.path.join(out, "contact_work_precision.png"))
+    files.save_figure(plotting.contact_work_precision(rows, title="bounce times against the analytic ones"),
+                      os.path.join(out, "contact_work_precision.png"))
     lines = ["### Error against run time (bounce times and apex heights)", "",
              "Ball under gravity (e = 1, 3 bounces: the midpoint rule is exact on parabolas) and ball on a "
              "spring (k = 50, e = 0.9, 5 bounces: harmonic flight); whole-trajectory contact NLP against the "
@@ -208,7 +207,7 @@ def _rigid_body_work_precision(out: str, quick: bool):
     study.write_csv(rows, os.path.join(out, "rigidbody_work_precision.csv"))
     fig = plotting.work_precision_panels(rows, error="flip_interval_error",
                                          title="free body near the intermediate axis, 4 flips in T = 100 s")
-    fig.savefig(os.path.join(out, "rigidbody_work_precision.png"))
+    files.save_figure(fig, os.path.join(out, "rigidbody_work_precision.png"))
     ok = all(r["success"] for r in rows if r["method"] == "whole")
     lines = ["### Error against run time (flip interval and energy)", "",
              f"I = (1, 2, 3), ω₀ = (1e-3, 1, 1e-3), T = 100 s, N = {ns[0]} … {ns[-1]}; the flip-interval error is "
@@ -239,15 +238,14 @@ def _script_scenes(out: str, heading: str, intro: str, scenes, plot_name: str = 
     for stem, scene, argv, title, animate in scenes:
         outcome, _ = _run_case(scene, argv)
         ok &= outcome.success
-        with open(os.path.join(out, f"{stem}.json"), "w") as fh:
-            json.dump(jsonable(outcome.data), fh, allow_nan=False)
+        files.write_text(os.path.join(out, f"{stem}.json"), json.dumps(jsonable(outcome.data), allow_nan=False))
         lines += [f"### {title}", "", f"`python problems/{scene}.py {' '.join(argv)}`".replace(" `", "`"), "",
                   "```", *outcome.summary, "```", ""]
         if outcome.success and "plot" in outcome.writers:
-            outcome.writers["plot"](os.path.join(out, f"{stem}_{plot_name}.png"))
+            files.write_atomically(os.path.join(out, f"{stem}_{plot_name}.png"), outcome.writers["plot"])
             lines += [f"![{title}: {plot_name}]({stem}_{plot_name}.png)", ""]
             if animate:
-                outcome.writers["animate"](os.path.join(out, f"{stem}.gif"))
+                files.write_atomically(os.path.join(out, f"{stem}.gif"), outcome.writers["animate"])
                 lines += [f"![{title}: animation]({stem}.gif)", ""]
     return ok, lines
 
@@ -268,7 +266,7 @@ def _work_precision(out: str, quick: bool):
     study.write_csv([{k: v for k, v in r.items() if not isinstance(v, (list, dict))} for r in rows],
                     os.path.join(out, "work_precision.csv"))
     fig = plotting.work_precision_panels(rows, title="double pendulum, T = 5 s, θ = (2, 1)")
-    fig.savefig(os.path.join(out, "work_precision.png"))
+    files.save_figure(fig, os.path.join(out, "work_precision.png"))
     ok = all(r["success"] for r in rows if r["method"] == "whole")
     lines = ["## Error against run time (double pendulum, T = 5 s, θ = (2, 1) at rest)", "",
              f"N = {base[0]} … {top}; reference: CVODES at rtol 1e-14; data in `work_precision.csv`. "
@@ -309,7 +307,7 @@ def _long_horizon(out: str, quick: bool):
     study.write_csv(rows, os.path.join(out, "long_horizon.csv"))
     fig = plotting.long_horizon_plot(tseries, series, period=period,
                                      title=f"pendulum, amplitude {amp} rad, {periods} periods, {steps} steps/period")
-    fig.savefig(os.path.join(out, "long_horizon.png"))
+    files.save_figure(fig, os.path.join(out, "long_horizon.png"))
     lines = ["## Long horizon: energy over " + f"{periods} periods", "",
              "| method | status | time (s) | max |ΔE| first half | max |ΔE| second half | ratio |",
              "|---|---|---|---|---|---|"]
@@ -352,10 +350,9 @@ def write_report(out: str, quick: bool = False) -> int:
     # ---- reduced problem
     ang = droplet.solve_angle(droplet.Droplet())
     ok &= ang.success
-    with open(os.path.join(out, "droplet_angle.json"), "w") as fh:
-        json.dump(jsonable(ang.as_dict()), fh, allow_nan=False)
+    files.write_text(os.path.join(out, "droplet_angle.json"), json.dumps(jsonable(ang.as_dict()), allow_nan=False))
     if ang.success:
-        plotting.reduced_energy(ang, os.path.join(out, "droplet_angle.png"))
+        files.write_atomically(os.path.join(out, "droplet_angle.png"), lambda p: plotting.reduced_energy(ang, p))
     lines += ["### Reduced problem in θ", "",
               f"θ* = {math.degrees(ang.contact_angle):.12f}° ({ang.status}, {ang.result.iterations} iterations), "
               f"Young residual {ang.young_residual:.2e}, R = {ang.radius:.10g}, E = {ang.energy:.10g}.", "",
@@ -366,7 +363,7 @@ def write_report(out: str, quick: bool = False) -> int:
     rows = study.droplet_sweep(ns)
     ok &= all(r["status"] == "ok" for r in rows)
     study.write_csv(rows, os.path.join(out, "droplet_convergence.csv"))
-    plotting.droplet_convergence(rows, os.path.join(out, "droplet_convergence.png"))
+    files.write_atomically(os.path.join(out, "droplet_convergence.png"), lambda p: plotting.droplet_convergence(rows, p))
     lines += ["### Error against N and against run time", "",
               f"N = {ns[0]} … {ns[-1]}; data in `droplet_convergence.csv`.  Observed orders (fit over N ≥ 32):", "",
               "| formulation | " + " | ".join(study.DROPLET_ERRORS) + " | max iterations | all converged |",
@@ -414,7 +411,6 @@ def write_report(out: str, quick: bool = False) -> int:
         lines += part[1]
 
     lines += [f"Report written in {time.perf_counter() - t0:.1f} s; every solve converged: {ok}."]
-    with open(os.path.join(out, "summary.md"), "w") as fh:
-        fh.write("\n".join(lines) + "\n")
+    files.write_text(os.path.join(out, "summary.md"), "\n".join(lines) + "\n")
     print(f"report written to {os.path.join(out, 'summary.md')} (all converged: {ok})")
     return 0 if ok else 1

@@ -7,9 +7,12 @@ A problem script defines ``parser()`` and ``run(args) -> Outcome`` and calls
   scene runs, file descriptor 1 is pointed at stderr, so nothing a C++ library
   prints can leak into the JSON;
 * exit code ``0`` solved, ``1`` the solver failed (message on stderr),
-  ``2`` bad input (one line on stderr, no traceback);
-* ``--plot`` / ``--animate`` files are written only after a successful solve,
-  so a refused or failed run never overwrites earlier output.
+  ``2`` bad input (one line on stderr, no traceback; output paths are checked before the solve),
+  ``3`` solved and printed, but a requested file could not be written, ``130`` interrupted (SIGINT:
+  one line, no traceback; :mod:`castrajectory.solve.interrupt` keeps a strategy from retrying);
+* ``--plot`` / ``--animate`` files are written only after a successful solve and after its answer
+  is printed, each to a temporary file renamed into place, so a refused, failed or interrupted run
+  never overwrites or truncates earlier output.
 
 The console command (``castrajectory list``, ``run``, ``report``) is :func:`castrajectory.cli.main`.
 """
@@ -26,6 +29,7 @@ from typing import Callable, Dict, List, Optional
 
 import numpy as np
 
+from ..inspect.files import write_atomically
 from ..result import Result
 from ..validation import InputError
 
@@ -214,33 +218,77 @@ def stdout_to_stderr(enabled: bool = True):
         os.close(saved)
 
 
+def check_output_path(flag: str, path: Optional[str]) -> None:
+    """Refuse an output path before any work is done (exit 2): its folder must exist and be writable,
+    and the path must not name a folder."""
+    if not path:
+        return
+    folder = os.path.dirname(os.path.abspath(path)) or "."
+    if os.path.isdir(path):
+        raise InputError(f"--{flag} {path!r} is a folder; give a file path")
+    if not os.path.isdir(folder):
+        raise InputError(f"--{flag}: the folder {folder!r} does not exist")
+    if not os.access(folder, os.W_OK):
+        raise InputError(f"--{flag}: the folder {folder!r} is not writable")
+    if not os.path.splitext(path)[1]:
+        raise InputError(f"--{flag} {path!r} needs a file extension (the format is read from it)")
+
+
+#: Exit code of a run that was interrupted (SIGINT), as a shell reports it.
+EXIT_INTERRUPTED = 130
+#: Exit code of a solved run whose answer was printed but a requested file could not be written.
+EXIT_OUTPUT = 3
+
+
+def _interrupted(exc: BaseException) -> bool:
+    """A KeyboardInterrupt, or an error that CasADi raised while one was pending."""
+    while exc is not None:
+        if isinstance(exc, KeyboardInterrupt):
+            return True
+        exc = exc.__cause__ or exc.__context__
+    return False
+
+
 def run_scene(parser: argparse.ArgumentParser, run: Callable[[argparse.Namespace], Outcome],
               argv: Optional[List[str]] = None) -> int:
     """Parse, run, write outputs and return the exit code (see module docstring).
 
-    The JSON printed is ``outcome.as_dict()``.
+    The JSON printed is ``outcome.as_dict()``.  Output paths are checked before the solve; files are
+    written after the answer is printed, each atomically.
     """
     args = parser.parse_args(argv)
     prog = parser.prog
     try:
-        with stdout_to_stderr(args.json):
-            outcome = run(args)
-            if outcome.success:
-                for flag, writer in outcome.writers.items():
-                    path = getattr(args, flag, None)
-                    if path:
-                        os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
-                        writer(path)
-    except InputError as exc:
-        print(f"{prog}: error: {exc}", file=sys.stderr)
-        return 2
-    if args.json:
-        sys.stdout.write(json.dumps(jsonable(outcome.as_dict()), allow_nan=False) + "\n")
-    else:
-        print("\n".join(outcome.summary))
-    if not outcome.success:
-        print(f"{prog}: solver failed: {outcome.message}", file=sys.stderr)
-        return 1
+        try:
+            for flag in ("plot", "animate"):
+                check_output_path(flag, getattr(args, flag, None))
+            with stdout_to_stderr(args.json):
+                outcome = run(args)
+        except InputError as exc:
+            print(f"{prog}: error: {exc}", file=sys.stderr)
+            return 2
+        if args.json:
+            sys.stdout.write(json.dumps(jsonable(outcome.as_dict()), allow_nan=False) + "\n")
+        else:
+            print("\n".join(outcome.summary))
+        sys.stdout.flush()
+        if not outcome.success:
+            print(f"{prog}: solver failed: {outcome.message}", file=sys.stderr)
+            return 1
+        for flag, writer in outcome.writers.items():
+            path = getattr(args, flag, None)
+            if path:
+                try:
+                    with stdout_to_stderr(args.json):
+                        write_atomically(path, writer)
+                except (InputError, OSError, ValueError, RuntimeError) as exc:
+                    print(f"{prog}: could not write --{flag} {path}: {exc}", file=sys.stderr)
+                    return EXIT_OUTPUT
+    except BaseException as exc:  # an interrupt, also when CasADi wrapped it: one line, exit 130
+        if not _interrupted(exc) or isinstance(exc, SystemExit):
+            raise
+        print(f"{prog}: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
     return 0
 
 

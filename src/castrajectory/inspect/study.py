@@ -18,6 +18,7 @@ from ..models import collision
 from ..solve import droplet
 from ..baselines import stepping
 from ..solve import trajectory
+from . import files
 
 DROPLET_ERRORS = ("shape", "contact_angle", "span", "energy", "pressure")
 
@@ -75,10 +76,13 @@ def observed_orders(rows: List[dict], formulation: str, n_min: int = 32, floor: 
 
 
 def write_csv(rows: List[dict], path: str) -> None:
-    with open(path, "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
+    """``rows`` as a CSV file, written atomically (:mod:`.files`)."""
+    def write(tmp):
+        with open(tmp, "w", newline="") as fh:
+            w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+            w.writeheader()
+            w.writerows(rows)
+    files.write_atomically(path, write)
 
 
 def sweep_sizes(n_max: int = 100_000, n_min: int = 8) -> List[int]:

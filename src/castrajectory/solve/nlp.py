@@ -35,7 +35,7 @@ from typing import Dict, List, Optional, Sequence
 import casadi as ca
 import numpy as np
 
-from . import jit
+from . import interrupt, jit
 from .assembly import Contribution, assemble, dense_vector
 from ..discretise.program import (  # noqa: F401  (X, P, Constraint: re-exported)
     Constraint, P, Program, X, _column, _Group)
@@ -669,7 +669,11 @@ class NLP(Program):
                 self.set_parameter("__sigma", sigma)
             p = np.concatenate([b.init for b in self._params]) if self._params else np.zeros(0)
             t = time.perf_counter()
-            sol = solver(p=p, **args)
+            # an interrupt stops Ipopt between iterations and is raised here, not reported as a
+            # failed solve that a strategy would retry (solve.interrupt)
+            with interrupt.watching():
+                sol = solver(p=p, **args)
+            interrupt.raise_if_interrupted()
             dt = time.perf_counter() - t
             stats = solver.stats()
             status = stats.get("return_status", "unknown")

@@ -1,0 +1,87 @@
+"""An interrupt (SIGINT, Ctrl-C) during a solve stops it: it is raised as ``KeyboardInterrupt``, never
+reported as a failed attempt that a strategy would retry.
+
+CasADi checks for signals between Ipopt iterations and stops Ipopt there, but then returns a status
+(``NonIpopt_Exception_Thrown`` or ``User_Requested_Stop``) as if the solve had failed, and the Python
+exception is gone.  :func:`watching` notes every SIGINT that arrives while a solve runs (and passes it
+on to the handler that was installed before, by default Python's, which raises ``KeyboardInterrupt``);
+:func:`raise_if_interrupted` then raises it after the solver returns.
+"""
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import sys
+import tempfile
+import threading
+
+_seen = False
+
+
+def _main_thread() -> bool:
+    return threading.current_thread() is threading.main_thread()
+
+
+@contextlib.contextmanager
+def watching():
+    """Note SIGINTs for the duration (main thread only; elsewhere signals cannot be handled anyway)."""
+    global _seen
+    if not _main_thread():
+        yield
+        return
+    previous = signal.getsignal(signal.SIGINT)
+
+    def note(signum, frame):
+        global _seen
+        _seen = True
+        if callable(previous):
+            previous(signum, frame)
+        elif previous == signal.SIG_DFL:
+            raise KeyboardInterrupt
+
+    _seen = False
+    signal.signal(signal.SIGINT, note)
+    # CasADi reports the interrupt on file descriptor 2 ("KeyboardInterruptException"); what C and C++
+    # print there during the solve is held back and passed on after it, without that line
+    held = _hold_stderr()
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        _release_stderr(held, drop="KeyboardInterrupt" if _seen else None)
+
+
+def _hold_stderr():
+    try:
+        sys.stderr.flush()
+        tmp = tempfile.TemporaryFile()
+        saved = os.dup(2)
+        os.dup2(tmp.fileno(), 2)
+        return tmp, saved
+    except (OSError, ValueError, AttributeError):
+        return None
+
+
+def _release_stderr(held, drop):
+    if held is None:
+        return
+    tmp, saved = held
+    os.dup2(saved, 2)
+    os.close(saved)
+    tmp.seek(0)
+    text = tmp.read().decode(errors="replace")
+    tmp.close()
+    if drop:
+        text = "".join(line for line in text.splitlines(True) if drop not in line)
+    if text:
+        sys.stderr.write(text)
+        sys.stderr.flush()
+
+
+def raise_if_interrupted() -> None:
+    """Raise ``KeyboardInterrupt`` if a SIGINT arrived in the last :func:`watching` block."""
+    global _seen
+    if _seen:
+        _seen = False
+        raise KeyboardInterrupt
