@@ -16,7 +16,7 @@ import numpy as np
 
 from castrajectory import cli
 from castrajectory.models import collision
-from castrajectory.validation import finite
+from castrajectory.validation import InputError, finite
 
 
 def parser():
@@ -41,6 +41,10 @@ def run(args):
     v = [finite("vx", args.vx), finite("vy", args.vy), finite("omega", args.omega)]
     corner = None if args.corner is None else [finite("corner DX", args.corner[0]),
                                                finite("corner DY", args.corner[1])]
+    if corner is not None and (abs(corner[0]) > w / 2 * (1 + 1e-12)
+                               or abs(corner[1]) > h / 2 * (1 + 1e-12)):
+        raise InputError(f"the contact point ({corner[0]:g}, {corner[1]:g}) lies outside the "
+                         f"{w:g} x {h:g} body (|DX| <= w/2, |DY| <= h/2)")
     e = collision.restitution(args.restitution)
 
     t0 = time.perf_counter()

@@ -14,7 +14,7 @@ import sys
 from castrajectory import cli
 from castrajectory.models import pendulum
 from castrajectory.solve import simulate
-from castrajectory.validation import positive
+from castrajectory.validation import InputError, finite, positive
 
 
 def parser():
@@ -36,7 +36,9 @@ def run(args):
     k = args.ratio * positive("mass", args.mass) * args.g / positive("rest", args.rest)
     system = pendulum.spring_pendulum(args.mass, args.rest, k, args.g)
     # start at the static stretch under gravity (plus a small extra stretch) at rest
-    r0 = args.rest * (1 + math.cos(args.theta) / args.ratio + args.stretch)
+    r0 = args.rest * (1 + math.cos(args.theta) / args.ratio + finite("stretch", args.stretch))
+    if not r0 > 0.0:
+        raise InputError(f"the initial spring length rest × (1 + cos θ/ratio + stretch) = {r0:.3g} must be positive")
     res = simulate.simulate(system, [r0, args.theta], [0.0, 0.0], args.T, args.n, args.scheme, args.method,
                             options=cli.ipopt_options(args), verbose=args.verbose)
     period = 2 * math.pi * math.sqrt(args.mass / k)

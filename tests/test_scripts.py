@@ -203,7 +203,20 @@ MECH_BAD = [
     ("stiff_spring_pendulum", ["--mass", "-1"], "mass must be positive"),
     ("thrown_ball", ["--T", "0"], "T must be positive"),
     ("thrown_ball", ["--mass", "0"], "mass must be positive"),
+    # values that are finite but overflow, non-physical lengths, Ipopt options that Ipopt would refuse
+    ("double_pendulum", ["--omega1", "1e300"], "overflows"),
+    ("double_pendulum", ["--method", "rk4", "--omega2", "1e300"], "overflows"),
+    ("stiff_spring_pendulum", ["--stretch", "-2"], "must be positive"),
+    ("double_pendulum", ["--max-iter", "-1"], "--max-iter must be at least 1"),
+    ("double_pendulum", ["--max-iter", "0"], "--max-iter must be at least 1"),
 ]
+
+
+def test_collision_impulse_refuses_a_corner_outside_the_body():
+    p = run([script("collision_impulse"), "--corner", "5", "5", "--json"])
+    assert p.returncode == 2 and p.stdout == ""
+    lines = p.stderr.strip().splitlines()
+    assert len(lines) == 1 and "outside the 2 x 1 body" in lines[0]
 
 
 @pytest.mark.parametrize("name,args,needle", MECH_BAD)
@@ -364,6 +377,8 @@ CONTACT_BAD = [
     ("bowl3d", ["--axis", "0", "0", "0"], "axis must not be zero"),
     ("bowl3d", ["--size", "0.4", "-1", "0.2"], "box edge 2 must be positive"),
     ("bowl3d", ["--omega", "1", "nan", "0"], "omega 2 must be finite"),
+    ("bouncing_ball", ["--velocity", "1e300"], "overflows"),
+    ("bowl3d", ["--omega", "1e300", "0", "0"], "overflows"),
 ]
 
 

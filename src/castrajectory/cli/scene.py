@@ -68,8 +68,12 @@ def scene_parser(prog: str, description: str) -> ArgumentParser:
 
 
 def ipopt_options(args) -> dict:
-    """Ipopt options selected by the shared flags."""
-    return {} if args.max_iter is None else {"max_iter": args.max_iter}
+    """Ipopt options selected by the shared flags (``--max-iter`` at least 1)."""
+    if args.max_iter is None:
+        return {}
+    if args.max_iter < 1:
+        raise InputError(f"--max-iter must be at least 1 (got {args.max_iter})")
+    return {"max_iter": args.max_iter}
 
 
 def add_plot(p: argparse.ArgumentParser) -> None:
@@ -243,7 +247,7 @@ EXIT_OUTPUT = 3
 def _interrupted(exc: BaseException) -> bool:
     """A KeyboardInterrupt, or an error that CasADi raised while one was pending."""
     while exc is not None:
-        if isinstance(exc, KeyboardInterrupt):
+        if isinstance(exc, KeyboardInterrupt) or "KeyboardInterrupt" in str(exc):
             return True
         exc = exc.__cause__ or exc.__context__
     return False

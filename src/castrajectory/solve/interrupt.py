@@ -85,3 +85,11 @@ def raise_if_interrupted() -> None:
     if _seen:
         _seen = False
         raise KeyboardInterrupt
+
+
+def reraise(exc: BaseException) -> None:
+    """Raise ``KeyboardInterrupt`` if ``exc`` is CasADi's report of one (a SIGINT that arrived inside a
+    long CasADi operation, e.g. code generation, comes back as a RuntimeError naming it); for the
+    ``except`` clauses that turn other errors into fallbacks."""
+    if "KeyboardInterrupt" in str(exc):
+        raise KeyboardInterrupt from exc

@@ -45,6 +45,8 @@ from typing import Dict, Optional
 
 import casadi as ca
 
+from . import interrupt
+
 #: Compiler flags.  ``-O2`` without fast-math and with ``-ffp-contract=off`` (no fused multiply-add)
 #: keeps the operation-by-operation IEEE arithmetic of the virtual machine; no ``-march=native``, so
 #: a shared cache stays valid on other machines of the same architecture.
@@ -161,7 +163,8 @@ def compiled(fn: ca.Function, build: bool = True) -> ca.Function:
             raise
         _loaded[key] = out
         return out
-    except Exception:  # no compiler, failed compile, unwritable cache, failed load: use the VM
+    except Exception as exc:  # no compiler, failed compile, unwritable cache, failed load: use the VM
+        interrupt.reraise(exc)          # ... but an interrupt inside CasADi's code generation stops
         stats["fallbacks"] += 1
         if "key" in locals():
             _failed.add(key)

@@ -572,8 +572,8 @@ class NLP(Program):
                     if vn <= max(viol, 1e-3 * tol):
                         x, viol = xn, vn
                         gv, Jg = funcs["jac_g"](x, p)
-            except RuntimeError:
-                pass
+            except RuntimeError as exc:
+                interrupt.reraise(exc)
         f, gf = funcs["grad_f"](x, p)
         gf = np.asarray(gf).reshape(-1)
         lam_g = np.zeros(self._ng)
@@ -591,7 +591,8 @@ class NLP(Program):
                 A = Jg[eq.tolist(), free.tolist()]
                 try:
                     lam = np.asarray(ca.solve(A.T, ca.DM(-gf[free]), "qr")).reshape(-1)
-                except RuntimeError:
+                except RuntimeError as exc:
+                    interrupt.reraise(exc)
                     lam = np.full(eq.size, np.nan)
                 lam_g[eq] = lam
                 stat = gf + np.asarray(ca.mtimes(Jg.T, ca.DM(lam_g))).reshape(-1)

@@ -45,6 +45,8 @@ def simulate(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str = 
     """Trajectory from ``(q0, q̇0)`` over ``[0, T]`` on ``N`` uniform steps."""
     one_of("method", method, METHODS)
     one_of("scheme", scheme, tuple(SCHEMES))
+    trajectory._check_finite_state(system, trajectory._check_state("q0", q0, system.nq),
+                                   trajectory._check_state("qd0", qd0, system.nq))
     if system.contact is not None and method != "whole":
         raise InputError(f"the {method} baseline has no contact model; contact scenes use method 'whole'")
     if method == "whole":

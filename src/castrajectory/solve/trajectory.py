@@ -101,6 +101,17 @@ def trajectory_keys(run) -> dict:
     return {k: getattr(run, k) for k in ("scheme", "method", "t", "q", "energy")}
 
 
+def _check_finite_state(system: LagrangianSystem, q0, qd0) -> None:
+    """Refuse an initial state whose energy or acceleration overflows (finite inputs such as 1e300 whose
+    squares do not exist in floating point), before any solve."""
+    with np.errstate(all="ignore"):
+        E = float(np.asarray(system.energy(q0, qd0)).reshape(-1)[0])
+        a = np.asarray(system.acceleration(q0, qd0), float).reshape(-1)
+    if not (np.isfinite(E) and np.all(np.isfinite(a)) and abs(E) < 1e150 and np.max(np.abs(a), initial=0.0) < 1e150):
+        raise InputError(f"the initial state's energy ({E:.3g}) or acceleration ({np.max(np.abs(a), initial=0.0):.3g}) "
+                         "overflows: the inputs are too large for double precision")
+
+
 def _check_state(name, value, n):
     arr = np.asarray(value, dtype=float).reshape(-1)
     if arr.size != n:
@@ -496,6 +507,7 @@ def solve_initial_value(system: LagrangianSystem, q0, qd0, T: float, N: int, sch
     :class:`~castrajectory.solve.contact.ContactOptions`) sets that solve.
     """
     T, N = _validate(system, T, N)
+    _check_finite_state(system, _check_state("q0", q0, system.nq), _check_state("qd0", qd0, system.nq))
     if system.contact is not None:
         from .contact import solve_contact
         return solve_contact(system, _check_state("q0", q0, system.nq), _check_state("qd0", qd0, system.nq),
