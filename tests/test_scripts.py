@@ -209,6 +209,7 @@ MECH_BAD = [
     ("stiff_spring_pendulum", ["--stretch", "-2"], "must be positive"),
     ("double_pendulum", ["--max-iter", "-1"], "--max-iter must be at least 1"),
     ("double_pendulum", ["--max-iter", "0"], "--max-iter must be at least 1"),
+    ("double_pendulum", ["--n", "1000000000"], "GB of memory"),          # refused at once, not after minutes
 ]
 
 
@@ -378,6 +379,7 @@ CONTACT_BAD = [
     ("bowl3d", ["--size", "0.4", "-1", "0.2"], "box edge 2 must be positive"),
     ("bowl3d", ["--omega", "1", "nan", "0"], "omega 2 must be finite"),
     ("bouncing_ball", ["--velocity", "1e300"], "overflows"),
+    ("bouncing_ball", ["--n", "1000000000"], "GB of memory"),
     ("bowl3d", ["--omega", "1e300", "0", "0"], "overflows"),
 ]
 

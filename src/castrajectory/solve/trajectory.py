@@ -31,6 +31,7 @@ requested N; levels and windows are listed in :attr:`Trajectory.levels`.
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field
 from typing import Dict, List, Optional
 
@@ -490,9 +491,30 @@ def _finish(tn: TrajectoryNLP, res: NLPResult, log: List[Level], mode: str) -> T
         action=float(np.sum(np.asarray(dm.Ld.map(N)(q[:-1].T, Z.T, q[1:].T, tn.h)))))
 
 
+#: Memory of a whole-trajectory solve per step and unknown per step (bytes): 2.8 kB per step for the
+#: double pendulum (2 coordinates) at N = 200 000 (545 MB), 5.6 kB at N = 20 000; the estimate takes 2 kB
+#: per coordinate, constraint or contact and step, at least 3 per step.
+BYTES_PER_UNKNOWN = 2000.0
+
+
+def _memory_bytes() -> float:
+    try:
+        return float(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+    except (ValueError, OSError, AttributeError):
+        return float("inf")
+
+
 def _validate(system, T, N):
     positive("T", T)
     N = integer_at_least("n", N, 2)
+    # a grid the machine cannot hold is refused before anything is built (it failed after 14-80 s with
+    # a MemoryError traceback or std::bad_alloc)
+    per_step = max(3, system.nq + system.nc + (3 * system.ncontact if system.contact is not None else 0))
+    need, have = BYTES_PER_UNKNOWN * per_step * N, _memory_bytes()
+    if need > 0.8 * have:
+        raise InputError(f"n = {N} needs about {need / 1e9:.3g} GB of memory for the whole-trajectory NLP "
+                         f"(about {BYTES_PER_UNKNOWN * per_step / 1e3:.3g} kB per step, measured), more than "
+                         f"this machine's {have / 1e9:.3g} GB allow; use n <= {int(0.8 * have / (BYTES_PER_UNKNOWN * per_step))}")
     return float(T), N
 
 
