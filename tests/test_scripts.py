@@ -484,3 +484,12 @@ def test_a_picture_that_cannot_be_written_keeps_the_answer(tmp_path):
     assert len(lines) == 1 and "could not write --plot" in lines[0]
     assert bad.read_bytes() == b"earlier output"
     assert sorted(f.name for f in tmp_path.iterdir()) == ["plot.unknownformat"]
+
+
+def test_max_iter_caps_the_whole_run():
+    """--max-iter is the Ipopt budget of the whole run, every level and window included (it was applied
+    per sub-solve: 299 solves, 1374 iterations for --max-iter 5)."""
+    p = run([script("double_pendulum"), "--T", "10", "--max-iter", "5", "--json"])
+    assert p.returncode == 1
+    d = json.loads(p.stdout)
+    assert d["status"] != "ok" and 1 <= d["iterations"] <= 5

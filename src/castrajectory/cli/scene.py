@@ -30,6 +30,7 @@ from typing import Callable, Dict, List, Optional
 import numpy as np
 
 from ..inspect.files import write_atomically
+from ..solve import budget
 from ..result import Result
 from ..validation import InputError
 
@@ -63,7 +64,8 @@ def scene_parser(prog: str, description: str) -> ArgumentParser:
                        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout and nothing else")
     p.add_argument("--verbose", action="store_true", help="stream Ipopt's log (to stderr with --json)")
-    p.add_argument("--max-iter", type=int, default=None, help="Ipopt iteration limit (default: library's)")
+    p.add_argument("--max-iter", type=int, default=None,
+                   help="Ipopt iterations of the whole run, every sub-solve included (default: no cap)")
     return p
 
 
@@ -266,7 +268,8 @@ def run_scene(parser: argparse.ArgumentParser, run: Callable[[argparse.Namespace
         try:
             for flag in ("plot", "animate"):
                 check_output_path(flag, getattr(args, flag, None))
-            with stdout_to_stderr(args.json):
+            # --max-iter caps the Ipopt iterations of the whole run, every sub-solve included
+            with stdout_to_stderr(args.json), budget.iterations(getattr(args, "max_iter", None)):
                 outcome = run(args)
         except InputError as exc:
             print(f"{prog}: error: {exc}", file=sys.stderr)

@@ -35,7 +35,7 @@ from typing import Dict, List, Optional, Sequence
 import casadi as ca
 import numpy as np
 
-from . import interrupt, jit
+from . import budget, interrupt, jit
 from .assembly import Contribution, assemble, dense_vector
 from ..discretise.program import (  # noqa: F401  (X, P, Constraint: re-exported)
     Constraint, P, Program, X, _column, _Group)
@@ -223,6 +223,8 @@ class NLP(Program):
     #: (a point certified without Ipopt) sets it False: compiling a new system's kernels cost 3.4 s for
     #: a 0.03 s gain on a 4000-step block drop.
     compile_elements: bool = True
+    #: Ipopt's statistics of the last solve (empty before one, or when a spent budget skipped it).
+    last_stats: dict = {}
 
     # ------------------------------------------------------------------ solving
     def _ipopt_options(self, options, verbose):
@@ -655,6 +657,11 @@ class NLP(Program):
             variable block or a constraint (``(-inf, inf)`` switches a constraint off;
             ``lb == ub`` fixes variables, which Ipopt then removes).
         """
+        left = budget.remaining()
+        if left is not None:
+            # a run-wide iteration budget (solve.budget): at most what is left, and nothing once it is spent
+            cap = int((options or {}).get("max_iter", DEFAULT_IPOPT_OPTIONS.get("max_iter", 3000)))
+            options = dict(options or {}, max_iter=min(cap, max(left, 1)))
         solver = self.build(options, verbose, expand)
         build_time = self._build_time
         args = self._arguments(init, warm, bounds)
@@ -670,15 +677,22 @@ class NLP(Program):
                 self.set_parameter("__sigma", sigma)
             p = np.concatenate([b.init for b in self._params]) if self._params else np.zeros(0)
             t = time.perf_counter()
+            if budget.remaining() == 0:
+                # the run's iteration budget is spent: not solved, and Ipopt not started
+                nx = np.asarray(args["x0"]).size
+                sol = {"x": args["x0"], "lam_x": np.zeros(nx), "lam_g": np.zeros(self._ng), "f": float("nan")}
+                status = "Maximum_Iterations_Exceeded"
+                break
             # an interrupt stops Ipopt between iterations and is raised here, not reported as a
             # failed solve that a strategy would retry (solve.interrupt)
             with interrupt.watching():
                 sol = solver(p=p, **args)
             interrupt.raise_if_interrupted()
             dt = time.perf_counter() - t
-            stats = solver.stats()
+            stats = self.last_stats = solver.stats()
             status = stats.get("return_status", "unknown")
             iters = int(stats.get("iter_count", 0))
+            budget.spend(iters)
             total_iter += iters
             total_time += dt
             xk = np.asarray(sol["x"]).reshape(-1)

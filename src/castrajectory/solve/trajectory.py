@@ -144,7 +144,7 @@ class TrajectoryNLP(TrajectoryTranscription):
         opts.update(options or {})
         init = {k: v for k, v in guess.items() if k in self.nlp.variable_names}
         res = self.nlp.solve(init=init, options=opts, verbose=verbose, bounds=self.fixed_bounds())
-        stats = self.nlp.build(opts, verbose).stats()  # the solver just used (cached by its options)
+        stats = self.nlp.last_stats  # of the solver just used
         self.function_time_s = float(sum(v for k, v in stats.items() if k.startswith("t_wall_nlp_")))
         return res
 
