@@ -199,6 +199,7 @@ MECH_BAD = [
     ("double_pendulum", ["--animate", "x.avi"], ".gif or .mp4"),
     ("double_pendulum", ["--scheme", "euler"], "invalid choice"),
     ("n_link_pendulum", ["--links", "0"], "links must be an integer >= 1"),
+    ("n_link_pendulum", ["--links", "1000"], "at most 170 links"),      # ran silently for > 300 s
     ("stiff_spring_pendulum", ["--ratio", "0"], "ratio must be positive"),
     ("stiff_spring_pendulum", ["--mass", "-1"], "mass must be positive"),
     ("thrown_ball", ["--T", "0"], "T must be positive"),
