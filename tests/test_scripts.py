@@ -465,7 +465,7 @@ def test_output_paths_are_refused_before_the_solve(tmp_path):
     """A --plot in a missing folder, or naming a folder, or without an extension: exit 2 and one line,
     before any solve (N = 10⁸ would take minutes), and nothing created."""
     for path, needle in [(tmp_path / "missing" / "x.png", "does not exist"), (tmp_path, "is a folder"),
-                         (tmp_path / "noext", "needs a file extension")]:
+                         (tmp_path / "noext", "needs a file extension"), ("/proc/x.png", "cannot write files")]:
         p = run([script("double_pendulum"), "--n", "100000000", "--plot", str(path)])
         assert p.returncode == 2, p.stderr
         lines = p.stderr.strip().splitlines()

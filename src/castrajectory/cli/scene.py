@@ -24,6 +24,7 @@ import json
 import math
 import os
 import sys
+import tempfile
 from dataclasses import dataclass, field
 from typing import Callable, Dict, List, Optional
 
@@ -234,8 +235,12 @@ def check_output_path(flag: str, path: Optional[str]) -> None:
         raise InputError(f"--{flag} {path!r} is a folder; give a file path")
     if not os.path.isdir(folder):
         raise InputError(f"--{flag}: the folder {folder!r} does not exist")
-    if not os.access(folder, os.W_OK):
-        raise InputError(f"--{flag}: the folder {folder!r} is not writable")
+    try:  # a real test: access() says yes to root in /proc
+        fd, probe = tempfile.mkstemp(prefix=".castrajectory-probe.", dir=folder)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError:
+        raise InputError(f"--{flag}: cannot write files in the folder {folder!r}") from None
     if not os.path.splitext(path)[1]:
         raise InputError(f"--{flag} {path!r} needs a file extension (the format is read from it)")
 
