@@ -494,3 +494,18 @@ def test_max_iter_caps_the_whole_run():
     assert p.returncode == 1
     d = json.loads(p.stdout)
     assert d["status"] != "ok" and 1 <= d["iterations"] <= 5
+
+
+def test_an_unresolved_elastic_run_is_not_silent():
+    """The elastic ball over T = 1000 s on 10 steps (h = 100 s against 0.9 s flights): every arrival is
+    caught and the energy goes; the run says so in the JSON's `warnings` and in the summary.  A resolved
+    run has an empty list, and every scene's JSON carries the key."""
+    p = run([script("bouncing_ball"), "--T", "1000", "--n", "10", "--json"])
+    assert p.returncode == 0, p.stderr
+    w = json.loads(p.stdout)["warnings"]
+    assert len(w) == 1 and "lost 100 % of the energy" in w[0]
+    p = run([script("bouncing_ball"), "--T", "1000", "--n", "10"])
+    assert "warning: an elastic contact (e = 1) lost" in p.stdout
+    for name, args in [("bouncing_ball", []), ("double_pendulum", ["--T", "1", "--n", "100"])]:
+        p = run([script(name), *args, "--json"])
+        assert p.returncode == 0 and json.loads(p.stdout)["warnings"] == []

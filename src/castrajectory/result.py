@@ -74,7 +74,7 @@ class SolveError(RuntimeError):
 
 
 #: The contract's fields, in the order of :meth:`Result.as_dict`.
-CONTRACT = ("status", "message", "iterations", "build_time_s", "solve_time_s")
+CONTRACT = ("status", "message", "iterations", "build_time_s", "solve_time_s", "warnings")
 
 
 @dataclass(kw_only=True)
@@ -88,6 +88,9 @@ class Result:
     build_time_s: float = 0.0
     solve_time_s: float = 0.0
     solver_status: Optional[str] = None
+    #: What a reader of a successful answer should know: an answer the grid does not resolve, say
+    #: (one sentence each; empty when there is nothing to say).
+    warnings: List[str] = field(default_factory=list)
 
     def __post_init__(self):
         if self.success:
@@ -104,7 +107,8 @@ class Result:
         """The contract's fields, to hand on to a result built from this one (``Sub(..., **r.contract())``)."""
         return {"success": self.success, "status": self.status, "message": self.message,
                 "iterations": self.iterations, "build_time_s": self.build_time_s,
-                "solve_time_s": self.solve_time_s, "solver_status": self.solver_status}
+                "solve_time_s": self.solve_time_s, "solver_status": self.solver_status,
+                "warnings": list(self.warnings)}
 
     def fail(self, status: str, message: str) -> None:
         """Turn this result into a failure named ``status`` (e.g. a check after the solver converged)."""

@@ -282,7 +282,7 @@ def run_scene(parser: argparse.ArgumentParser, run: Callable[[argparse.Namespace
         if args.json:
             sys.stdout.write(json.dumps(jsonable(outcome.as_dict()), allow_nan=False) + "\n")
         else:
-            print("\n".join(outcome.summary))
+            print("\n".join(outcome.summary + [f"warning: {w}" for w in outcome.warnings]))
         sys.stdout.flush()
         if not outcome.success:
             print(f"{prog}: solver failed: {outcome.message}", file=sys.stderr)

@@ -140,7 +140,9 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     lam[1:] += alpha_full[:N, None] * mu_full[:N]
     nu = nu_full[:N + 1].copy()
     total_iter = sum(a["iterations"] for a in attempts)
+    warnings = _elastic_loss_warning(cm, energy, impacts, H[:N])
     return ContactTrajectory(
+        warnings=warnings,
         t=t, q=q, p=p, v=v, energy=energy, t_sub=t_sub, q_sub=S, mu=MU, nu=nu, gap=gap, gap_sub=gap_sub,
         node_impulse=lam, impacts=impacts, complementarity_residual=float(res.complementarity_residual),
         status=res.status, success=res.success, message=res.message, solver_status=res.solver_status,
@@ -148,3 +150,22 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
         build_time_s=float(sum(a["build_time_s"] for a in attempts)),
         solve_time_s=float(guess_time + sum(a["solve_time_s"] for a in attempts)),
         scheme=cm.dm.scheme.name, homotopy=list(res.homotopy), attempts=attempts)
+
+
+#: An elastic scene (e = 1) whose energy falls by more than this fraction is reported with a warning.
+ELASTIC_LOSS_TOL = 1e-6
+
+
+def _elastic_loss_warning(cm: ContactMechanics, energy, impacts, H) -> List[str]:
+    """For e = 1: the fraction of the energy lost, if above :data:`ELASTIC_LOSS_TOL`.  Elastic impacts
+    conserve the energy exactly (docs, contact §3); a loss means arrivals were caught, i.e. bounces the
+    grid does not resolve -- a step longer than the flights (the answer is the grid's, not the physics')."""
+    if cm.e != 1.0 or energy.size < 2 or not np.all(np.isfinite(energy)):
+        return []
+    E0 = float(energy[0])
+    loss = (E0 - float(np.min(energy))) / max(abs(E0), 1e-300)
+    if loss <= ELASTIC_LOSS_TOL:
+        return []
+    return [f"an elastic contact (e = 1) lost {100 * loss:.3g} % of the energy: arrivals were caught because "
+            f"the step (up to {float(np.max(H)):.3g} s) is longer than the bounces' flights; refine n"]
+
