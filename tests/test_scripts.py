@@ -509,3 +509,14 @@ def test_an_unresolved_elastic_run_is_not_silent():
     for name, args in [("bouncing_ball", []), ("double_pendulum", ["--T", "1", "--n", "100"])]:
         p = run([script(name), *args, "--json"])
         assert p.returncode == 0 and json.loads(p.stdout)["warnings"] == []
+
+
+def test_a_step_longer_than_the_motion_warns():
+    """The double pendulum on 100 steps of 10⁴ s (its linearised 1/ω is 0.42 s at the start) solves and
+    said nothing; it now warns, and a resolved run (h ω = 0.02) does not."""
+    p = run([script("double_pendulum"), "--T", "1e6", "--n", "100", "--json"])
+    assert p.returncode == 0, p.stderr
+    w = json.loads(p.stdout)["warnings"]
+    assert len(w) == 1 and "longer than the motion's fastest time scale" in w[0] and "0.415 s" in w[0]
+    p = run([script("double_pendulum"), "--T", "1", "--n", "200", "--json"])
+    assert json.loads(p.stdout)["warnings"] == []

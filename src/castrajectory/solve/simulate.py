@@ -51,13 +51,44 @@ def simulate(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str = 
         raise InputError(f"the {method} baseline has no contact model; contact scenes use method 'whole'")
     if method == "whole":
         tr = trajectory.solve_initial_value(system, q0, qd0, T, N, scheme, options=options, verbose=verbose)
-        return Run(t=tr.t, q=tr.q, v=tr.v, energy=tr.energy, scheme=scheme, method=method, detail=tr,
-                   **tr.contract())
-    if method == "march":
-        st = stepping.march(system, q0, qd0, T, N, scheme)
-    elif method == "rk4":
-        st = stepping.rk4(system, q0, qd0, T, N)
+        run = Run(t=tr.t, q=tr.q, v=tr.v, energy=tr.energy, scheme=scheme, method=method, detail=tr,
+                  **tr.contract())
     else:
-        st = stepping.implicit_euler(system, q0, qd0, T, N)
-    return Run(t=st.t, q=st.q, v=st.qd, energy=st.energy, scheme=scheme if method == "march" else None,
-               method=method, detail=st, **st.contract())
+        if method == "march":
+            st = stepping.march(system, q0, qd0, T, N, scheme)
+        elif method == "rk4":
+            st = stepping.rk4(system, q0, qd0, T, N)
+        else:
+            st = stepping.implicit_euler(system, q0, qd0, T, N)
+        run = Run(t=st.t, q=st.q, v=st.qd, energy=st.energy, scheme=scheme if method == "march" else None,
+                  method=method, detail=st, **st.contract())
+    if run.success and system.contact is None:
+        run.warnings += resolution_warnings(system, q0, T / N)
+    return run
+
+
+def resolution_warnings(system: LagrangianSystem, q0, h: float) -> list:
+    """A warning if the step ``h`` is longer than the fastest time scale of the motion linearised at
+    ``q0``: ``1/ω`` with ``ω² = max |λ(M⁻¹ ∇²U)|`` (a pendulum's ``√(g/l)``, a spring's ``√(k/m)``; an
+    unstable equilibrium's growth rate likewise).  Such a step does not resolve the motion: the answer
+    is the scheme's, not the physics' (the double pendulum on 100 steps of 10⁴ s reported "ok")."""
+    import casadi as ca
+
+    q = ca.SX.sym("q", system.nq)
+    U = system.energy(q, ca.DM.zeros(system.nq))        # the potential: the energy at rest
+    Hf = ca.Function("hessU", [q], [ca.hessian(U, q)[0]])
+    with np.errstate(all="ignore"):
+        Hm = np.asarray(Hf(np.asarray(q0, float)), float)
+        M = np.asarray(system.mass_matrix(np.asarray(q0, float)), float)
+        try:
+            lam = np.linalg.eigvals(np.linalg.solve(M, Hm))
+        except np.linalg.LinAlgError:
+            return []
+    w2 = float(np.max(np.abs(lam), initial=0.0))
+    if not np.isfinite(w2) or w2 <= 0.0:
+        return []
+    tau = 1.0 / np.sqrt(w2)
+    if h <= tau:
+        return []
+    return [f"the step h = {h:.3g} s is longer than the motion's fastest time scale 1/ω = {tau:.3g} s "
+            f"(linearised at the start: h ω = {h / tau:.3g}); the grid does not resolve it, refine n"]
