@@ -422,8 +422,10 @@ def _interrupt_after(args, seconds: float, cwd=None):
     from the signal to the exit)."""
     import signal
     import time
+    # the child gets SIGINT's default disposition, as under a terminal (a test runner started as a
+    # background job passes SIGINT on ignored, and Python then keeps ignoring it)
     p = subprocess.Popen([sys.executable, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                         env=ENV, cwd=cwd)
+                         env=ENV, cwd=cwd, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     time.sleep(seconds)
     assert p.poll() is None, "the run ended before the interrupt: pick a longer one"
     t0 = time.perf_counter()

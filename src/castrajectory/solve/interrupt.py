@@ -31,6 +31,9 @@ def watching():
         yield
         return
     previous = signal.getsignal(signal.SIGINT)
+    if previous == signal.SIG_IGN:          # ignored by whoever started us (nohup, a background job)
+        yield
+        return
 
     def note(signum, frame):
         global _seen
