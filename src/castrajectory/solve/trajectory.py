@@ -529,13 +529,12 @@ def solve_initial_value(system: LagrangianSystem, q0, qd0, T: float, N: int, sch
     :class:`~castrajectory.solve.contact.ContactOptions`) sets that solve.
     """
     T, N = _validate(system, T, N)
-    _check_finite_state(system, _check_state("q0", q0, system.nq), _check_state("qd0", qd0, system.nq))
-    if system.contact is not None:
-        from .contact import solve_contact
-        return solve_contact(system, _check_state("q0", q0, system.nq), _check_state("qd0", qd0, system.nq),
-                             T, N, scheme, options=options, verbose=verbose, contact=contact)
     q0 = _check_state("q0", q0, system.nq)
     qd0 = _check_state("qd0", qd0, system.nq)
+    _check_finite_state(system, q0, qd0)
+    if system.contact is not None:
+        from .contact import solve_contact
+        return solve_contact(system, q0, qd0, T, N, scheme, options=options, verbose=verbose, contact=contact)
     if system.nc:
         c, C = system.constraint(q0)
         if np.max(np.abs(np.asarray(c))) > 1e-9 or np.max(np.abs(np.asarray(C) @ qd0)) > 1e-9:

@@ -56,8 +56,7 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
     ell = scales[0]
     tol = TOUCH_TOL * ell          # touching: gap within this
     gapf = cm.system.gap
-    rows = {key: [] for key in ("q", "qs", "beta", "nu", "mu", "lam", "lam_sub", "bounced", "steps", "base",
-                                "modes")}
+    rows = {key: [] for key in _ROWS}
     q, p = np.asarray(q0, float).copy(), np.asarray(p0, float).copy()
     g_q = np.asarray(gapf(q)[0]).reshape(-1)
     held_prev = g_q <= tol
@@ -85,13 +84,10 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
             i = int(np.argmin(ok)) if not np.all(ok) else K
             span = min(2 * span, CHUNK_STEPS) if i == K else 8
             if i:
-                modes = np.array([H if hj else O for hj in held])
+                modes = [H if hj else O for hj in held]
                 for j in range(i):
-                    for key, val in (("q", Qn[:, j]), ("qs", X[:n, j]), ("beta", 0.0), ("nu", NU[:, j]),
-                                     ("mu", MU[:, j]), ("lam", X[o + 2 * c:o + 2 * c + m, j]),
-                                     ("lam_sub", X[o + 2 * c + m:, j]), ("bounced", np.zeros(c, bool)),
-                                     ("steps", h), ("base", k + j), ("modes", modes)):
-                        rows[key].append(val)
+                    _record(rows, Qn[:, j], X[:n, j], 0.0, NU[:, j], MU[:, j], X[o + 2 * c:o + 2 * c + m, j],
+                            X[o + 2 * c + m:, j], np.zeros(c, bool), h, k + j, modes)
                 q, p, g_q = Qn[:, i - 1].copy(), Pn[:, i - 1].copy(), Gn[:, i - 1].copy()
                 held_prev = held.copy()
                 k += i
@@ -108,10 +104,7 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
                     trace.append((k, hk) + out + (q, p, g_q, held_prev))
                 return None
             qs, qn, b, nu, mu, lam, lams, modes, gn = out
-            for key, val in (("q", qn), ("qs", qs), ("beta", b), ("nu", nu), ("mu", mu), ("lam", lam),
-                             ("lam_sub", lams), ("bounced", np.array([m == I for m in modes]) & (gn > tol)),
-                             ("steps", hk), ("base", k), ("modes", np.array(modes))):
-                rows[key].append(val)
+            _record(rows, qn, qs, b, nu, mu, lam, lams, np.array([m == I for m in modes]) & (gn > tol), hk, k, modes)
             p = np.asarray(cm.p_node_minus(qs, b, qn, hk)).reshape(-1)
             held_prev = np.array([m in (H, C) for m in modes])
             q, g_q = qn, gn
@@ -122,3 +115,14 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
     if not cm.m:
         del out["lam"], out["lam_sub"]
     return out
+
+
+#: The per-step records of the march (``q`` is the step's end node).
+_ROWS = ("q", "qs", "beta", "nu", "mu", "lam", "lam_sub", "bounced", "steps", "base", "modes")
+
+
+def _record(rows, *values) -> None:
+    """Append one step's values, in the order of :data:`_ROWS`."""
+    for key, val in zip(_ROWS, values):
+        rows[key].append(np.array(val) if key == "modes" else val)
+

@@ -7,7 +7,8 @@ import numpy as np
 
 from ...result import HomotopyStep, NLPResult
 from ...discretise.contact.elements import SPLIT_WEIGHT
-from ...discretise.contact.transcription import COMPLEMENTARITY_TOL, PENALTY, TOUCH_TOL, ContactTranscription
+from ...discretise.contact.transcription import (ALPHA_MIN, COMPLEMENTARITY_TOL, PENALTY, TOUCH_TOL,
+                                                 ContactTranscription)
 from ..nlp import NLP
 
 
@@ -61,8 +62,8 @@ class ContactNLP(ContactTranscription):
         law = (modes == "I") & np.asarray(point["bounced"], bool).reshape(L, c)
         zero = np.zeros(L * c)
         untimed = ~np.any(timed, axis=1)
-        blo = np.where(untimed, 0.0, self.nlp._vars[self.nlp.variable_names.index("beta")].lb)
-        bhi = np.where(untimed, 0.0, self.nlp._vars[self.nlp.variable_names.index("beta")].ub)
+        blo = np.where(untimed, 0.0, ALPHA_MIN - 0.5)
+        bhi = np.where(untimed, 0.0, 0.5 - ALPHA_MIN)
         bounds = {
             "q": self._q_bounds(q0),
             "beta": (blo, bhi),
