@@ -32,12 +32,13 @@ def parser():
     p.add_argument("--g", type=float, default=9.81, help="gravity (>= 0; 0 drops the gravity term)")
     p.add_argument("--T", type=float, default=2.5, help="duration T in s (> 0)")
     p.add_argument("--n", type=int, default=3000, help="number of time steps N (>= 2)")
+    cli.add_accuracy(p)
     cli.add_plot(p)
     p.add_argument("--animate", metavar="PATH", help="write an animation (.gif, or .mp4 when ffmpeg is present)")
     return p
 
 
-def solve(height, velocity, e, mass, g, T, n, options=None, verbose=False):
+def solve(height, velocity, e, mass, g, T, n, options=None, verbose=False, rtol=None, n_max=None):
     """Solve the scene; returns (system, trajectory, summary dict of comparisons)."""
     H = finite("height", height)
     v0 = finite("velocity", velocity)
@@ -46,7 +47,8 @@ def solve(height, velocity, e, mass, g, T, n, options=None, verbose=False):
     if H < 0:
         raise InputError(f"the ball starts inside the ground: height {H} < 0")
     system = collision.bouncing_ball(mass, g, e)
-    tr = trajectory.solve_initial_value(system, [H], [v0], T, n, options=options, verbose=verbose)
+    tr = trajectory.solve_initial_value(system, [H], [v0], T, n, options=options, verbose=verbose, rtol=rtol,
+                                        n_max=n_max)
     return system, tr, compare(tr, H, v0, float(g), system.contact.restitution, float(mass))
 
 
@@ -90,7 +92,7 @@ def compare(tr, H, v0, g, e, m):
 def run(args):
     cli.check_animation_path(args.animate)
     system, tr, cmp_ = solve(args.height, args.velocity, args.restitution, args.mass, args.g, args.T, args.n,
-                             options=cli.ipopt_options(args), verbose=args.verbose)
+                             options=cli.ipopt_options(args), verbose=args.verbose, **cli.accuracy(args))
     n_b = len(cmp_["impact_times"])
     lines = [f"bouncing ball: H = {args.height:g} m, e = {args.restitution:g}, N = {args.n}, T = {args.T:g} s",
              f"{n_b} impacts; max |t - t_exact| = {cli.fmt(cmp_['impact_time_error'], '.3e')} s; "

@@ -33,7 +33,7 @@ def run(args):
     system = collision.rectangle_contact_system(body, finite("g", args.g), args.restitution, collision.bowl_ground(R))
     q0, qd0 = initial_state(args)
     tr = trajectory.solve_initial_value(system, q0, qd0, args.T, args.n, options=cli.ipopt_options(args),
-                                        verbose=args.verbose)
+                                        verbose=args.verbose, **cli.accuracy(args))
     lines = [f"bowl: R = {R:g}, body {args.width:g} x {args.height:g}, e = {args.restitution:g}, "
              f"N = {args.n}, T = {args.T:g} s",
              f"{len(tr.impacts)} impacts; energy drift max |E - E0| = {np.max(np.abs(tr.energy - tr.energy[0])):.2e}"]

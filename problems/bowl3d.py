@@ -39,6 +39,7 @@ def parser():
     p.add_argument("--g", type=float, default=9.81, help="gravity along -z (0 drops the gravity term)")
     p.add_argument("--T", type=float, default=1.5, help="duration T in s (> 0)")
     p.add_argument("--n", type=int, default=1000, help="number of time steps N (>= 2)")
+    cli.add_accuracy(p)
     cli.add_plot(p)
     p.add_argument("--animate", metavar="PATH", help="write an animation (.gif, or .mp4 when ffmpeg is present)")
     return p
@@ -62,7 +63,7 @@ def run(args):
     system = rb.box_in_bowl(args.mass, args.size, R, finite("g", args.g), args.restitution)
     q0, qd0 = initial_state(args)
     tr = trajectory.solve_initial_value(system, q0, qd0, args.T, args.n, options=cli.ipopt_options(args),
-                                        verbose=args.verbose)
+                                        verbose=args.verbose, **cli.accuracy(args))
     names = system.contact.names
     drift = float(np.max(np.abs(tr.energy - tr.energy[0])))
     lines = [f"box {' x '.join(f'{s:g}' for s in args.size)} in the bowl z = (x² + y²)/(2R), R = {R:g}, "

@@ -13,6 +13,7 @@ time-stepping baselines for comparison.
 import sys
 
 from castrajectory import cli
+from castrajectory.inspect import plotting
 from castrajectory.models import pendulum
 from castrajectory.solve import simulate
 
@@ -38,9 +39,20 @@ def run(args):
     system = pendulum.double_pendulum(args.m1, args.m2, args.l1, args.l2, args.g)
     # discretise + solve
     res = simulate.simulate(system, [args.theta1, args.theta2], [args.omega1, args.omega2], args.T, args.n,
-                            args.scheme, args.method, options=cli.ipopt_options(args), verbose=args.verbose)
+                            args.scheme, args.method, options=cli.ipopt_options(args), verbose=args.verbose,
+                            **cli.accuracy(args))
     # inspect
-    return cli.trajectory_outcome("double pendulum", system, res)
+    out = cli.trajectory_outcome("double pendulum", system, res)
+    out.writers["plot"] = lambda path: figure(out).savefig(path)
+    return out
+
+
+def figure(out):
+    """The --plot picture: both angles against time over the energy error."""
+    d = out.data
+    how = f"{d['method']}" + (f", {d['scheme']}" if d["scheme"] else "")
+    return plotting.trajectory_plot(d["t"], d["q"], ["θ1", "θ2"], panels=[("angle (rad)", [0, 1])],
+                                    energies={how: d["energy"]}, title=f"double pendulum ({how}): angles")
 
 
 def main(argv=None):

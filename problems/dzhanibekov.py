@@ -62,7 +62,8 @@ def run(args):
     qd0 = rb.quaternion_rate(q0, w0)
     # discretise + solve
     res = simulate.simulate(system, q0, qd0, args.T, args.n, args.scheme, args.method,
-                            options=cli.ipopt_options(args), verbose=args.verbose)
+                            options=cli.ipopt_options(args), verbose=args.verbose,
+                            **cli.accuracy(args))
     # inspect
     r = readings.free_body(system, res, inertia, w0)
     flips, exact = r["flip_times"], r["flip_interval_exact"]

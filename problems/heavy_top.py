@@ -65,7 +65,8 @@ def run(args):
     q0, qd0, _ = initial_state(tilt, spin, prec)
     # discretise + solve
     res = simulate.simulate(system, q0, qd0, args.T, args.n, args.scheme, args.method,
-                            options=cli.ipopt_options(args), verbose=args.verbose)
+                            options=cli.ipopt_options(args), verbose=args.verbose,
+                            **cli.accuracy(args))
     # inspect
     r = readings.heavy_top(system, res)
     lines = [f"heavy top: m = {args.mass:g}, I = ({inertia.I1:g}, {inertia.I3:g}) about the centre of mass, "

@@ -8,6 +8,7 @@ with every link at the same angle from the downward vertical.
 import sys
 
 from castrajectory import cli
+from castrajectory.inspect import plotting
 from castrajectory.models import pendulum
 from castrajectory.solve import simulate
 from castrajectory.validation import InputError, integer_at_least
@@ -38,8 +39,21 @@ def run(args):
                          f"links^2.7, measured); at most {MAX_LINKS} links (about 10 min)")
     system = pendulum.n_link_pendulum([args.mass] * k, [args.length] * k, args.g)
     res = simulate.simulate(system, [args.theta] * k, [0.0] * k, args.T, args.n, args.scheme, args.method,
-                            options=cli.ipopt_options(args), verbose=args.verbose)
-    return cli.trajectory_outcome(f"{k}-link pendulum", system, res, extra={"links": k})
+                            options=cli.ipopt_options(args), verbose=args.verbose,
+                            **cli.accuracy(args))
+    out = cli.trajectory_outcome(f"{k}-link pendulum", system, res, extra={"links": k})
+    out.writers["plot"] = lambda path: figure(out).savefig(path)
+    return out
+
+
+def figure(out):
+    """The --plot picture: every link's angle against time over the energy error."""
+    d = out.data
+    k = d["links"]
+    how = f"{d['method']}" + (f", {d['scheme']}" if d["scheme"] else "")
+    return plotting.trajectory_plot(d["t"], d["q"], [f"θ{i + 1}" for i in range(k)],
+                                    panels=[("angle (rad)", range(k))], energies={how: d["energy"]},
+                                    title=f"{k}-link pendulum ({how}): angles")
 
 
 def main(argv=None):

@@ -12,6 +12,7 @@ import math
 import sys
 
 from castrajectory import cli
+from castrajectory.inspect import plotting
 from castrajectory.models import pendulum
 from castrajectory.solve import simulate
 from castrajectory.validation import InputError, finite, positive
@@ -40,13 +41,24 @@ def run(args):
     if not r0 > 0.0:
         raise InputError(f"the initial spring length rest × (1 + cos θ/ratio + stretch) = {r0:.3g} must be positive")
     res = simulate.simulate(system, [r0, args.theta], [0.0, 0.0], args.T, args.n, args.scheme, args.method,
-                            options=cli.ipopt_options(args), verbose=args.verbose)
+                            options=cli.ipopt_options(args), verbose=args.verbose,
+                            **cli.accuracy(args))
     period = 2 * math.pi * math.sqrt(args.mass / k)
     h = args.T / args.n
     lines = [f"stiffness k = {k:.6g} (ratio {args.ratio:g}); radial period {period:.3e} s, "
              f"step h = {h:.3e} s (h ω = {2 * math.pi * h / period:.3g})"]
-    return cli.trajectory_outcome("stiff spring pendulum", system, res,
-                                  extra={"stiffness": k, "radial_period": period}, extra_lines=lines)
+    out = cli.trajectory_outcome("stiff spring pendulum", system, res,
+                                 extra={"stiffness": k, "radial_period": period}, extra_lines=lines)
+    out.writers["plot"] = lambda path: figure(out).savefig(path)
+    return out
+
+
+def figure(out):
+    """The --plot picture: the angle and the spring length against time (q = (r, θ)) over the energy error."""
+    d = out.data
+    how = f"{d['method']}" + (f", {d['scheme']}" if d["scheme"] else "")
+    return plotting.trajectory_plot(d["t"], d["q"], ["r", "θ"], panels=[("angle (rad)", [1]), ("length r", [0])],
+                                    energies={how: d["energy"]}, title=f"stiff spring pendulum ({how})")
 
 
 def main(argv=None):

@@ -12,6 +12,7 @@ import sys
 import numpy as np
 
 from castrajectory import cli
+from castrajectory.inspect import plotting
 from castrajectory.models import pendulum
 from castrajectory.solve import trajectory
 
@@ -46,7 +47,19 @@ def run(args):
              f"error {v0_err:.3e}"]
     extra = {"parabola_error": err, "launch_velocity": traj.v[0], "launch_velocity_exact": v0_exact,
              "launch_velocity_error": v0_err, "action": traj.action}
-    return cli.trajectory_outcome("thrown ball", system, traj, extra=extra, extra_lines=lines, links=False)
+    out = cli.trajectory_outcome("thrown ball", system, traj, extra=extra, extra_lines=lines, links=False)
+    out.writers["plot"] = lambda path: figure(out, args).savefig(path)
+    return out
+
+
+def figure(out, args):
+    """The --plot picture: the computed path (the nodes) over the analytic parabola at the same times."""
+    t, q = np.asarray(out.data["t"], float), np.asarray(out.data["q"], float)
+    return plotting.path_plot(q, parabola(t, args.distance, args.height, t[-1], args.g),
+                              label=f"least action ({out.data['scheme']}, N = {len(t) - 1})",
+                              reference_label="analytic parabola",
+                              title=f"thrown ball: to ({args.distance:g}, {args.height:g}) in T = {t[-1]:g} s, "
+                                    f"g = {args.g:g}")
 
 
 def main(argv=None):

@@ -135,12 +135,13 @@ def test_large_n_starts_from_a_coarse_solve(monkeypatch):
     monkeypatch.setattr(dl, "make_nlp", spy)
     drop = free_drop(60)
     sol = dl.solve(drop, dl.PRESOLVE_MIN_N)
-    assert built == [(dl.PRESOLVE_N, False), (dl.PRESOLVE_MIN_N, True)]
+    # (then the error estimate's grid, N/2, from the answer resampled)
+    assert built == [(dl.PRESOLVE_N, False), (dl.PRESOLVE_MIN_N, True), (dl.PRESOLVE_MIN_N // 2, True)]
     assert sol.success and sol.result.iterations <= 15
     assert droplet_errors(sol, oracle(drop))["shape"] < 1.0 / dl.PRESOLVE_MIN_N ** 2
     built.clear()
     dl.solve(drop, dl.PRESOLVE_MIN_N - 1)
-    assert built == [(dl.PRESOLVE_MIN_N - 1, False)]
+    assert built == [(dl.PRESOLVE_MIN_N - 1, False), ((dl.PRESOLVE_MIN_N - 1) // 2, True)]
 
 
 def test_pinned_balloon_at_large_n():

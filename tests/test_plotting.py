@@ -175,3 +175,167 @@ def test_animate_points_full_size_is_fast(tmp_path):
         assert 250 <= im.n_frames <= 300
         assert im.size[0] % 2 == 0 and im.size[1] % 2 == 0
     assert elapsed < 15.0
+
+
+# ----------------------------------------------------------------------------- pictures a reader needs (#14)
+import importlib
+import re
+
+from castrajectory.solve import droplet as droplet_solve
+
+
+def _scene(name, argv):
+    """Run a problem script's scene in-process; returns (module, args, outcome)."""
+    mod = importlib.import_module(f"castrajectory.problems.{name}")
+    args = mod.parser().parse_args(argv)
+    out = mod.run(args)
+    assert out.success, out.message
+    return mod, args, out
+
+
+def _rectangle(K=400, T=3.0, w=2.0, h=1.0):
+    """Corners (closed outline) of a w x h rectangle thrown at x = 0, y = 2, tumbling and bouncing on y = 0."""
+    t = np.linspace(0.0, T, K)
+    th = 0.3 + 1.0 * t
+    cx = 0.5 * t
+    cy = 1.2 + 0.8 * np.abs(np.cos(2.0 * t))
+    local = np.array([[-w, -h], [w, -h], [w, h], [-w, h], [-w, -h]]) / 2
+    c, s = np.cos(th)[:, None], np.sin(th)[:, None]
+    P = np.stack([cx[:, None] + c * local[:, 0] - s * local[:, 1], cy[:, None] + s * local[:, 0] + c * local[:, 1]], -1)
+    P[..., 1] -= min(0.0, P[..., 1].min())  # resting on the ground at worst
+    return t, P
+
+
+def _check_window(anim, min_fraction=None):
+    """Every frame: the bodies are inside the window; with ``min_fraction``, the body spans at least that
+    fraction of the window's width and of its height.  Returns the window's (width, height)."""
+    (x0, x1), (y0, y1) = anim.ax.get_xlim(), anim.ax.get_ylim()
+    W, H = x1 - x0, y1 - y0
+    for i in anim.frames:
+        anim.draw(i)
+        x, y = (np.asarray(a, float) for a in anim.markers.get_data())
+        assert x0 <= x.min() and x.max() <= x1 and y0 <= y.min() and y.max() <= y1
+        if min_fraction is not None:
+            assert np.ptp(x) >= min_fraction * W and np.ptp(y) >= min_fraction * H, (i, np.ptp(x) / W, np.ptp(y) / H)
+    return W, H
+
+
+def test_animation_window_follows_the_body_not_the_ground():
+    """The rectangle drop's ground ran ±1000 m and set the limits; now the motion does, the ground is cut to it."""
+    t, P = _rectangle()
+    anim = plotting.PointsAnimation(P, t, links=True, pivot=None, trail=False, max_frames=60,
+                                    ground=np.array([[-1e3, 0.0], [1e3, 0.0]]))
+    W, H = _check_window(anim, min_fraction=0.1)
+    span = np.ptp(P.reshape(-1, 2), axis=0)
+    assert W <= 1.5 * span.max() and H <= 1.5 * span.max()
+    # the ground is drawn exactly across the window, on y = 0, inside it
+    (x0, x1), (y0, y1) = anim.ax.get_xlim(), anim.ax.get_ylim()
+    g = anim.ground
+    assert np.isclose(g[:, 0].min(), x0) and np.isclose(g[:, 0].max(), x1)
+    assert np.all(g[:, 1] == 0.0) and y0 < 0.0 < y1
+    assert anim.ax.get_aspect() == 1.0
+
+
+def test_clip_polyline_pieces():
+    poly = np.array([[-2.0, 0.0], [0.0, 0.0], [0.0, 5.0], [0.5, 5.0], [0.5, 0.5], [3.0, 0.5]])
+    out = plotting.clip_polyline(poly, (-1.0, -1.0), (1.0, 1.0))
+    pieces = np.split(out, np.where(np.isnan(out[:, 0]))[0])
+    assert len(pieces) == 2  # the excursion above y = 1 splits it
+    assert np.allclose(out[0], [-1.0, 0.0]) and np.allclose(out[-1], [1.0, 0.5])
+    assert np.all(np.abs(out[~np.isnan(out[:, 0])]) <= 1.0)
+    assert plotting.clip_polyline(poly, (10.0, 10.0), (11.0, 11.0)) is None
+
+
+@pytest.mark.parametrize("name,argv,min_fraction", [
+    ("rectangle_drop", ["--T", "1.2", "--n", "300"], 0.1),
+    ("bowl", ["--T", "1", "--n", "200"], 0.1),
+    ("bouncing_ball", ["--n", "200"], None),
+    ("double_pendulum", ["--T", "1", "--n", "100"], None),
+])
+def test_scene_animations_share_the_motion_window(monkeypatch, tmp_path, name, argv, min_fraction):
+    """Each scene's --animate hook goes through animate_points: its window comes from the motion."""
+    _, _, out = _scene(name, argv)
+    calls = []
+    monkeypatch.setattr(plotting, "animate_points", lambda P, t, path, **kw: calls.append((P, t, kw)))
+    out.writers["animate"](str(tmp_path / "a.gif"))
+    ((P, t, kw),) = calls
+    kw = {k: v for k, v in kw.items() if k != "fps"}
+    anim = plotting.PointsAnimation(P, t, max_frames=40, **kw)
+    W, H = _check_window(anim, min_fraction)
+    moving = np.asarray(P, float).reshape(-1, 2)
+    if kw.get("links", True) and kw.get("pivot", (0.0, 0.0)) is not None:
+        moving = np.vstack([moving, [0.0, 0.0]])
+    assert max(W, H) <= 1.5 * max(np.ptp(moving, axis=0).max(), 1e-9) + 1e-9
+    if anim.ground is not None:
+        (x0, x1), (y0, y1) = anim.ax.get_xlim(), anim.ax.get_ylim()
+        g = anim.ground[~np.isnan(anim.ground[:, 0])]
+        assert np.all((g[:, 0] >= x0 - 1e-12) & (g[:, 0] <= x1 + 1e-12) & (g[:, 1] >= y0 - 1e-12) & (g[:, 1] <= y1 + 1e-12))
+
+
+def test_thrown_ball_plot_is_the_path_over_the_parabola(tmp_path):
+    mod, args, out = _scene("thrown_ball", ["--n", "50"])
+    (ax,) = mod.figure(out, args).axes
+    labelled = [l for l in ax.get_lines() if not l.get_label().startswith("_")]
+    assert len(labelled) == 2
+    (analytic,) = [l for l in labelled if l.get_label() == "analytic parabola"]
+    (computed,) = [l for l in labelled if l.get_label().startswith("least action")]
+    ref, xy = np.column_stack(analytic.get_data()), np.column_stack(computed.get_data())
+    assert xy.shape == ref.shape == (51, 2)
+    assert np.max(np.abs(xy - ref)) < 1e-8
+    # the analytic line is the parabola through both ends with acceleration -g
+    t = np.asarray(out.data["t"], float)
+    T, h = t[-1], t[1] - t[0]
+    assert np.allclose(ref[0], [0.0, 0.0]) and np.allclose(ref[-1], [args.distance, args.height])
+    assert np.allclose(np.diff(ref[:, 1], 2) / h**2, -args.g, rtol=1e-9)
+    assert np.allclose(np.diff(ref[:, 0], 2), 0.0, atol=1e-12)
+    assert np.allclose(ref[:, 1], args.height * t / T + args.g * t * (T - t) / 2, rtol=0, atol=1e-12)
+    out.writers["plot"](str(tmp_path / "ball.png"))
+    assert (tmp_path / "ball.png").stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("name,argv,angles", [
+    ("double_pendulum", ["--T", "1", "--n", "100"], [0, 1]),
+    ("n_link_pendulum", ["--links", "3", "--T", "1", "--n", "100"], [0, 1, 2]),
+    ("stiff_spring_pendulum", ["--T", "0.5", "--n", "100"], [1]),   # q = (r, θ)
+])
+def test_pendulum_plot_has_angles_against_time(tmp_path, name, argv, angles):
+    mod, _, out = _scene(name, argv)
+    fig = mod.figure(out)
+    t, q = np.asarray(out.data["t"], float), np.asarray(out.data["q"], float)
+    (ax,) = [a for a in fig.axes if "angle" in a.get_ylabel()]
+    lines = ax.get_lines()
+    assert len(lines) == len(angles)
+    for line, j in zip(lines, angles):
+        x, y = line.get_data()
+        assert np.array_equal(np.asarray(x, float), t) and np.array_equal(np.asarray(y, float), q[:, j])
+        assert line.get_label().startswith("θ")
+    assert fig.axes[-1].get_xlabel() == "t"
+    assert any(a.get_yscale() == "log" for a in fig.axes)  # the energy error stays in the picture
+    out.writers["plot"](str(tmp_path / "p.png"))
+    assert (tmp_path / "p.png").stat().st_size > 10_000
+
+
+def _check_contact_angle(ax, theta, point):
+    (tangent,) = [l for l in ax.get_lines() if l.get_label().startswith("tangent")]
+    x, y = (np.asarray(a, float) for a in tangent.get_data())
+    assert np.allclose([x[0], y[0]], point)
+    assert np.isclose((y[-1] - y[0]) / (x[-1] - x[0]), math.tan(theta), rtol=1e-12)
+    labels = [tx.get_text() for tx in ax.texts] + [tangent.get_label()]
+    found = [re.search(r"θ = (\d+)\.(\d+)°", s) for s in labels]
+    assert all(found) and len(found) == 2
+    for m in found:
+        value, digits = float(f"{m.group(1)}.{m.group(2)}"), len(m.group(2))
+        assert abs(value - math.degrees(theta)) <= 0.5 * 10.0**-digits + 1e-12
+
+
+@pytest.mark.parametrize("gamma_sl", [0.5, 1.6])   # 60° and above 90°
+def test_droplet_plot_draws_the_contact_angle(gamma_sl):
+    sol = droplet_solve.solve(droplet_solve.Droplet(1.0, gamma_sl, 1.0, 1.0), 60)
+    fig = plotting.droplet_figure(sol)
+    _check_contact_angle(fig.axes[0], sol.contact_angle, (sol.x[0], sol.y[0]))
+
+
+def test_droplet_angle_plot_draws_the_contact_angle():
+    sol = droplet_solve.solve_angle(droplet_solve.Droplet(1.0, 0.2, 1.0, 1.0))
+    fig = plotting.reduced_energy_figure(sol)
+    _check_contact_angle(fig.axes[1], sol.contact_angle, (0.0, 0.0))

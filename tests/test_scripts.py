@@ -505,7 +505,7 @@ def test_an_unresolved_elastic_run_is_not_silent():
     p = run([script("bouncing_ball"), "--T", "1000", "--n", "10", "--json"])
     assert p.returncode == 0, p.stderr
     w = json.loads(p.stdout)["warnings"]
-    assert len(w) == 1 and "lost 100 % of the energy" in w[0]
+    assert any("lost 100 % of the energy" in x for x in w)
     p = run([script("bouncing_ball"), "--T", "1000", "--n", "10"])
     assert "warning: an elastic contact (e = 1) lost" in p.stdout
     for name, args in [("bouncing_ball", []), ("double_pendulum", ["--T", "1", "--n", "100"])]:
@@ -519,6 +519,6 @@ def test_a_step_longer_than_the_motion_warns():
     p = run([script("double_pendulum"), "--T", "1e6", "--n", "100", "--json"])
     assert p.returncode == 0, p.stderr
     w = json.loads(p.stdout)["warnings"]
-    assert len(w) == 1 and "longer than the motion's fastest time scale" in w[0] and "0.415 s" in w[0]
+    assert any("longer than the motion's fastest time scale" in x and "0.415 s" in x for x in w)
     p = run([script("double_pendulum"), "--T", "1", "--n", "200", "--json"])
     assert json.loads(p.stdout)["warnings"] == []

@@ -9,6 +9,10 @@ Every method and every scene returns a subclass of :class:`Result`:
 * ``solver_status``: the method's own word for how it ended (Ipopt's return status), kept
   for the record; ``None`` where the method has none;
 * ``message``: one line saying what happened, and on failure what to try next;
+* ``warnings``: sentences a reader of a successful answer should know (empty when there are none);
+* ``error_estimate``: the answer's estimated error (an
+  :class:`~castrajectory.solve.estimate.ErrorEstimate`: Richardson from two grids), or ``None``
+  for a result that is not a discretised answer (one NLP solve);
 * ``iterations``, ``build_time_s``, ``solve_time_s``: counters and wall times summed over
   every solve the method ran;
 * ``as_dict()``: the JSON object of the result (the contract's keys, then the subclass's);
@@ -74,7 +78,7 @@ class SolveError(RuntimeError):
 
 
 #: The contract's fields, in the order of :meth:`Result.as_dict`.
-CONTRACT = ("status", "message", "iterations", "build_time_s", "solve_time_s", "warnings")
+CONTRACT = ("status", "message", "iterations", "build_time_s", "solve_time_s", "warnings", "error_estimate")
 
 
 @dataclass(kw_only=True)
@@ -91,6 +95,9 @@ class Result:
     #: What a reader of a successful answer should know: an answer the grid does not resolve, say
     #: (one sentence each; empty when there is nothing to say).
     warnings: List[str] = field(default_factory=list)
+    #: The answer's estimated error (:class:`castrajectory.solve.estimate.ErrorEstimate`), where the
+    #: method forms one; ``None`` where the result is not an answer a grid approximates (one NLP solve).
+    error_estimate: Optional[object] = None
 
     def __post_init__(self):
         if self.success:
@@ -108,7 +115,7 @@ class Result:
         return {"success": self.success, "status": self.status, "message": self.message,
                 "iterations": self.iterations, "build_time_s": self.build_time_s,
                 "solve_time_s": self.solve_time_s, "solver_status": self.solver_status,
-                "warnings": list(self.warnings)}
+                "warnings": list(self.warnings), "error_estimate": self.error_estimate}
 
     def fail(self, status: str, message: str) -> None:
         """Turn this result into a failure named ``status`` (e.g. a check after the solver converged)."""
@@ -116,7 +123,10 @@ class Result:
 
     def as_dict(self) -> dict:
         """The JSON object: the contract's keys; subclasses add theirs (``{**super().as_dict(), ...}``)."""
-        return {k: getattr(self, k) for k in CONTRACT}
+        out = {k: getattr(self, k) for k in CONTRACT}
+        if out["error_estimate"] is not None:
+            out["error_estimate"] = out["error_estimate"].as_dict()
+        return out
 
     def raise_for_status(self) -> "Result":
         """Return ``self`` if the method succeeded, raise :class:`SolveError` otherwise."""

@@ -79,6 +79,28 @@ def ipopt_options(args) -> dict:
     return {"max_iter": args.max_iter}
 
 
+def add_accuracy(p: argparse.ArgumentParser) -> None:
+    """``--rtol`` and ``--n-max``: accuracy on request (the grid refined until the error estimate meets it)."""
+    p.add_argument("--rtol", type=float, default=None,
+                   help="refine n (powers of two) until the estimated relative error is at most this; "
+                        "exit 1 if it cannot be reached")
+    p.add_argument("--n-max", type=int, default=None,
+                   help="largest n that --rtol may refine to (default 2^20, or what memory allows)")
+
+
+def accuracy(args) -> dict:
+    """``rtol`` and ``n_max`` from the flags of :func:`add_accuracy`, checked (exit 2 on bad values)."""
+    rtol, n_max = getattr(args, "rtol", None), getattr(args, "n_max", None)
+    if rtol is not None and not (math.isfinite(rtol) and 0.0 < rtol < 1.0):
+        raise InputError(f"--rtol must be in (0, 1) (got {rtol})")
+    if n_max is not None:
+        if rtol is None:
+            raise InputError("--n-max limits --rtol's refinement; give --rtol too")
+        if n_max < args.n:
+            raise InputError(f"--n-max must be at least --n = {args.n} (got {n_max})")
+    return {"rtol": rtol, "n_max": n_max}
+
+
 def add_plot(p: argparse.ArgumentParser) -> None:
     p.add_argument("--plot", metavar="PATH", help="write a picture (format from the extension, e.g. .png, .pdf)")
 
@@ -91,6 +113,8 @@ def add_trajectory_flags(p: argparse.ArgumentParser, T: float, n: int, scheme: s
     p.add_argument("--T", type=float, default=T, help="duration T in s (> 0)")
     p.add_argument("--n", type=int, default=n, help="number of time steps N (>= 2)")
     p.add_argument("--scheme", choices=list(SCHEMES), default=scheme, help="discrete Lagrangian")
+    if methods:
+        add_accuracy(p)
     if methods:
         p.add_argument("--method", choices=list(METHODS), default="whole",
                        help="whole: one whole-trajectory NLP (the library's method); others are baselines")
@@ -282,7 +306,7 @@ def run_scene(parser: argparse.ArgumentParser, run: Callable[[argparse.Namespace
         if args.json:
             sys.stdout.write(json.dumps(jsonable(outcome.as_dict()), allow_nan=False) + "\n")
         else:
-            print("\n".join(outcome.summary + [f"warning: {w}" for w in outcome.warnings]))
+            print("\n".join(outcome.summary + estimate_lines(outcome) + [f"warning: {w}" for w in outcome.warnings]))
         sys.stdout.flush()
         if not outcome.success:
             print(f"{prog}: solver failed: {outcome.message}", file=sys.stderr)
@@ -302,6 +326,12 @@ def run_scene(parser: argparse.ArgumentParser, run: Callable[[argparse.Namespace
         print(f"{prog}: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
     return 0
+
+
+def estimate_lines(result) -> List[str]:
+    """The summary line of the answer's error estimate (none for a result without one)."""
+    est = getattr(result, "error_estimate", None)
+    return [] if est is None else [est.line()]
 
 
 def status_line(status: str, result) -> str:

@@ -17,10 +17,28 @@ from PIL import Image
 _ERROR_STYLE = {"shape": "o-", "contact_angle": "s-", "span": "^-", "energy": "v-", "pressure": "d-"}
 
 
-def droplet_shape(sol, path: str) -> None:
-    """The discrete drop over the analytic circle, with the contact angles."""
+def _mark_contact_angle(ax, point, theta: float, size: float, digits: int = 4, color: str = "C3") -> None:
+    """Draw the contact angle ``theta`` at the left contact ``point`` of a drop on ``y = point[1]``.
+
+    The interface's tangent leaves the point along ``(cos θ, sin θ)`` (slope ``tan θ``; the liquid is to the
+    right); an arc of radius ``size`` from the ground to the tangent marks the angle, labelled in degrees
+    with ``digits`` decimals.  The tangent line carries the label too, for the legend.
+    """
+    x0, y0 = float(point[0]), float(point[1])
+    deg = f"θ = {math.degrees(theta):.{digits}f}°"
+    c, s = math.cos(theta), math.sin(theta)
+    ax.plot([x0, x0 + 2.2 * size * c], [y0, y0 + 2.2 * size * s], "--", color=color, lw=1.2,
+            label=f"tangent at the contact, {deg}")
+    phi = np.linspace(0.0, theta, 60)
+    ax.plot(x0 + size * np.cos(phi), y0 + size * np.sin(phi), "-", color=color, lw=1.2)
+    ax.text(x0 + 1.25 * size * math.cos(0.5 * theta), y0 + 1.25 * size * math.sin(0.5 * theta), deg,
+            color=color, fontsize=9, ha="left" if theta < 0.5 * math.pi else "center", va="bottom")
+
+
+def droplet_figure(sol) -> Figure:
+    """The discrete drop over the analytic circle, with the contact angle drawn and labelled at the left contact."""
     cap = sol.analytic
-    fig = Figure(figsize=(7.0, 4.2), layout="constrained")
+    fig = Figure(figsize=(8.4, 4.2), layout="constrained")
     ax = fig.add_subplot()
     pts = cap.points(720)
     ax.plot(pts[:, 0], pts[:, 1], "-", color="0.6", lw=3, label="analytic arc")
@@ -31,6 +49,7 @@ def droplet_shape(sol, path: str) -> None:
     pad = 0.08 * (hi - lo)
     ax.axhline(0.0, color="k", lw=1)
     ax.fill_between([lo - pad, hi + pad], [0, 0], [-0.04 * (hi - lo)] * 2, color="0.85")
+    _mark_contact_angle(ax, (sol.x[0], sol.y[0]), sol.contact_angle, 0.15 * (hi - lo))
     ax.set_aspect("equal")
     ax.set_xlabel("x")
     ax.set_ylabel("y")
@@ -38,16 +57,24 @@ def droplet_shape(sol, path: str) -> None:
     ax.set_title(f"Droplet, {mode}, {sol.formulation}, N = {sol.n}\n"
                  f"θ = {math.degrees(sol.contact_angle):.4f}° (analytic {math.degrees(cap.contact_angle):.4f}°), "
                  f"shape error {sol.errors['shape']:.1e}", fontsize=10)
-    ax.legend(loc="upper right", fontsize=8)
-    fig.savefig(path, dpi=130)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8)
+    return fig
 
 
-def reduced_energy(sol, path: str) -> None:
-    """E(θ) of the reduced problem with the optimum and Young's angle marked."""
+def droplet_shape(sol, path: str) -> None:
+    """:func:`droplet_figure` written to ``path``."""
+    droplet_figure(sol).savefig(path, dpi=130)
+
+
+def reduced_energy_figure(sol) -> Figure:
+    """E(θ) of the reduced problem with the optimum and Young's angle marked, beside the cap of the optimal
+    angle with its contact angle drawn and labelled."""
+    from ..models.droplet import arc_points
+
     th = np.linspace(0.02, math.pi - 0.02, 600)
     E = np.array([float(sol.energy_function(t)) for t in th])
-    fig = Figure(figsize=(6.4, 4.0), layout="constrained")
-    ax = fig.add_subplot()
+    fig = Figure(figsize=(10.4, 4.0), layout="constrained")
+    ax, bx = fig.subplots(1, 2, width_ratios=[1.3, 1.0])
     ax.plot(np.degrees(th), E, lw=1.5)
     ax.plot([math.degrees(sol.contact_angle)], [sol.energy], "o", color="C3",
             label=f"Ipopt optimum θ = {math.degrees(sol.contact_angle):.6f}°, E = {sol.energy:.6g}")
@@ -58,9 +85,24 @@ def reduced_energy(sol, path: str) -> None:
     ax.set_ylim(sol.energy - 0.1 * (ymax - sol.energy), ymax)
     ax.set_xlabel("θ (degrees)")
     ax.set_ylabel("E(θ)")
-    ax.set_title("Reduced droplet energy E(θ) = 2R(θ)(γ_gl θ + (γ_sl − γ_sg) sin θ)")
+    ax.set_title("Reduced droplet energy E(θ) = 2R(θ)(γ_gl θ + (γ_sl − γ_sg) sin θ)", fontsize=10)
     ax.legend(fontsize=8)
-    fig.savefig(path, dpi=130)
+    pts = arc_points(sol.contact_angle, sol.radius, 400)
+    lo, hi = min(pts[:, 0].min(), 0.0), max(pts[:, 0].max(), sol.span)
+    bx.plot(pts[:, 0], pts[:, 1], "-", color="C0", lw=1.5, label=f"cap, R = {sol.radius:.6g}")
+    bx.axhline(0.0, color="k", lw=1)
+    _mark_contact_angle(bx, (0.0, 0.0), sol.contact_angle, 0.15 * (hi - lo), digits=6)
+    bx.set_aspect("equal")
+    bx.set_xlabel("x")
+    bx.set_ylabel("y")
+    bx.set_title("the drop at the optimum", fontsize=10)
+    bx.legend(loc="upper center", bbox_to_anchor=(0.5, -0.3), fontsize=8)
+    return fig
+
+
+def reduced_energy(sol, path: str) -> None:
+    """:func:`reduced_energy_figure` written to ``path``."""
+    reduced_energy_figure(sol).savefig(path, dpi=130)
 
 
 def droplet_convergence(rows: List[dict], path: str) -> None:
@@ -116,18 +158,8 @@ def _positive(y: np.ndarray) -> np.ndarray:
     return y
 
 
-def energy_plot(t, energies: Dict[str, np.ndarray], title: Optional[str] = None,
-                relative: bool = True) -> Figure:
-    """Energy drift of one or several labelled runs.
-
-    ``energies`` maps a label to ``E(t)``; ``t`` is one time array shared by all
-    runs or a dict with the same labels.  With ``relative=True`` the plot shows
-    ``|E − E₀| / |E₀|`` on a log axis (``|E − E₀|`` when ``E₀ = 0``; exact
-    zeros, such as the first sample, are left out); otherwise ``E − E₀`` on a
-    linear axis.
-    """
-    fig = Figure(figsize=(6.4, 4.0), layout="constrained")
-    ax = fig.add_subplot()
+def _energy_axes(ax, t, energies: Dict[str, np.ndarray], relative: bool = True) -> None:
+    """Draw the energy drift of each labelled run on ``ax`` (see :func:`energy_plot`)."""
     absolute = False
     for label, E in energies.items():
         E = np.asarray(E, dtype=float).reshape(-1)
@@ -150,14 +182,41 @@ def energy_plot(t, energies: Dict[str, np.ndarray], title: Optional[str] = None,
         ax.set_ylabel("E − E₀")
     ax.set_xlabel("t")
     ax.grid(True, which="major", alpha=0.3)
-    ax.set_title(title or "Energy error", fontsize=10)
     if energies:
         ax.legend(fontsize=8)
+
+
+def energy_plot(t, energies: Dict[str, np.ndarray], title: Optional[str] = None,
+                relative: bool = True) -> Figure:
+    """Energy drift of one or several labelled runs.
+
+    ``energies`` maps a label to ``E(t)``; ``t`` is one time array shared by all
+    runs or a dict with the same labels.  With ``relative=True`` the plot shows
+    ``|E − E₀| / |E₀|`` on a log axis (``|E − E₀|`` when ``E₀ = 0``; exact
+    zeros, such as the first sample, are left out); otherwise ``E − E₀`` on a
+    linear axis.
+    """
+    fig = Figure(figsize=(6.4, 4.0), layout="constrained")
+    ax = fig.add_subplot()
+    _energy_axes(ax, t, energies, relative)
+    ax.set_title(title or "Energy error", fontsize=10)
     return fig
 
 
-def trajectory_plot(t, q, names: Sequence[str], title: Optional[str] = None) -> Figure:
-    """Generalised coordinates ``q`` (shape (K, n)) against time, one line per coordinate."""
+#: More coordinates than this in one panel of :func:`trajectory_plot` get no legend.
+_MAX_LEGEND = 12
+
+
+def trajectory_plot(t, q, names: Sequence[str], title: Optional[str] = None,
+                    panels: Optional[Sequence[tuple]] = None,
+                    energies: Optional[Dict[str, np.ndarray]] = None) -> Figure:
+    """Generalised coordinates ``q`` (shape (K, n)) against time, one line per coordinate.
+
+    ``panels`` is a list of ``(ylabel, columns)``, one axes each (e.g. ``[("angle (rad)", [1]),
+    ("r (m)", [0])]`` keeps a length apart from an angle); by default every coordinate shares one
+    axes labelled ``q``.  ``energies`` (label -> ``E(t)``) adds the relative energy error below, as
+    :func:`energy_plot` draws it.  The axes share the time axis.
+    """
     t = _as_time(t, "trajectory_plot")
     q = np.asarray(q, dtype=float)
     if q.ndim == 1:
@@ -167,15 +226,50 @@ def trajectory_plot(t, q, names: Sequence[str], title: Optional[str] = None) -> 
     names = list(names)
     if len(names) != q.shape[1]:
         raise ValueError(f"trajectory_plot: {q.shape[1]} coordinates but {len(names)} names")
+    panels = list(panels) if panels else [("q", range(q.shape[1]))]
+    rows = len(panels) + (1 if energies else 0)
+    fig = Figure(figsize=(6.4, 2.2 + 1.8 * rows), layout="constrained")
+    axes = fig.subplots(rows, 1, sharex=True, squeeze=False)[:, 0]
+    for ax, (ylabel, cols) in zip(axes, panels):
+        cols = list(cols)
+        for j in cols:
+            ax.plot(t, q[:, j], lw=1.2, label=names[j])
+        ax.set_ylabel(ylabel)
+        ax.grid(True, which="major", alpha=0.3)
+        if len(cols) <= _MAX_LEGEND:
+            ax.legend(fontsize=8, loc="upper right")
+    if energies:
+        _energy_axes(axes[-1], t, energies)
+        axes[-1].set_title("energy error", fontsize=9)
+    axes[-1].set_xlabel("t")
+    axes[0].set_title(title or "Generalised coordinates", fontsize=10)
+    return fig
+
+
+def path_plot(q, reference=None, label: str = "computed", reference_label: str = "analytic",
+              xlabel: str = "x", ylabel: str = "y", title: Optional[str] = None) -> Figure:
+    """A planar path ``q`` (shape (K, 2)) drawn over a ``reference`` path (same shape, e.g. the analytic one
+    at the same times), equal aspect; the largest distance between them is in the legend."""
+    q = np.asarray(q, dtype=float).reshape(-1, 2)
     fig = Figure(figsize=(6.4, 4.0), layout="constrained")
     ax = fig.add_subplot()
-    for j, name in enumerate(names):
-        ax.plot(t, q[:, j], lw=1.2, label=name)
-    ax.set_xlabel("t")
-    ax.set_ylabel("q")
-    ax.grid(True, which="major", alpha=0.3)
-    ax.set_title(title or "Generalised coordinates", fontsize=10)
+    if reference is not None:
+        ref = np.asarray(reference, dtype=float).reshape(-1, 2)
+        if ref.shape != q.shape:
+            raise ValueError(f"path_plot: the reference has shape {ref.shape}, the path {q.shape}")
+        err = float(np.max(np.abs(q - ref))) if q.size else float("nan")
+        ax.plot(ref[:, 0], ref[:, 1], "-", color="0.6", lw=4, label=reference_label)
+        label = f"{label} (max deviation {err:.1e})"
+    stride = max(1, len(q) // 40)
+    ax.plot(q[:, 0], q[:, 1], "-", color="C0", lw=1.2, label=label)
+    ax.plot(q[::stride, 0], q[::stride, 1], "o", color="C0", ms=3)
+    ax.plot(q[[0, -1], 0], q[[0, -1], 1], "s", color="k", ms=5)
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
+    ax.set_title(title or "Path", fontsize=10)
     return fig
 
 
@@ -366,6 +460,173 @@ def _frames(t: np.ndarray, max_frames: int) -> np.ndarray:
     return np.unique(np.clip(np.searchsorted(t, targets, side="right") - 1, 0, t.size - 1))
 
 
+#: Margin of an animation's window around the motion, as a fraction of the motion's largest half-extent.
+VIEW_MARGIN = 0.12
+
+
+def view_window(points, margin: float = VIEW_MARGIN, min_aspect: float = 0.5, cube: bool = False):
+    """The view box of an animation: ``(lo, hi)`` around ``points`` (shape (M, d), every position the
+    bodies take, every frame).
+
+    One rule for every animation: the box is the points' bounding box, each half-width raised to at
+    least ``min_aspect`` of the largest one (all equal with ``cube``, for a 3-D box), then grown by
+    ``margin`` of the largest.  Fixed scenery (a ground, a bowl) does not widen it; it is clipped to it.
+    """
+    P = np.asarray(points, dtype=float).reshape(-1, np.shape(points)[-1])
+    lo, hi = P.min(axis=0), P.max(axis=0)
+    centre, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
+    big = float(half.max())
+    if not big > 1e-12 * max(1.0, float(np.abs(centre).max())):  # nothing moves: a unit window around it
+        big = 0.5 * max(1.0, float(np.abs(centre).max()))
+    half = np.full_like(half, big) if cube else np.maximum(half, min_aspect * big)
+    half = half + margin * big
+    return centre - half, centre + half
+
+
+def clip_polyline(poly, lo, hi) -> Optional[np.ndarray]:
+    """The parts of the polyline ``poly`` (M, 2) inside the box ``[lo, hi]`` (Liang–Barsky per segment),
+    as one polyline with a NaN row between separate pieces; ``None`` when no part is inside."""
+    poly = np.asarray(poly, dtype=float).reshape(-1, 2)
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    pieces: List[List[np.ndarray]] = []
+    for a, b in zip(poly[:-1], poly[1:]):
+        d = b - a
+        t0, t1 = 0.0, 1.0
+        for k in range(2):
+            for p, r in ((-d[k], a[k] - lo[k]), (d[k], hi[k] - a[k])):
+                if p == 0.0:
+                    if r < 0.0:
+                        t0, t1 = 1.0, 0.0
+                elif p < 0.0:
+                    t0 = max(t0, r / p)
+                else:
+                    t1 = min(t1, r / p)
+        if t0 > t1:
+            continue
+        pa, pb = a + t0 * d, a + t1 * d
+        if pieces and t0 == 0.0 and np.array_equal(pieces[-1][-1], pa):
+            pieces[-1].append(pb)
+        else:
+            pieces.append([pa, pb])
+    if not pieces:
+        return None
+    out = []
+    for k, piece in enumerate(pieces):
+        if k:
+            out.append(np.full(2, np.nan))
+        out.extend(piece)
+    return np.array(out)
+
+
+class PointsAnimation:
+    """The figure of :func:`animate_points` and how to draw one sample on it, before anything is written.
+
+    ``fig`` and ``ax`` are fixed for the whole animation (limits from :func:`view_window`);
+    ``frames`` are the sample indices drawn; ``ground`` is the scenery polyline drawn (clipped to the
+    window) or ``None``; ``markers`` and ``links`` are the moving artists, set by :meth:`draw`.
+    """
+
+    def __init__(self, positions, t, trail: bool = True, max_frames: int = 300, links: bool = True,
+                 pivot=(0.0, 0.0), title: Optional[str] = None, trail_time: float = 1.0, dpi: int = 80,
+                 ground=None):
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.collections import LineCollection
+
+        P = np.asarray(positions, dtype=float)
+        if P.ndim == 2 and P.shape[-1] == 2:
+            P = P[:, None, :]
+        if P.ndim != 3 or P.shape[-1] != 2 or P.shape[0] == 0:
+            raise ValueError(f"positions must have shape (K, n_points, 2), got {np.shape(positions)}")
+        t = _as_time(t, "animate_points")
+        if t.size != P.shape[0]:
+            raise ValueError(f"animate_points: {P.shape[0]} position rows but {t.size} times")
+        if not np.all(np.isfinite(t)) or np.any(np.diff(t) < 0):
+            raise ValueError("animate_points: t must be finite and non-decreasing")
+        if not np.all(np.isfinite(P)):
+            raise ValueError("animate_points: positions contain non-finite values")
+        if int(max_frames) < 1:
+            raise ValueError("animate_points: max_frames must be positive")
+        self.P, self.t, self.trail, self.trail_time = P, t, trail, trail_time
+        self.frames = _frames(t, max_frames)
+        self.has_pivot = pivot is not None
+        self.pivot = np.asarray(pivot if self.has_pivot else (0.0, 0.0), dtype=float).reshape(2)
+        self.show_links = links
+
+        # the window follows the bodies (and the pivot they hang from), never the scenery
+        moving = P.reshape(-1, 2)
+        if links and self.has_pivot:
+            moving = np.vstack([moving, self.pivot])
+        lo, hi = view_window(moving)
+        self.ground = None if ground is None else clip_polyline(ground, lo, hi)
+        centre, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
+
+        # figure shaped to the window (aspect clamped), in even pixel counts as ffmpeg wants
+        dpi = int(dpi)
+        left, right, bottom, top_in = 0.5, 0.12, 0.35, (0.35 if title else 0.12)
+        aspect = float(np.clip(half[1] / half[0], 0.4, 1.6))
+        width_px = 2 * round(4.0 * dpi / 2)
+        axes_w = width_px / dpi - left - right
+        height_px = 2 * round((axes_w * aspect + bottom + top_in) * dpi / 2)
+        fig = Figure(figsize=(width_px / dpi, height_px / dpi), dpi=dpi)
+        canvas = FigureCanvasAgg(fig)
+        W, H = width_px / dpi, height_px / dpi
+        fig.subplots_adjust(left=left / W, right=1 - right / W, bottom=bottom / H, top=1 - top_in / H)
+        ax = fig.add_subplot()
+        ax.set_xlim(lo[0], hi[0])
+        ax.set_ylim(lo[1], hi[1])
+        ax.set_aspect("equal", adjustable="box")
+        ax.tick_params(labelsize=7)
+        ax.grid(True, alpha=0.2)
+        if title:
+            ax.set_title(title, fontsize=9)
+        if links and self.has_pivot:
+            ax.plot([self.pivot[0]], [self.pivot[1]], "s", color="k", ms=4)
+        if self.ground is not None:
+            ax.plot(self.ground[:, 0], self.ground[:, 1], "-", color="0.3", lw=1.5)
+        # The static part (frame, ticks, grid, title, pivot, ground) is rendered once and laid under
+        # the axes as a figure image; each frame then redraws only the moving artists, which keeps a
+        # 300-frame GIF at a few seconds.
+        canvas.draw()
+        background = np.asarray(canvas.buffer_rgba()).copy()
+        for artist in list(ax.lines):
+            artist.remove()
+        ax.set_title("")
+        ax.set_axis_off()
+        fig.figimage(background, origin="upper", resize=False).set_zorder(-1)
+        (self.links,) = ax.plot([], [], "-", color="0.25", lw=1.6, visible=links)
+        (self.markers,) = ax.plot([], [], "o", color="C0", ms=7, mec="k", mew=0.6, zorder=3)
+        self._trail = LineCollection([], linewidths=1.5)
+        ax.add_collection(self._trail, autolim=False)
+        self._stamp = ax.text(0.02, 0.97, "", transform=ax.transAxes, va="top", fontsize=8)
+        self.fig, self.ax, self.dpi = fig, ax, dpi
+
+    def draw(self, i: int) -> None:
+        """Set the moving artists to sample ``i``."""
+        P, t, pts = self.P, self.t, self.P[i]
+        if self.show_links:
+            chain = np.vstack([self.pivot, pts]) if self.has_pivot else pts
+            self.links.set_data(chain[:, 0], chain[:, 1])
+        self.markers.set_data(pts[:, 0], pts[:, 1])
+        if self.trail:
+            tt = self.trail_time
+            j0 = int(np.searchsorted(t, t[i] - tt, side="left"))
+            idx = np.arange(j0, i + 1)
+            if idx.size > 150:
+                idx = np.unique(np.linspace(j0, i, 150).round().astype(int))
+            tr = P[idx, -1, :]
+            if len(tr) >= 2:
+                segs = np.stack([tr[:-1], tr[1:]], axis=1)
+                age = (t[i] - t[idx[1:]]) / tt if tt > 0 else np.zeros(len(segs))
+                colors = np.empty((len(segs), 4))
+                colors[:, :3] = (0.84, 0.15, 0.16)  # C3
+                colors[:, 3] = np.clip(1.0 - age, 0.0, 1.0) * 0.9
+                self._trail.set_segments(segs)
+                self._trail.set_color(colors)
+            else:
+                self._trail.set_segments([])
+        self._stamp.set_text(f"t = {t[i]:.2f}")
+
+
 def animate_points(positions, t, path: str, trail: bool = True, fps: int = 30, max_frames: int = 300,
                    links: bool = True, pivot=(0.0, 0.0), title: Optional[str] = None,
                    trail_time: float = 1.0, dpi: int = 80, ground=None) -> str:
@@ -377,111 +638,21 @@ def animate_points(positions, t, path: str, trail: bool = True, fps: int = 30, m
     the last point over the preceding ``trail_time`` (s).  Frames are
     subsampled evenly in time to at most ``max_frames``.  ``path`` ending in
     ``.gif`` is written with Pillow; ``.mp4`` needs ffmpeg (``ValueError``
-    otherwise).  The axes are fixed, equal-aspect and cover every position.
-    ``pivot=None`` joins only the points (a rigid body's outline); ``ground``
-    (an (M, 2) polyline, e.g. the floor or a bowl) is drawn under them.
-    Returns ``path``.
+    otherwise).  The axes are fixed and equal-aspect; the window is
+    :func:`view_window` of every position (and the pivot), so the bodies fill
+    it.  ``pivot=None`` joins only the points (a rigid body's outline);
+    ``ground`` (an (M, 2) polyline, e.g. the floor or a bowl, as long as
+    wanted) is drawn clipped to the window.  The figure is
+    :class:`PointsAnimation`.  Returns ``path``.
     """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.collections import LineCollection
-
     writer = _writer(path, fps)
-    P = np.asarray(positions, dtype=float)
-    if P.ndim == 2 and P.shape[-1] == 2:
-        P = P[:, None, :]
-    if P.ndim != 3 or P.shape[-1] != 2 or P.shape[0] == 0:
-        raise ValueError(f"positions must have shape (K, n_points, 2), got {np.shape(positions)}")
-    t = _as_time(t, "animate_points")
-    if t.size != P.shape[0]:
-        raise ValueError(f"animate_points: {P.shape[0]} position rows but {t.size} times")
-    if not np.all(np.isfinite(t)) or np.any(np.diff(t) < 0):
-        raise ValueError("animate_points: t must be finite and non-decreasing")
-    if not np.all(np.isfinite(P)):
-        raise ValueError("animate_points: positions contain non-finite values")
-    if int(max_frames) < 1 or fps <= 0:
-        raise ValueError("animate_points: max_frames and fps must be positive")
-    frames = _frames(t, max_frames)
-    has_pivot = pivot is not None
-    pivot = np.asarray(pivot if has_pivot else (0.0, 0.0), dtype=float).reshape(2)
-
-    allpts = P.reshape(-1, 2)
-    if links and has_pivot:
-        allpts = np.vstack([allpts, pivot])
-    if ground is not None:
-        ground = np.asarray(ground, dtype=float).reshape(-1, 2)
-        lo0, hi0 = allpts.min(axis=0), allpts.max(axis=0)
-        span = max(hi0[0] - lo0[0], 1e-9)
-        inside = (ground[:, 0] >= lo0[0] - 0.25 * span) & (ground[:, 0] <= hi0[0] + 0.25 * span)
-        ground = ground[inside] if inside.sum() >= 2 else ground
-        allpts = np.vstack([allpts, ground])
-    lo, hi = allpts.min(axis=0), allpts.max(axis=0)
-    centre, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
-    half = np.maximum(half, 0.5 * max(half.max(), 1e-9)) * 1.08 + 1e-9
-
-    # figure shaped to the data (aspect clamped), in even pixel counts as ffmpeg wants
-    dpi = int(dpi)
-    left, right, bottom, top_in = 0.5, 0.12, 0.35, (0.35 if title else 0.12)
-    aspect = float(np.clip(half[1] / half[0], 0.4, 1.6))
-    width_px = 2 * round(4.0 * dpi / 2)
-    axes_w = width_px / dpi - left - right
-    height_px = 2 * round((axes_w * aspect + bottom + top_in) * dpi / 2)
-    fig = Figure(figsize=(width_px / dpi, height_px / dpi), dpi=dpi)
-    canvas = FigureCanvasAgg(fig)
-    W, H = width_px / dpi, height_px / dpi
-    fig.subplots_adjust(left=left / W, right=1 - right / W, bottom=bottom / H, top=1 - top_in / H)
-    ax = fig.add_subplot()
-    ax.set_xlim(centre[0] - half[0], centre[0] + half[0])
-    ax.set_ylim(centre[1] - half[1], centre[1] + half[1])
-    ax.set_aspect("equal", adjustable="box")
-    ax.tick_params(labelsize=7)
-    ax.grid(True, alpha=0.2)
-    if title:
-        ax.set_title(title, fontsize=9)
-    if links and has_pivot:
-        ax.plot([pivot[0]], [pivot[1]], "s", color="k", ms=4)
-    if ground is not None:
-        ax.plot(ground[:, 0], ground[:, 1], "-", color="0.3", lw=1.5)
-    # The static part (frame, ticks, grid, title, pivot) is rendered once and
-    # laid under the axes as a figure image; each frame then redraws only the
-    # moving artists, which keeps a 300-frame GIF at a few seconds.
-    canvas.draw()
-    background = np.asarray(canvas.buffer_rgba()).copy()
-    for artist in list(ax.lines):
-        artist.remove()
-    ax.set_title("")
-    ax.set_axis_off()
-    fig.figimage(background, origin="upper", resize=False).set_zorder(-1)
-    (link_line,) = ax.plot([], [], "-", color="0.25", lw=1.6, visible=links)
-    (markers,) = ax.plot([], [], "o", color="C0", ms=7, mec="k", mew=0.6, zorder=3)
-    trail_lc = LineCollection([], linewidths=1.5)
-    ax.add_collection(trail_lc, autolim=False)
-    stamp = ax.text(0.02, 0.97, "", transform=ax.transAxes, va="top", fontsize=8)
-    rgb = np.array([0.84, 0.15, 0.16])  # C3
-
-    with writer.saving(fig, str(path), dpi=dpi):
-        for i in frames:
-            pts = P[i]
-            if links:
-                chain = np.vstack([pivot, pts]) if has_pivot else pts
-                link_line.set_data(chain[:, 0], chain[:, 1])
-            markers.set_data(pts[:, 0], pts[:, 1])
-            if trail:
-                j0 = int(np.searchsorted(t, t[i] - trail_time, side="left"))
-                idx = np.arange(j0, i + 1)
-                if idx.size > 150:
-                    idx = np.unique(np.linspace(j0, i, 150).round().astype(int))
-                tr = P[idx, -1, :]
-                if len(tr) >= 2:
-                    segs = np.stack([tr[:-1], tr[1:]], axis=1)
-                    age = (t[i] - t[idx[1:]]) / trail_time if trail_time > 0 else np.zeros(len(segs))
-                    colors = np.empty((len(segs), 4))
-                    colors[:, :3] = rgb
-                    colors[:, 3] = np.clip(1.0 - age, 0.0, 1.0) * 0.9
-                    trail_lc.set_segments(segs)
-                    trail_lc.set_color(colors)
-                else:
-                    trail_lc.set_segments([])
-            stamp.set_text(f"t = {t[i]:.2f}")
+    if fps <= 0:
+        raise ValueError("animate_points: fps must be positive")
+    anim = PointsAnimation(positions, t, trail=trail, max_frames=max_frames, links=links, pivot=pivot,
+                           title=title, trail_time=trail_time, dpi=dpi, ground=ground)
+    with writer.saving(anim.fig, str(path), dpi=anim.dpi):
+        for i in anim.frames:
+            anim.draw(i)
             writer.grab_frame()
     return str(path)
 
@@ -585,21 +756,24 @@ def animate_rigid_body(t, rotations, path: str, size, momentum=None, center=None
     signs = np.array([(-1, -1, -1), (1, -1, -1), (1, 1, -1), (-1, 1, -1),
                       (-1, -1, 1), (1, -1, 1), (1, 1, 1), (-1, 1, 1)], float)
     corners = signs * half
-    reach = float(np.linalg.norm(half)) * 1.15 + float(np.max(np.abs(C))) if C.size else 1.0
+    frames = _frames(t, max_frames)
+    # the window follows the body (its corners and drawn axes at every frame, and the origin the
+    # momentum arrow starts from), as in animate_points; the surface is clipped to it
+    tips = np.concatenate([corners, np.diag(half * 1.4), -np.diag(half * 1.4)])
+    moving = (C[frames, None, :] + np.einsum("kij,mj->kmi", R[frames], tips)).reshape(-1, 3)
+    if momentum is not None:
+        moving = np.vstack([moving, np.zeros(3)])
+    lo, hi = view_window(moving, cube=True)
     fig = Figure(figsize=(4.4, 4.4), dpi=dpi)
     FigureCanvasAgg(fig)
     ax = fig.add_subplot(projection="3d")
-    mid = np.zeros(3)
     if surface is not None:
-        # the view around the body's path, the surface clipped to it
-        lo, hi = C.min(axis=0) - float(np.linalg.norm(half)), C.max(axis=0) + float(np.linalg.norm(half))
-        mid, reach = 0.5 * (lo + hi), 0.5 * float(np.max(hi - lo)) * 1.1
         X, Y, Z = (np.asarray(a, float) for a in surface)
-        Z = np.where((Z >= mid[2] - reach) & (Z <= mid[2] + reach), Z, np.nan)
-        ax.plot_wireframe(X, Y, Z, color="0.7", lw=0.5, rstride=1, cstride=1)
-    ax.set_xlim(mid[0] - reach, mid[0] + reach)
-    ax.set_ylim(mid[1] - reach, mid[1] + reach)
-    ax.set_zlim(mid[2] - reach, mid[2] + reach)
+        inside = (X >= lo[0]) & (X <= hi[0]) & (Y >= lo[1]) & (Y <= hi[1]) & (Z >= lo[2]) & (Z <= hi[2])
+        ax.plot_wireframe(X, Y, np.where(inside, Z, np.nan), color="0.7", lw=0.5, rstride=1, cstride=1)
+    ax.set_xlim(lo[0], hi[0])
+    ax.set_ylim(lo[1], hi[1])
+    ax.set_zlim(lo[2], hi[2])
     ax.set_box_aspect((1, 1, 1))
     ax.tick_params(labelsize=6)
     if title:
@@ -608,12 +782,15 @@ def animate_rigid_body(t, rotations, path: str, size, momentum=None, center=None
     axis_lines = [ax.plot([], [], [], "-", color=c, lw=2.0)[0] for c in ("C3", "C2", "C0")]
     if momentum is not None:
         Lv = np.asarray(momentum, float).reshape(3)
-        Lv = Lv / max(float(np.linalg.norm(Lv)), 1e-300) * reach * 0.9
+        u = Lv / max(float(np.linalg.norm(Lv)), 1e-300)
+        with np.errstate(divide="ignore", invalid="ignore"):  # the longest arrow from the origin in the window
+            room = np.where(u > 0, hi / u, np.where(u < 0, lo / u, np.inf))
+        Lv = u * 0.9 * float(np.min(room))
         ax.plot([0, Lv[0]], [0, Lv[1]], [0, Lv[2]], "-", color="k", lw=1.5)
         ax.text(Lv[0], Lv[1], Lv[2], "L", fontsize=8)
     stamp = ax.text2D(0.02, 0.95, "", transform=ax.transAxes, fontsize=8)
     with writer.saving(fig, str(path), dpi=dpi):
-        for i in _frames(t, max_frames):
+        for i in frames:
             P = C[i] + corners @ R[i].T
             for line, (a, b) in zip(edge_lines, _BOX_EDGES):
                 line.set_data_3d([P[a, 0], P[b, 0]], [P[a, 1], P[b, 1]], [P[a, 2], P[b, 2]])

@@ -12,11 +12,11 @@ from typing import Optional
 import numpy as np
 
 from ..baselines import stepping
-from . import trajectory
+from . import estimate, trajectory
 from ..discretise.lagrangians import SCHEMES
 from ..models.mechanics import LagrangianSystem
 from ..result import Result
-from ..validation import InputError, one_of
+from ..validation import InputError, integer_at_least, one_of, positive
 
 METHODS = ("whole", "march", "rk4", "implicit-euler")
 
@@ -41,31 +41,74 @@ class Run(Result):
 
 
 def simulate(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str = "midpoint",
-             method: str = "whole", options: Optional[dict] = None, verbose: bool = False) -> Run:
-    """Trajectory from ``(q0, q̇0)`` over ``[0, T]`` on ``N`` uniform steps."""
+             method: str = "whole", options: Optional[dict] = None, verbose: bool = False,
+             rtol: Optional[float] = None, n_max: Optional[int] = None) -> Run:
+    """Trajectory from ``(q0, q̇0)`` over ``[0, T]`` on ``N`` uniform steps.
+
+    Every run carries an error estimate (``error_estimate``: Richardson from the run and the same
+    method on a coarser grid, :mod:`castrajectory.solve.estimate`).  ``rtol`` (as ``solve_ivp``'s):
+    refine ``N`` by powers of two until the estimated relative error is at most ``rtol``, up to
+    ``n_max`` steps; a run that ends above it fails (``Tolerance_Not_Reached``), its message giving
+    the estimate."""
     one_of("method", method, METHODS)
     one_of("scheme", scheme, tuple(SCHEMES))
     if system.contact is not None and method != "whole":
         raise InputError(f"the {method} baseline has no contact model; contact scenes use method 'whole'")
     if method == "whole":
-        tr = trajectory.solve_initial_value(system, q0, qd0, T, N, scheme, options=options, verbose=verbose)
+        tr = trajectory.solve_initial_value(system, q0, qd0, T, N, scheme, options=options, verbose=verbose,
+                                            rtol=rtol, n_max=n_max)
         run = Run(t=tr.t, q=tr.q, v=tr.v, energy=tr.energy, scheme=scheme, method=method, detail=tr,
                   **tr.contract())
     else:
-        # (the whole solve checks the state itself)
-        trajectory._check_finite_state(system, trajectory._check_state("q0", q0, system.nq),
-                                       trajectory._check_state("qd0", qd0, system.nq))
-        if method == "march":
-            st = stepping.march(system, q0, qd0, T, N, scheme)
-        elif method == "rk4":
-            st = stepping.rk4(system, q0, qd0, T, N)
-        else:
-            st = stepping.implicit_euler(system, q0, qd0, T, N)
-        run = Run(t=st.t, q=st.q, v=st.qd, energy=st.energy, scheme=scheme if method == "march" else None,
-                  method=method, detail=st, **st.contract())
+        run = _baseline(system, q0, qd0, T, N, scheme, method, rtol, n_max)
     if run.success and system.contact is None:
-        run.warnings += resolution_warnings(system, q0, T / N)
+        run.warnings += resolution_warnings(system, q0, run.t[-1] / (len(run.t) - 1))
     return run
+
+
+#: Order of each baseline (for its error estimate); ``march`` takes its scheme's.
+BASELINE_ORDER = {"rk4": 4, "implicit-euler": 1}
+
+
+def _baseline(system, q0, qd0, T, N, scheme, method, rtol, n_max) -> Run:
+    """A time-stepping baseline, with the same error estimate (the stepper on ``N/2``) and ``rtol``."""
+    T, N = trajectory._validate(system, T, N)
+    rtol = None if rtol is None else positive("rtol", rtol)
+    limit = estimate.limit_n(None if n_max is None else integer_at_least("n_max", n_max, N),
+                             trajectory._memory_limit(system))
+    # (the whole solve checks the state itself)
+    trajectory._check_finite_state(system, trajectory._check_state("q0", q0, system.nq),
+                                   trajectory._check_state("qd0", qd0, system.nq))
+    order = SCHEMES[scheme].order if method == "march" else BASELINE_ORDER[method]
+
+    def step(n):
+        if method == "march":
+            st = stepping.march(system, q0, qd0, T, n, scheme)
+        elif method == "rk4":
+            st = stepping.rk4(system, q0, qd0, T, n)
+        else:
+            st = stepping.implicit_euler(system, q0, qd0, T, n)
+        return Run(t=st.t, q=st.q, v=st.qd, energy=st.energy, scheme=scheme if method == "march" else None,
+                   method=method, detail=st, **st.contract())
+
+    fine = step(N)
+    if not fine.success:
+        fine.error_estimate = estimate.ErrorEstimate.none("the run did not succeed")
+        return fine
+    runs = [fine]
+    coarse = step(N // 2 if N % 2 == 0 else (N + 1) // 2) if N >= 4 else None
+    if coarse is not None:
+        runs.append(coarse)
+
+    def est_of(c, f):
+        if c is None:
+            return estimate.ErrorEstimate.none(f"N = {len(f.t) - 1} has no coarser grid")
+        if not c.success:
+            return estimate.ErrorEstimate.none(f"the run on N = {len(c.t) - 1} for the estimate failed")
+        return estimate.trajectory_estimate(c, f, order, energy_scale=estimate.kinetic_scale(system, f.q, f.v))
+
+    fine, est, n, short = estimate.refine_runs(rtol, fine, est_of(coarse, fine), N, order, limit, step, est_of, runs)
+    return estimate.conclude(fine, est, runs, rtol, n, limit, short)
 
 
 def resolution_warnings(system: LagrangianSystem, q0, h: float) -> list:

@@ -40,7 +40,7 @@ import numpy as np
 
 from ..discretise.lagrangians import DiscreteMechanics, rk4_step
 from ..discretise.trajectory import TrajectoryTranscription
-from . import jit
+from . import estimate, jit
 from ..models.mechanics import LagrangianSystem
 from ..result import NLPResult, Result
 from . import nlp as _nlp
@@ -68,6 +68,9 @@ class Level:
     #: part of solve_time_s spent evaluating residuals and Jacobians (CasADi); the rest is
     #: Ipopt itself, chiefly the sparse LDLᵀ factorisation (MUMPS) of its KKT matrix
     function_time_s: float = 0.0
+    #: the solve's part in the run: "solve" (towards the answer) or "estimate" (a coarser grid solved
+    #: only for the answer's error estimate, after it)
+    purpose: str = "solve"
 
 
 @dataclass(kw_only=True)
@@ -138,9 +141,12 @@ class TrajectoryNLP(TrajectoryTranscription):
         if self.mode == "boundary":
             # The gradient of S_d/h is the DEL residual, whose round-off floor grows like
             # eps |q| M / h²; scale it to a position-level quantity (as Ipopt's row scaling
-            # does for the initial-value rows) so that tol stays reachable at large N.
+            # does for the initial-value rows), relative to the size of the configurations, so that
+            # tol stays reachable at large N and far from the origin (a ball thrown 100 m on 2000
+            # steps stopped at Search_Direction_Becomes_Too_Small with its gradient at 2e-12).
             m_ref = float(np.max(np.diag(np.asarray(self.dm.system.mass_matrix(self.q0)))))
-            opts["obj_scaling_factor"] = min(1.0, 100.0 * self.h ** 2 / m_ref)
+            size = max(1.0, float(np.max(np.abs(self.q0))), float(np.max(np.abs(self.end))))
+            opts["obj_scaling_factor"] = min(1.0, 100.0 * self.h ** 2 / (m_ref * size))
         opts.update(options or {})
         init = {k: v for k, v in guess.items() if k in self.nlp.variable_names}
         res = self.nlp.solve(init=init, options=opts, verbose=verbose, bounds=self.fixed_bounds())
@@ -504,37 +510,57 @@ def _memory_bytes() -> float:
         return float("inf")
 
 
+def _per_step(system) -> int:
+    return max(3, system.nq + system.nc + (3 * system.ncontact if system.contact is not None else 0))
+
+
+def _memory_limit(system) -> int:
+    """The largest N whose whole-trajectory NLP fits in 80 % of this machine's memory (estimate)."""
+    have = _memory_bytes()
+    return int(min(0.8 * have / (BYTES_PER_UNKNOWN * _per_step(system)), 2 ** 62))
+
+
 def _validate(system, T, N):
     positive("T", T)
     N = integer_at_least("n", N, 2)
     # a grid the machine cannot hold is refused before anything is built (it failed after 14-80 s with
     # a MemoryError traceback or std::bad_alloc)
-    per_step = max(3, system.nq + system.nc + (3 * system.ncontact if system.contact is not None else 0))
-    need, have = BYTES_PER_UNKNOWN * per_step * N, _memory_bytes()
-    if need > 0.8 * have:
-        raise InputError(f"n = {N} needs about {need / 1e9:.3g} GB of memory for the whole-trajectory NLP "
-                         f"(about {BYTES_PER_UNKNOWN * per_step / 1e3:.3g} kB per step, measured), more than "
-                         f"this machine's {have / 1e9:.3g} GB allow; use n <= {int(0.8 * have / (BYTES_PER_UNKNOWN * per_step))}")
+    limit = _memory_limit(system)
+    if N > limit:
+        per = BYTES_PER_UNKNOWN * _per_step(system)
+        raise InputError(f"n = {N} needs about {per * N / 1e9:.3g} GB of memory for the whole-trajectory NLP "
+                         f"(about {per / 1e3:.3g} kB per step, measured), more than "
+                         f"this machine's {_memory_bytes() / 1e9:.3g} GB allow; use n <= {limit}")
     return float(T), N
 
 
 def solve_initial_value(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str = "midpoint",
                         options: Optional[dict] = None, verbose: bool = False,
-                        coarsest: int = 32, contact=None) -> Trajectory:
+                        coarsest: int = 32, contact=None, rtol: Optional[float] = None,
+                        n_max: Optional[int] = None) -> Trajectory:
     """Solve the initial-value problem as one whole-trajectory NLP (robust strategy in the module doc).
 
     A system with a :class:`~castrajectory.models.mechanics.Contact` term is transcribed by
     :func:`castrajectory.solve.contact.solve_contact` (collision sub-nodes and complementarity)
     and returns a :class:`~castrajectory.solve.contact.ContactTrajectory`; ``contact`` (a
     :class:`~castrajectory.solve.contact.ContactOptions`) sets that solve.
+
+    Every answer carries an :class:`~castrajectory.solve.estimate.ErrorEstimate` (Richardson from
+    the answer and the finest coarser level, see :func:`_estimate`).  ``rtol``: refine past ``N``
+    (the ladder continues, each grid a power of two finer) until the estimated relative error is
+    at most ``rtol``, up to ``n_max`` steps (:data:`~castrajectory.solve.estimate.N_MAX_RTOL` and
+    the memory by default); a run that stops above it fails with the estimate in its message.
     """
     T, N = _validate(system, T, N)
+    rtol = None if rtol is None else positive("rtol", rtol)
+    n_limit = estimate.limit_n(None if n_max is None else integer_at_least("n_max", n_max, N), _memory_limit(system))
     q0 = _check_state("q0", q0, system.nq)
     qd0 = _check_state("qd0", qd0, system.nq)
     _check_finite_state(system, q0, qd0)
     if system.contact is not None:
         from .contact import solve_contact
-        return solve_contact(system, q0, qd0, T, N, scheme, options=options, verbose=verbose, contact=contact)
+        return solve_contact(system, q0, qd0, T, N, scheme, options=options, verbose=verbose, contact=contact,
+                             rtol=rtol, n_limit=n_limit)
     if system.nc:
         c, C = system.constraint(q0)
         if np.max(np.abs(np.asarray(c))) > 1e-9 or np.max(np.abs(np.asarray(C) @ qd0)) > 1e-9:
@@ -596,12 +622,98 @@ def solve_initial_value(system: LagrangianSystem, q0, qd0, T: float, N: int, sch
             # windows (a whole attempt from the level guess would fail the same way).
             i = max(i, len(levels) - 1)
         # A coarse level that fails is too coarse to resolve the motion: drop it and go finer.
-    if not res.success and T / N * omega > COARSE_H_OMEGA:
-        # the motion is not resolved by the grid (e.g. a fast spin at a coarse N): say so
-        res.message += (f"; the grid does not resolve the motion (h ω = {T / N * omega:.3g} at the start, "
-                        f"where ω is the fastest linearised frequency or coordinate rate): "
-                        f"N >= {int(math.ceil(T * omega / COARSE_H_OMEGA))} resolves it")
-    return _finish(tn, res, log, "initial_value")
+    if not res.success:
+        if T / N * omega > COARSE_H_OMEGA:
+            # the motion is not resolved by the grid (e.g. a fast spin at a coarse N): say so
+            res.message += (f"; the grid does not resolve the motion (h ω = {T / N * omega:.3g} at the start, "
+                            f"where ω is the fastest linearised frequency or coordinate rate): "
+                            f"N >= {int(math.ceil(T * omega / COARSE_H_OMEGA))} resolves it")
+        out = _finish(tn, res, log, "initial_value")
+        out.error_estimate = estimate.ErrorEstimate.none("the solve did not converge")
+        return out
+    if rtol is not None:
+        _polish(tn, res, solved)
+    out = _finish(tn, res, log, "initial_value")
+    est = _estimate(solved, tn, res, out, options, verbose, log, omega, polish=rtol is not None)
+    state = {"tn": tn, "res": res, "out": out}
+
+    def advance(N2):
+        # accuracy on request: the ladder goes on past N, its next level extrapolated from the last two
+        nxt = TrajectoryNLP(dm, N2, T, "initial_value", q0, p0)
+        guess = _extrapolate(solved[-2], solved[-1], nxt) if len(solved) >= 2 else _refine(*solved[-1], nxt)
+        r2 = _solve_level(nxt, guess, options, verbose, log, allow_windows=True, final=True, omega=omega)
+        if not r2.success:
+            return False, r2.solver_status
+        solved.append((nxt, r2.values))
+        _polish(nxt, r2, solved)
+        o2 = _finish(nxt, r2, log, "initial_value")
+        state.update(tn=nxt, res=r2, out=o2)
+        return True, _estimate(solved, nxt, r2, o2, options, verbose, log, omega, polish=True)
+
+    est, _, short = estimate.refine(rtol, tn.N, est, dm.scheme.order, n_limit, advance)
+    tn, out = state["tn"], state["out"]
+    # the run's cost: every solve, the estimate's included
+    return estimate.conclude(out, est, log, rtol, tn.N, n_limit, short)
+
+
+def _path(tn: TrajectoryNLP, values: Dict[str, np.ndarray]):
+    """Nodes, configurations and energies of a solved level (for estimates: the answer's own readings)."""
+    from types import SimpleNamespace
+    dm, N = tn.dm, tn.N
+    q = values["q"].reshape(N + 1, dm.n)
+    Z = values["Z"].reshape(N, dm.s) if dm.s else np.zeros((N, 0))
+    v = dm.velocities(q, dm.momenta(q, Z, tn.h))
+    return SimpleNamespace(t=np.linspace(0.0, tn.T, N + 1), q=q, energy=dm.system.energies(q, v))
+
+
+def _polish(tn: TrajectoryNLP, res: NLPResult, solved: List[tuple]) -> None:
+    """One Newton step of the whole system on a converged level (:meth:`NLP.polish
+    <castrajectory.solve.nlp.NLP.polish>`), in ``res`` and in ``solved``'s last entry if it is this level.
+
+    Ipopt stops when the rows, scaled down by up to ``100/|∇g|`` (``h²/M`` for the DEL rows of a short
+    step), are within ``tol``: an unscaled residual far above rounding, which a chaotic motion
+    amplifies into the answer (the double pendulum at T = 10, galerkin4, N = 64000: 1.5e-6 rad off the
+    reference where the scheme's error is 6e-9; 5e-10 after the step).  The estimate cannot see such
+    an error (a coarser grid solved from the answer inherits it), so it is removed instead -- when an
+    ``rtol`` asks for the last digits: the step's sparse QR costs as much as 2-3 Ipopt iterations
+    (0.13 s for galerkin4 at N = 32000), and without a chaotic amplification the floor is far below
+    the discretisation error (1e-10 for the double pendulum at T = 5)."""
+    res.values = tn.nlp.polish({k: v for k, v in res.values.items() if k in tn.nlp.variable_names},
+                               TRAJECTORY_IPOPT["tol"], bounds=tn.fixed_bounds())
+    if solved and solved[-1][0] is tn:
+        solved[-1] = (tn, res.values)
+
+
+def _estimate(solved: List[tuple], tn: TrajectoryNLP, res: NLPResult, answer: "Trajectory", options, verbose,
+              log: List[Level], omega: float, polish: bool = False) -> "estimate.ErrorEstimate":
+    """Richardson estimate of the answer on ``tn`` from a coarser solved grid.
+
+    The partner is the finest level solved before, if it is at most
+    :data:`~castrajectory.solve.estimate.PARTNER_RATIO` times coarser (the ladder's own levels: the
+    estimate costs nothing).  Otherwise (the ladder jumped further, or went straight to ``N``) the
+    grid ``N/2`` is solved from the answer restricted to it (one or two Newton iterations, or its
+    own windows), and recorded in ``levels`` (``polish``: it takes a Newton step too, as the answer did)."""
+    partner = None
+    if len(solved) >= 2 and solved[-1][0] is tn and tn.N / solved[-2][0].N <= estimate.PARTNER_RATIO:
+        partner = solved[-2]
+    else:
+        Nc = tn.N // 2 if tn.N % 2 == 0 else (tn.N + 1) // 2
+        if Nc < 2:
+            return estimate.ErrorEstimate.none(f"N = {tn.N} has no coarser grid")
+        pc = TrajectoryNLP(tn.dm, Nc, tn.T, "initial_value", tn.q0, tn.end)
+        n_log = len(log)
+        rc = _solve_level(pc, _refine(tn, res.values, pc), options, verbose, log, allow_windows=True,
+                          final=True, omega=omega)
+        for lv in log[n_log:]:
+            lv.purpose = "estimate"
+        if not rc.success:
+            return estimate.ErrorEstimate.none(f"the grid N = {Nc} for the estimate did not converge "
+                                               f"({rc.solver_status}): the answer may not be converged either")
+        if polish:
+            _polish(pc, rc, [])
+        partner = (pc, rc.values)
+    return estimate.trajectory_estimate(_path(*partner), answer, tn.dm.scheme.order,
+                                        energy_scale=estimate.kinetic_scale(tn.dm.system, answer.q, answer.v))
 
 
 def solve_boundary(system: LagrangianSystem, q0, qT, T: float, N: int, scheme: str = "midpoint",
@@ -615,6 +727,7 @@ def solve_boundary(system: LagrangianSystem, q0, qT, T: float, N: int, scheme: s
     dm = DiscreteMechanics(system, scheme)
     log: List[Level] = []
     prev, values = None, None
+    solved: List[tuple] = []
     for Nl in _levels(N, coarsest):
         tn = TrajectoryNLP(dm, Nl, T, "boundary", q0, qT)
         guess = _initial_guess(tn, None) if prev is None else _refine(prev, values, tn)
@@ -622,4 +735,22 @@ def solve_boundary(system: LagrangianSystem, q0, qT, T: float, N: int, scheme: s
         if not res.success:
             break
         prev, values = tn, res.values
-    return _finish(tn, res, log, "boundary")
+        solved.append((tn, res.values))
+    out = _finish(tn, res, log, "boundary")
+    if not res.success:
+        out.error_estimate = estimate.ErrorEstimate.none("the solve did not converge")
+    elif len(solved) < 2:
+        Nc = N // 2 if N % 2 == 0 else (N + 1) // 2
+        pc = TrajectoryNLP(dm, Nc, T, "boundary", q0, qT)
+        rc = _solve_level(pc, _refine(tn, res.values, pc), options, verbose, log, allow_windows=False)
+        log[-1].purpose = "estimate"
+        out.iterations += rc.iterations
+        out.build_time_s += rc.build_time_s
+        out.solve_time_s += rc.solve_time_s
+        solved.insert(0, (pc, rc.values))
+        out.error_estimate = estimate.trajectory_estimate(_path(pc, rc.values), out, dm.scheme.order) if rc.success \
+            else estimate.ErrorEstimate.none(f"the grid N = {Nc} for the estimate did not converge ({rc.solver_status})")
+    else:
+        out.error_estimate = estimate.trajectory_estimate(_path(*solved[-2]), out, dm.scheme.order)
+    out.warnings += out.error_estimate.warnings()
+    return out

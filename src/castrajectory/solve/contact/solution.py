@@ -63,6 +63,8 @@ class ContactTrajectory(Result):
     attempts: List[dict] = field(default_factory=list)
     mode: str = "initial_value"
     method: str = "whole"
+    #: steps of the base grid (``t`` has more nodes where steps were halved around crowded impacts)
+    n: int = 0
 
     def as_dict(self) -> dict:
         return {**super().as_dict(), "solver_status": self.solver_status,
@@ -149,7 +151,7 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
         iterations=int(total_iter),
         build_time_s=float(sum(a["build_time_s"] for a in attempts)),
         solve_time_s=float(guess_time + sum(a["solve_time_s"] for a in attempts)),
-        scheme=cm.dm.scheme.name, homotopy=list(res.homotopy), attempts=attempts)
+        scheme=cm.dm.scheme.name, homotopy=list(res.homotopy), attempts=attempts, n=int(round(float(t[-1]) / h)))
 
 
 #: An elastic scene (e = 1) whose energy falls by more than this fraction is reported with a warning.
