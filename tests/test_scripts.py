@@ -211,6 +211,8 @@ MECH_BAD = [
     ("double_pendulum", ["--max-iter", "-1"], "--max-iter must be at least 1"),
     ("double_pendulum", ["--max-iter", "0"], "--max-iter must be at least 1"),
     ("double_pendulum", ["--n", "1000000000"], "GB of memory"),          # refused at once, not after minutes
+    ("n_link_pendulum", ["--links", "3", "--theta", "1e300"], "too large"),   # Ipopt diverged (exit 1)
+    ("thrown_ball", ["--distance", "1e300"], "too large"),                # NaN in Ipopt (exit 1)
 ]
 
 

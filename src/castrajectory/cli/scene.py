@@ -331,7 +331,7 @@ def run_scene(parser: argparse.ArgumentParser, run: Callable[[argparse.Namespace
 def estimate_lines(result) -> List[str]:
     """The summary line of the answer's error estimate (none for a result without one)."""
     est = getattr(result, "error_estimate", None)
-    return [] if est is None else [est.line()]
+    return [] if est is None or not result.success else [est.line()]
 
 
 def status_line(status: str, result) -> str:

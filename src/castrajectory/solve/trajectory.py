@@ -116,12 +116,20 @@ def _check_finite_state(system: LagrangianSystem, q0, qd0) -> None:
                          "overflows: the inputs are too large for double precision")
 
 
+#: A coordinate at least this large is refused: the spacing of doubles there is >= 0.1, which leaves
+#: no digits for a motion (an angle of 1e300 rad diverged in Ipopt; a throw to 1e300 m gave NaN).
+MAX_COORDINATE = 1e15
+
+
 def _check_state(name, value, n):
     arr = np.asarray(value, dtype=float).reshape(-1)
     if arr.size != n:
         raise InputError(f"{name} needs {n} values (got {arr.size})")
     if not np.all(np.isfinite(arr)):
         raise InputError(f"{name} must be finite (got {arr.tolist()})")
+    if name.startswith("q") and not name.startswith("qd") and np.max(np.abs(arr), initial=0.0) >= MAX_COORDINATE:
+        raise InputError(f"{name} = {arr.tolist()} is too large: a coordinate of {MAX_COORDINATE:.0e} or more leaves "
+                         "no digits of double precision for its motion")
     return arr
 
 
@@ -752,5 +760,6 @@ def solve_boundary(system: LagrangianSystem, q0, qT, T: float, N: int, scheme: s
             else estimate.ErrorEstimate.none(f"the grid N = {Nc} for the estimate did not converge ({rc.solver_status})")
     else:
         out.error_estimate = estimate.trajectory_estimate(_path(*solved[-2]), out, dm.scheme.order)
-    out.warnings += out.error_estimate.warnings()
+    if res.success:
+        out.warnings += out.error_estimate.warnings()
     return out
