@@ -11,6 +11,10 @@ time and against N) and prints observed orders.
 
     python scripts/contact_work_precision.py --out contact_wp
     python scripts/contact_work_precision.py --sizes 250 500 1000 --out /tmp/wp
+    python scripts/contact_work_precision.py --workers 2 --out /tmp/wp     # a local pool of 2 processes
+
+Runs go one after another in this process (fair wall times) unless ``--workers N`` (a local
+process pool) or ``--dask-scheduler ADDRESS`` (a Dask cluster) is given.
 """
 from __future__ import annotations
 
@@ -20,6 +24,7 @@ import sys
 
 import numpy as np
 
+from castrajectory.cli import sweeps
 from castrajectory.inspect import plotting, study
 
 
@@ -27,12 +32,16 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--sizes", type=int, nargs="+", default=[250, 500, 1000, 2000, 4000])
     p.add_argument("--out", default="contact_work_precision", help="output directory")
+    sweeps.add_sweep_flags(p)
     args = p.parse_args(argv)
     if any(n < 2 for n in args.sizes):
         print("contact_work_precision.py: error: every size must be >= 2", file=sys.stderr)
         return 2
+    executor = sweeps.executor(args, "contact_work_precision.py")
     os.makedirs(args.out, exist_ok=True)
-    rows = study.contact_work_precision(sorted(args.sizes))
+    with executor:
+        rows = study.contact_work_precision(sorted(args.sizes), executor=executor, bar=sweeps.bar(args),
+                                            quiet=args.quiet)
     study.write_csv(rows, os.path.join(args.out, "contact_work_precision.csv"))
     fig = plotting.contact_work_precision(rows, title="Contact trajectories: bounce times against the analytic ones")
     fig.savefig(os.path.join(args.out, "contact_work_precision.png"))

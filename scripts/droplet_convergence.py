@@ -6,11 +6,16 @@ analytic cap and the build/solve wall times, writes a CSV and a log-log plot
 
     python scripts/droplet_convergence.py --out out/
     python scripts/droplet_convergence.py --n-max 4096 --out out/      # quick
+    python scripts/droplet_convergence.py --workers 2 --out out/       # on a local pool of 2 processes
+
+Runs go one after another in this process (fair wall times) unless ``--workers N`` (a local
+process pool) or ``--dask-scheduler ADDRESS`` (a Dask cluster) is given.
 """
 import argparse
 import os
 import sys
 
+from castrajectory.cli import sweeps
 from castrajectory.solve import droplet
 from castrajectory.inspect import plotting, study
 
@@ -21,9 +26,11 @@ def main(argv=None):
     p.add_argument("--n-min", type=int, default=8)
     p.add_argument("--n-max", type=int, default=100_000)
     p.add_argument("--formulations", nargs="+", choices=droplet.FORMULATIONS, default=list(droplet.FORMULATIONS))
+    sweeps.add_sweep_flags(p)
     args = p.parse_args(argv)
     if args.n_min < droplet.MIN_N or args.n_max < args.n_min:
         p.error(f"need {droplet.MIN_N} <= --n-min <= --n-max")
+    executor = sweeps.executor(args, "droplet_convergence.py")
     os.makedirs(args.out, exist_ok=True)
 
     def progress(r):
@@ -31,7 +38,9 @@ def main(argv=None):
               f"build={r['build_time_s']:.3f}s solve={r['solve_time_s']:.3f}s  "
               + " ".join(f"{k}={r['err_' + k]:.2e}" for k in study.DROPLET_ERRORS), flush=True)
 
-    rows = study.droplet_sweep(study.sweep_sizes(args.n_max, args.n_min), args.formulations, progress=progress)
+    with executor:
+        rows = study.droplet_sweep(study.sweep_sizes(args.n_max, args.n_min), args.formulations, executor=executor,
+                                   progress=None if args.quiet else progress, bar=sweeps.bar(args), quiet=args.quiet)
     csv_path, png_path = os.path.join(args.out, "droplet_convergence.csv"), os.path.join(args.out,
                                                                                          "droplet_convergence.png")
     study.write_csv(rows, csv_path)

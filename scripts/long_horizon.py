@@ -23,10 +23,15 @@ code 1 if the verdict fails or a run fails, 0 otherwise.
 
     python scripts/long_horizon.py --out out/
     python scripts/long_horizon.py --periods 100 --out out/     # quick
+    python scripts/long_horizon.py --workers 2 --out out/       # the runs on a local pool of 2 processes
+
+The runs go one after another in this process (fair wall times) unless ``--workers N`` (a local
+process pool) or ``--dask-scheduler ADDRESS`` (a Dask cluster) is given.
 """
 from __future__ import annotations
 
 import argparse
+import functools
 import math
 import os
 import sys
@@ -39,7 +44,8 @@ for _var in BLAS_THREAD_VARS:
 import numpy as np  # noqa: E402
 
 from castrajectory.models import pendulum  # noqa: E402
-from castrajectory.inspect import plotting, study
+from castrajectory.cli import sweeps  # noqa: E402
+from castrajectory.inspect import plotting, study  # noqa: E402
 
 BOUNDED_FACTOR = 1.5
 DRIFT_TAIL_RATIO = 3.0
@@ -55,6 +61,7 @@ def main(argv=None) -> int:
     p.add_argument("--skip-whole-galerkin4", action="store_true",
                    help="leave out the whole-trajectory galerkin4 run (the slowest)")
     p.add_argument("--out", default="out", help="output directory (default out)")
+    sweeps.add_sweep_flags(p)
     args = p.parse_args(argv)
     if not (math.isfinite(args.amplitude) and 0 < abs(args.amplitude) < math.pi):
         p.error("--amplitude must be in (0, pi)")
@@ -62,9 +69,11 @@ def main(argv=None) -> int:
         p.error("--periods and --steps-per-period must be at least 2")
     if not (args.length > 0 and args.g > 0 and math.isfinite(args.length) and math.isfinite(args.g)):
         p.error("--length and --g must be positive")
+    executor = sweeps.executor(args, "long_horizon.py")
     os.makedirs(args.out, exist_ok=True)
 
-    system = pendulum.n_link_pendulum([1.0], [args.length], args.g)
+    # a factory, not a built system: a process pool or a Dask worker builds it where it runs
+    system = functools.partial(pendulum.n_link_pendulum, [1.0], [args.length], args.g)
     period = 2 * math.pi * math.sqrt(args.length / args.g)
     T = args.periods * period
     N = args.periods * args.steps_per_period
@@ -78,18 +87,23 @@ def main(argv=None) -> int:
     print(f"T = {args.periods} periods = {T:.3f} s, N = {N} steps ({args.steps_per_period} per period, "
           f"h = {T / N:.5f} s)")
 
-    rows, series, tseries = [], {}, {}
-    t_all = time.perf_counter()
-    for method, scheme in runs:
-        row, run = study.long_horizon_run(system, q0, qd0, T, N, method, scheme)
-        rows.append(row)
-        lab = row["label"]
-        if np.all(np.isfinite(run.energy)):
-            series[lab] = np.asarray(run.energy) - row["E0"]
-            tseries[lab] = run.t
-        extra = f" levels={row['levels']} it={row['iterations']}" if method == "whole" else ""
-        print(f"  {lab:16s} {row['status']:>4s} build={row['build_time_s']:7.3f}s "
+    def progress(result):
+        row = result[0]
+        extra = f" levels={row['levels']} it={row['iterations']}" if row["method"] == "whole" else ""
+        print(f"  {row['label']:16s} {row['status']:>4s} build={row['build_time_s']:7.3f}s "
               f"solve={row['solve_time_s']:8.3f}s wall={row['wall_time_s']:8.3f}s{extra}", flush=True)
+
+    t_all = time.perf_counter()
+    with executor:
+        results = study.long_horizon_sweep(system, q0, qd0, T, N, runs, executor=executor,
+                                           progress=None if args.quiet else progress, bar=sweeps.bar(args),
+                                           quiet=args.quiet)
+    rows, series, tseries = [], {}, {}
+    for row, t, energy in results:
+        rows.append(row)
+        if np.all(np.isfinite(energy)):
+            series[row["label"]] = energy - row["E0"]
+            tseries[row["label"]] = t
     total = time.perf_counter() - t_all
 
     csv_path, png_path = os.path.join(args.out, "long_horizon.csv"), os.path.join(args.out, "long_horizon.png")

@@ -23,11 +23,14 @@ error of 1e-8 (log-log interpolation between the bracketing runs) and the
 ratio whole-galerkin4 / rk4 at 1e-8.
 
 Runs go one after another in this process (fair wall times), each with a
-fresh system, after one untimed warm-up run per method.  BLAS threads are
+fresh system, after one untimed warm-up run per method; ``--workers N`` runs
+them on a local pool of N processes and ``--dask-scheduler ADDRESS`` on a Dask
+cluster (same errors, but the times then disturb each other).  BLAS threads are
 pinned to 1 unless the caller set them.  Exit code 1 if any run failed.
 
     python scripts/work_precision.py --out out/
     python scripts/work_precision.py --quick --out out/
+    python scripts/work_precision.py --quick --workers 2 --out out/
 """
 from __future__ import annotations
 
@@ -44,8 +47,9 @@ for _var in BLAS_THREAD_VARS:
 import numpy as np  # noqa: E402
 
 from castrajectory.models import pendulum  # noqa: E402
-from castrajectory.inspect import plotting, study
-from castrajectory.baselines import stepping
+from castrajectory.cli import sweeps  # noqa: E402
+from castrajectory.inspect import plotting, study  # noqa: E402
+from castrajectory.baselines import stepping  # noqa: E402
 
 TARGET = 1e-8
 #: CVODES tolerance of the reference: at 1e-13 the double pendulum's q(5) is off by
@@ -85,11 +89,13 @@ def main(argv=None) -> int:
     p.add_argument("--theta2", type=float, default=1.0, help="initial angle of link 2, rad (default 1)")
     p.add_argument("--out", default="out", help="output directory (default out)")
     p.add_argument("--quick", action="store_true", help="N up to 4000 only (whole-galerkin4 8000, RK4 16000)")
+    sweeps.add_sweep_flags(p)
     args = p.parse_args(argv)
     if not (math.isfinite(args.T) and args.T > 0):
         p.error("--T must be positive")
     if not (math.isfinite(args.theta1) and math.isfinite(args.theta2)):
         p.error("--theta1 and --theta2 must be finite")
+    executor = sweeps.executor(args, "work_precision.py")
     os.makedirs(args.out, exist_ok=True)
 
     q0, qd0 = np.array([args.theta1, args.theta2]), np.zeros(2)
@@ -111,8 +117,11 @@ def main(argv=None) -> int:
               f"err={r['error_final']:9.2e} dE={r['energy_error_max']:9.2e}", flush=True)
 
     t_start = time.perf_counter()
-    rows = study.work_precision_sweep(pendulum.double_pendulum, q0, qd0, args.T, METHODS_SCHEMES,
-                                      sizes(args.quick), reference_rtol=REFERENCE_RTOL, progress=progress)
+    with executor:
+        rows = study.work_precision_sweep(pendulum.double_pendulum, q0, qd0, args.T, METHODS_SCHEMES,
+                                          sizes(args.quick), executor=executor, reference_rtol=REFERENCE_RTOL,
+                                          progress=None if args.quiet else progress, bar=sweeps.bar(args),
+                                          quiet=args.quiet)
     sweep_s = time.perf_counter() - t_start
 
     csv_path = os.path.join(args.out, "work_precision.csv")

@@ -128,6 +128,17 @@ def test_console_list_run_and_report(tmp_path):
     for f in ("droplet_curve.png", "droplet_angle.png", "droplet_convergence.png", "droplet_overhang.png"):
         assert f in summary and (out / f).exists()
     assert (out / "droplet_convergence.csv").read_text().count("\n") > 10
+    # what the report adds: one stability table over every family, and what each scene carries
+    stab = summary.split("## Stability on stiff and extreme cases")[1].split("\n## ")[0]
+    for family in ("droplet", "stiff spring", "pendulum", "contact", "rigid body"):
+        assert f"| {family} |" in stab
+    assert "FAILED" not in stab and "cases pass." in stab
+    carries = {line.split(" | ")[0].strip("| "): line for line in
+               summary.split("## What each scene carries")[1].splitlines() if line.startswith("| ")}
+    assert "| 0 (0) |" in carries["double_pendulum"] and "gravity" in carries["double_pendulum"]
+    assert "gravity" not in carries["double_pendulum_g0"]
+    assert "contact: 1 gap" in carries["bouncing_ball"] and "| 0 (0) | equal" not in carries["bouncing_ball"]
+    assert "no NLP" in carries["collision_impulse"]
 
 
 def test_convergence_script_small(tmp_path):

@@ -29,7 +29,10 @@ def main(argv: Optional[List[str]] = None) -> int:
     r.add_argument("scene")
     rep = sub.add_parser("report", help="solve every scene at its defaults and write a report")
     rep.add_argument("--out", required=True, metavar="DIR", help="output directory")
-    rep.add_argument("--quick", action="store_true", help="smaller convergence sweep (N up to 2048)")
+    size = rep.add_mutually_exclusive_group()
+    size.add_argument("--quick", action="store_true", help="the smallest sweeps (for tests: N up to 2048)")
+    size.add_argument("--full", action="store_true", help="the larger sweeps (droplet to N = 1e5, pendulum to 16000)")
+    rep.add_argument("--quiet", action="store_true", help="no progress lines")
     if argv[:1] == ["run"]:
         if len(argv) < 2 or argv[1].startswith("-"):
             print("castrajectory: error: run needs a scene name; see `castrajectory list`", file=sys.stderr)
@@ -48,7 +51,8 @@ def main(argv: Optional[List[str]] = None) -> int:
     from .report import write_report
     from .scene import EXIT_INTERRUPTED, _interrupted
     try:
-        return write_report(args.out, quick=args.quick)
+        return write_report(args.out, size="quick" if args.quick else "full" if args.full else "default",
+                            quiet=args.quiet)
     except BaseException as exc:  # Ctrl-C: the report stops, files already written stay as they are
         if isinstance(exc, SystemExit) or not _interrupted(exc):
             raise

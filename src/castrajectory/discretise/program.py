@@ -155,6 +155,9 @@ class Program:
         self._ng = 0
         self._comps: List[tuple] = []  # (name, a, b) expressions
         self._comp_groups: List[tuple] = []  # (name, |a b| function, element args, count)
+        #: complementarity pairs the program holds by other means than complementarity() (an exact
+        #: penalty of the products, say), declared by name and count by whoever writes them
+        self.declared_pairs: Dict[str, int] = {}
         self._f = None
         self._f_groups: List[_Group] = []
         self._solver = None
@@ -332,6 +335,26 @@ class Program:
         return {"variables": int(sum(b.init.size for b in self._vars)),
                 "parameters": int(sum(b.init.size for b in self._params)),
                 "equality_rows": rows["equality"], "inequality_rows": rows["inequality"]}
+
+    def anatomy(self) -> dict:
+        """What the program carries, read from its description: variables, equality and inequality rows,
+        complementarity pairs (those of :meth:`complementarity` and :meth:`complementarity_elements`,
+        and :attr:`declared_pairs`), and each element family: its kind, elements, inputs and outputs per
+        element, and the size of its function (SX instructions)."""
+        pairs = sum(int(ca.vec(a).numel()) for _, a, _ in self._comps)
+        pairs += sum(int(count * (fn.size1_out(0) * fn.size2_out(0))) for _, fn, _, count in self._comp_groups)
+        pairs += sum(int(v) for v in self.declared_pairs.values())
+        kinds = {}
+        for c, g in zip(self._cons.values(), self._g):
+            if isinstance(g, _Group):
+                kinds[g.name] = c.kind
+        families = []
+        for g in [g for g in self._g if isinstance(g, _Group)] + list(self._f_groups):
+            fn = g.fn
+            families.append({"name": g.name, "kind": kinds.get(g.name, "objective"), "elements": int(g.count),
+                             "inputs": int(sum(fn.nnz_in(i) for i in range(fn.n_in()))), "outputs": int(g.size),
+                             "instructions": int(fn.n_instructions()) if fn.is_a("SXFunction") else None})
+        return {**self.sizes(), "complementarity_pairs": int(pairs), "families": families}
 
     def _check_new(self, name: str) -> None:
         if self._solver is not None:

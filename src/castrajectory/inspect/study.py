@@ -1,15 +1,30 @@
 """Error-against-run-time studies (work–precision sweeps).
 
 A sweep solves one scene over a list of sizes and records, per run, the
-errors against the analytic oracle and the wall times.  Runs go through an
-``Executor``-like object with a ``map`` method; the default runs them one after
-another in this process, which is what timing needs (parallel runs on a
-two-core machine would distort each other's wall times).
+errors against the analytic oracle and the wall times.
+
+Executors.  Every run of a sweep is a *task*: a module-level function with
+plain-data arguments (numbers, strings, dicts, a picklable system factory such
+as ``pendulum.double_pendulum``), never a lambda or a CasADi object (CasADi's SX
+expressions do not pickle; a task builds its system where it runs).  Tasks go
+through a :class:`concurrent.futures.Executor`, which :func:`executor_for`
+picks: :class:`SerialExecutor` (the default: one after another in this
+process, which is what timing needs, since parallel runs on a two-core machine
+distort each other's wall times), a local process pool, or a Dask cluster.
+Rows come back in task order and hold the same values whichever executor ran
+them; only the timing columns (:data:`TIMING_COLUMNS`) differ.
+
+Progress.  A sweep draws a tqdm bar on stderr when stderr is a terminal (or
+when asked with ``bar=True``); ``quiet=True`` silences it.  Nothing is written
+to stdout.
 """
 from __future__ import annotations
 
+import concurrent.futures as cf
 import csv
+import functools
 import math
+import sys
 from typing import Callable, Iterable, List, Optional, Sequence
 
 import numpy as np
@@ -18,18 +33,170 @@ from ..models import collision
 from ..solve import droplet
 from ..baselines import stepping
 from ..solve import trajectory
+from ..validation import InputError
 from . import files
 
 DROPLET_ERRORS = ("shape", "contact_angle", "span", "energy", "pressure")
 
+#: Columns of sweep rows that measure time (they differ from run to run; everything else must not).
+TIMING_COLUMNS = frozenset({"build_time_s", "solve_time_s", "total_time_s", "time_s", "wall_time_s", "wall_s"})
 
-class SerialExecutor:
-    """Runs tasks in order in this process (the default: fair wall times)."""
 
-    def map(self, fn, *iterables):
+# ----------------------------------------------------------------------------- executors
+class SerialExecutor(cf.Executor):
+    """Runs tasks in order in this process (the default: fair wall times).
+
+    ``submit`` runs the call at once and returns a finished future; ``map`` is
+    lazy, like the built-in ``map``.
+    """
+
+    def submit(self, fn, /, *args, **kwargs):
+        fut = cf.Future()
+        try:
+            fut.set_result(fn(*args, **kwargs))
+        except Exception as exc:  # noqa: BLE001 - handed to whoever reads the future
+            fut.set_exception(exc)
+        return fut
+
+    def map(self, fn, *iterables, timeout=None, chunksize=1):
         return map(fn, *iterables)
 
 
+class _DaskExecutor(cf.Executor):
+    """``Client.get_executor()`` that also closes its client on ``shutdown``."""
+
+    def __init__(self, client):
+        self.client = client
+        self._ex = client.get_executor(pure=False)   # pure=False: two equal tasks are two runs
+
+    def submit(self, fn, /, *args, **kwargs):
+        return self._ex.submit(fn, *args, **kwargs)
+
+    def map(self, fn, *iterables, timeout=None, chunksize=1):
+        return self._ex.map(fn, *iterables, timeout=timeout)
+
+    def shutdown(self, wait=True, *, cancel_futures=False):
+        try:
+            self._ex.shutdown(wait=wait and not cancel_futures)
+        finally:
+            self.client.close()
+
+    def __repr__(self):
+        return f"<Dask executor on {self.client.scheduler.address}>"
+
+
+def executor_for(workers: Optional[int] = None, dask_scheduler: Optional[str] = None) -> cf.Executor:
+    """The executor of a sweep: serial, a local process pool or a Dask cluster.
+
+    * ``workers`` None or 1 and no ``dask_scheduler``: :class:`SerialExecutor`;
+    * ``workers = N > 1``: ``concurrent.futures.ProcessPoolExecutor(N)``;
+    * ``dask_scheduler = "tcp://host:8786"``: the executor of a
+      ``distributed.Client`` connected to that scheduler (the ``dist`` extra:
+      ``pip install "castrajectory[dist]"``); its ``shutdown`` closes the client.
+
+    Use it as a context manager (``with executor_for(...) as ex:``) so that
+    the pool or the client is released.  Raises :class:`InputError` (one
+    sentence) for ``workers < 1``, both arguments at once, a missing ``dist``
+    extra or a scheduler that cannot be reached.
+    """
+    if dask_scheduler is not None:
+        if workers not in (None, 1):
+            raise InputError("give --workers or --dask-scheduler, not both "
+                             "(the Dask cluster decides how many workers run)")
+        try:
+            import distributed
+        except ImportError:
+            raise InputError("--dask-scheduler needs Dask: pip install \"castrajectory[dist]\" "
+                             "(or pip install \"dask[distributed]\")") from None
+        try:
+            client = distributed.Client(dask_scheduler, timeout="10s")
+        except (OSError, TimeoutError, ValueError) as err:
+            raise InputError(f"cannot reach the Dask scheduler at {dask_scheduler}: "
+                             f"{str(err).splitlines()[0] if str(err) else type(err).__name__}") from None
+        return _DaskExecutor(client)
+    if workers is None or workers == 1:
+        return SerialExecutor()
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise InputError(f"--workers must be a whole number >= 1 (got {workers!r})")
+    return cf.ProcessPoolExecutor(max_workers=workers)
+
+
+def _needs_pickling(executor) -> bool:
+    return not isinstance(executor, (SerialExecutor, cf.ThreadPoolExecutor))
+
+
+def progress_bar(total: int, desc: str, bar: Optional[bool] = None, quiet: bool = False):
+    """A tqdm bar on stderr: shown when ``bar`` is True, or when ``bar`` is None and stderr
+    is a terminal; never with ``quiet``.  Returns a disabled bar otherwise (same methods)."""
+    show = (not quiet) and (bar if bar is not None else _isatty(sys.stderr))
+    return _bar_class()(total=total, desc=desc, unit="run", file=sys.stderr, disable=not show,
+                        dynamic_ncols=True, leave=True, smoothing=0.1, miniters=1)
+
+
+@functools.lru_cache(maxsize=None)
+def _bar_class():
+    """tqdm without its monitor thread (``miniters=1`` makes it unnecessary), so that a sweep's
+    process forks no extra thread into a process pool's workers."""
+    from tqdm import tqdm
+
+    class Bar(tqdm):
+        monitor_interval = 0
+
+    return Bar
+
+
+def _isatty(stream) -> bool:
+    try:
+        return bool(stream.isatty())
+    except (AttributeError, ValueError):
+        return False
+
+
+def run_tasks(fn: Callable, tasks: Sequence, executor: Optional[cf.Executor] = None,
+              progress: Optional[Callable[[object], None]] = None, bar: Optional[bool] = None,
+              quiet: bool = False, desc: str = "sweep", label: Optional[Callable[[object], str]] = None) -> list:
+    """``[fn(t) for t in tasks]`` through ``executor`` (serial by default), in task order.
+
+    ``progress(result)`` is called as each task finishes (in task order when
+    serial, in order of completion otherwise), with the bar (see
+    :func:`progress_bar`) lifted off the terminal while it prints.
+    ``label(result)``, if given, is shown after the bar.  The first task that
+    raises cancels those not yet started and re-raises.
+    """
+    from tqdm import tqdm
+
+    tasks = list(tasks)
+    executor = executor or SerialExecutor()
+    results: list = [None] * len(tasks)
+    with progress_bar(len(tasks), desc, bar, quiet) as pb:
+        def done(i, res):
+            results[i] = res
+            if progress is not None:
+                if pb.disable:
+                    progress(res)
+                else:
+                    with tqdm.external_write_mode():
+                        progress(res)
+            if label is not None and not pb.disable:
+                pb.set_postfix_str(label(res), refresh=False)
+            pb.update(1)
+
+        if isinstance(executor, SerialExecutor):
+            for i, t in enumerate(tasks):
+                done(i, fn(t))
+            return results
+        futures = {executor.submit(fn, t): i for i, t in enumerate(tasks)}
+        try:
+            for fut in cf.as_completed(futures):
+                done(futures[fut], fut.result())
+        except BaseException:
+            for fut in futures:
+                fut.cancel()
+            raise
+    return results
+
+
+# ----------------------------------------------------------------------------- droplet
 def droplet_run(drop: droplet.Droplet, formulation: str, n: int) -> dict:
     """One row of a droplet sweep."""
     sol = droplet.solve(drop, n, formulation)
@@ -41,19 +208,24 @@ def droplet_run(drop: droplet.Droplet, formulation: str, n: int) -> dict:
     return row
 
 
+def _droplet_task(drop: droplet.Droplet, task) -> dict:
+    formulation, n = task
+    return droplet_run(drop, formulation, n)
+
+
 def droplet_sweep(ns: Sequence[int], formulations: Iterable[str] = droplet.FORMULATIONS,
-                  drop: Optional[droplet.Droplet] = None, executor=None,
-                  progress: Optional[Callable[[dict], None]] = None) -> List[dict]:
-    """Solve the droplet for every formulation and ``n``; return one row per run."""
+                  drop: Optional[droplet.Droplet] = None, executor: Optional[cf.Executor] = None,
+                  progress: Optional[Callable[[dict], None]] = None, bar: Optional[bool] = None,
+                  quiet: bool = False) -> List[dict]:
+    """Solve the droplet for every formulation and ``n``; return one row per run (in task order).
+
+    ``executor``: see :func:`executor_for` (serial by default); ``progress(row)`` as each run
+    finishes; ``bar`` / ``quiet``: the progress bar (:func:`progress_bar`).
+    """
     drop = drop or droplet.Droplet()
-    executor = executor or SerialExecutor()
     tasks = [(f, int(n)) for f in formulations for n in ns]
-    rows = []
-    for row in executor.map(lambda t: droplet_run(drop, *t), tasks):
-        rows.append(row)
-        if progress:
-            progress(row)
-    return rows
+    return run_tasks(functools.partial(_droplet_task, drop), tasks, executor, progress, bar, quiet,
+                     desc="droplet", label=lambda r: f"{r['formulation']} N={r['n']}")
 
 
 def loglog_slope(x: Sequence[float], y: Sequence[float]) -> float:
@@ -184,14 +356,18 @@ def _trajectory_task(system, q0, qd0, T, q_ref, E0, options, task):
 
 
 def work_precision_sweep(system, q0, qd0, T: float, methods_schemes: Sequence[tuple], ns,
-                         executor=None, reference_rtol: float = 1e-13,
+                         executor: Optional[cf.Executor] = None, reference_rtol: float = 1e-13,
                          reference_atol: Optional[float] = None, options: Optional[dict] = None,
-                         warmup: bool = True, progress: Optional[Callable[[dict], None]] = None) -> List[dict]:
+                         warmup: bool = True, progress: Optional[Callable[[dict], None]] = None,
+                         bar: Optional[bool] = None, quiet: bool = False) -> List[dict]:
     """Solve one initial-value problem with every ``(method, scheme)`` and every ``N``.
 
     ``system``: a ``LagrangianSystem``, or a function returning one (then each
-    run gets a fresh system and pays for all of its own function building; the
-    factory must be picklable to use a process pool).  ``methods_schemes``:
+    run gets a fresh system and pays for all of its own function building).
+    A process pool or a Dask cluster (``executor``, see :func:`executor_for`)
+    needs the function, and a picklable one (a module-level factory such as
+    ``pendulum.double_pendulum``, or a ``functools.partial`` of one): CasADi
+    expressions do not pickle.  ``methods_schemes``:
     pairs such as ``("whole", "galerkin4")`` or ``("rk4", None)`` (the scheme
     of ``rk4`` / ``implicit-euler`` is ignored).  ``ns``: a list of step
     counts for every pair, or a dict keyed by ``(method, scheme)``, by the
@@ -208,13 +384,16 @@ def work_precision_sweep(system, q0, qd0, T: float, methods_schemes: Sequence[tu
 
     ``warmup``: first run every pair once at ``N = 64``, untimed and in this
     process, so loading the Ipopt plugin and first-call set-up are billed to
-    no row.
+    no row.  ``progress(row)`` is called as each run finishes; ``bar`` /
+    ``quiet``: the progress bar (:func:`progress_bar`).
     """
-    import functools
-
     from ..baselines.stepping import reference
 
     sys0, factory = _system_of(system)
+    executor = executor or SerialExecutor()
+    if factory is None and _needs_pickling(executor):
+        raise TypeError("work_precision_sweep: a process pool or a Dask cluster needs a picklable function "
+                        "returning the system (e.g. pendulum.double_pendulum), not a built system")
     q0 = np.asarray(q0, float).reshape(-1)
     qd0 = np.asarray(qd0, float).reshape(-1)
     atol = reference_rtol if reference_atol is None else reference_atol
@@ -226,14 +405,9 @@ def work_precision_sweep(system, q0, qd0, T: float, methods_schemes: Sequence[tu
         for m, s in pairs:
             trajectory_run(shared, q0, qd0, T, 64, m, s, q_ref, E0, options)
     tasks = [(m, s, n) for m, s in pairs for n in _ns_for(ns, m, s)]
-    executor = executor or SerialExecutor()
     fn = functools.partial(_trajectory_task, shared, q0, qd0, T, q_ref, E0, options)
-    rows = []
-    for row in executor.map(fn, tasks):
-        rows.append(row)
-        if progress:
-            progress(row)
-    return rows
+    return run_tasks(fn, tasks, executor, progress, bar, quiet, desc="work-precision",
+                     label=lambda r: f"{r['label']} N={r['n']}")
 
 
 def _select(rows: List[dict], label: str, key: str) -> List[dict]:
@@ -360,6 +534,33 @@ def long_horizon_run(system, q0, qd0, T: float, n: int, method: str, scheme: Opt
     return row, run
 
 
+def _long_horizon_task(system, q0, qd0, T, n, options, tail_fraction, pair):
+    """One long run for an executor: ``(row, t, energy)`` (plain arrays: a ``Run`` holds CasADi objects)."""
+    method, scheme = pair
+    row, run = long_horizon_run(system, q0, qd0, T, n, method, scheme, options, tail_fraction)
+    return row, np.asarray(run.t, float), np.asarray(run.energy, float)
+
+
+def long_horizon_sweep(system, q0, qd0, T: float, n: int, pairs: Sequence[tuple],
+                       executor: Optional[cf.Executor] = None, options: Optional[dict] = None,
+                       tail_fraction: float = 0.1, progress: Optional[Callable[[tuple], None]] = None,
+                       bar: Optional[bool] = None, quiet: bool = False) -> List[tuple]:
+    """:func:`long_horizon_run` for every ``(method, scheme)`` in ``pairs``: ``[(row, t, energy)]`` in order.
+
+    ``system`` as in :func:`work_precision_sweep` (a picklable factory for a process pool or
+    a Dask cluster); ``progress((row, t, energy))`` as each run finishes.
+    """
+    _, factory = _system_of(system)
+    executor = executor or SerialExecutor()
+    if factory is None and _needs_pickling(executor):
+        raise TypeError("long_horizon_sweep: a process pool or a Dask cluster needs a picklable function "
+                        "returning the system, not a built system")
+    fn = functools.partial(_long_horizon_task, factory or system, list(np.asarray(q0, float).reshape(-1)),
+                           list(np.asarray(qd0, float).reshape(-1)), T, int(n), options, tail_fraction)
+    return run_tasks(fn, [tuple(p) for p in pairs], executor, progress, bar, quiet, desc="long horizon",
+                     label=lambda r: r[0]["label"])
+
+
 # ----------------------------------------------------------------------------- contact: work-precision
 #: Contact work-precision cases: bouncing ball under gravity (flight exact in the midpoint rule)
 #: and the ball on a spring (harmonic flight: the discretisation error is visible).
@@ -423,10 +624,20 @@ def _flight_apex(c: dict, y, v):
     return y + v * v / (2 * c["g"])
 
 
+def _contact_task(task) -> dict:
+    case, method, n = task
+    return contact_run(case, n, method)
+
+
 def contact_work_precision(ns: Sequence[int], cases: Iterable[str] = tuple(CONTACT_CASES),
-                           methods: Iterable[str] = ("whole", "moreau-jean")) -> List[dict]:
-    """Rows of :func:`contact_run` for every case × method × N."""
-    return [contact_run(c, n, m) for c in cases for m in methods for n in ns]
+                           methods: Iterable[str] = ("whole", "moreau-jean"),
+                           executor: Optional[cf.Executor] = None, progress: Optional[Callable[[dict], None]] = None,
+                           bar: Optional[bool] = None, quiet: bool = False) -> List[dict]:
+    """Rows of :func:`contact_run` for every case × method × N (in that order; ``executor``:
+    see :func:`executor_for`, serial by default)."""
+    tasks = [(c, m, int(n)) for c in cases for m in methods for n in ns]
+    return run_tasks(_contact_task, tasks, executor, progress, bar, quiet, desc="contact",
+                     label=lambda r: f"{r['case']} {r['method']} N={r['n']}")
 
 
 # ----------------------------------------------------------------------------- rigid bodies
@@ -475,11 +686,14 @@ def rigid_body_run(n: int, method: str, scheme: Optional[str] = None, case: Opti
 
 def rigid_body_work_precision(ns: Sequence[int], pairs: Sequence[tuple] = (
         ("whole", "midpoint"), ("whole", "trapezoid"), ("whole", "galerkin4"), ("march", "galerkin4"),
-        ("rk4-euler", None)), executor=None) -> List[dict]:
-    """:func:`rigid_body_run` for every (method, scheme) and N (``executor.map``, serial by default)."""
-    ex = executor or SerialExecutor()
-    tasks = [(m, s, n) for m, s in pairs for n in ns]
-    return list(ex.map(_rigid_body_task, tasks))
+        ("rk4-euler", None)), executor: Optional[cf.Executor] = None,
+        progress: Optional[Callable[[dict], None]] = None, bar: Optional[bool] = None,
+        quiet: bool = False) -> List[dict]:
+    """:func:`rigid_body_run` for every (method, scheme) and N (``executor``: see
+    :func:`executor_for`, serial by default)."""
+    tasks = [(m, s, int(n)) for m, s in pairs for n in ns]
+    return run_tasks(_rigid_body_task, tasks, executor, progress, bar, quiet, desc="rigid body",
+                     label=lambda r: f"{r['label']} N={r['n']}")
 
 
 def _rigid_body_task(task):

@@ -34,7 +34,7 @@ Example (planar pendulum, one atom)::
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Optional, Sequence
+from typing import List, Optional, Sequence
 
 import casadi as ca
 import numpy as np
@@ -199,6 +199,22 @@ class LagrangianSystem:
     def ncontact(self) -> int:
         """Number of contact points (0 without a :class:`Contact` term)."""
         return self.contact.count if self.contact is not None else 0
+
+    def terms(self) -> List[str]:
+        """What the system holds, one entry per term: its kinetic form, each potential term, its
+        holonomic constraints, its contact (for the report's table of what each scene carries)."""
+        kin = type(self.kinetic).__name__
+        na = len(getattr(self.kinetic, "masses", []))
+        out = [{"Atoms": f"kinetic: {na} atom{'s' if na != 1 else ''}",
+                "MassMatrix": "kinetic: mass matrix",
+                "RigidBody": "kinetic: rigid body (rotation, inertia)"}.get(kin, f"kinetic: {kin}")]
+        for t in self.potentials:
+            out.append({"Gravity": "gravity", "Spring": "spring"}.get(type(t).__name__, getattr(t, "name", "potential")))
+        if self.nc:
+            out.append(f"{self.nc} holonomic constraint{'s' if self.nc > 1 else ''}")
+        if self.contact is not None:
+            out.append(f"contact: {self.ncontact} gap{'s' if self.ncontact > 1 else ''}, e = {self.contact.restitution:g}")
+        return out
 
     # -- symbolic pieces (expressions in self.q, self.qd)
     def kinetic_expr(self):

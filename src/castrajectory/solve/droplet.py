@@ -61,6 +61,8 @@ class DropletSolution(Result):
     young_residual: Optional[float]
     analytic: CircularCap
     errors: Dict[str, float] = field(default_factory=dict)
+    #: what the NLP carries: its terms and the program's anatomy
+    program: dict = field(default_factory=dict)
 
     def as_dict(self) -> dict:
         """The JSON object of ``problems/droplet.py --json``."""
@@ -78,6 +80,7 @@ class DropletSolution(Result):
             "errors": dict(self.errors),
             "x": self.x.tolist(),
             "y": self.y.tolist(),
+            "program": self.program,
         }
 
 
@@ -145,8 +148,14 @@ def solve(drop: Droplet, n: int = 400, formulation: str = "curve", *, options: O
         "pressure": abs(r["pressure"] - cap.pressure) / cap.pressure,
     }
     young = None if drop.span is not None else drop.gamma_gl * math.cos(r["contact_angle"]) + drop.wetting
+    terms = ["surface tension γ_gl × length", "area constraint"]
+    if drop.span is None and drop.wetting != 0.0:
+        terms.insert(1, "wetting (γ_sl − γ_sg) × span")
+    elif drop.span is not None:
+        terms.append("span pinned")
     sol = DropletSolution(drop, formulation, n, res, r["x"], r["y"], r["contact_angle"], r["span"], r["pressure"],
-                          r["energy"], young, cap, errors, **res.contract())
+                          r["energy"], young, cap, errors, {"terms": terms, "steps": int(n), **nlp.anatomy()},
+                          **res.contract())
     if sol.success:
         sol.error_estimate = _estimate(drop, n, formulation, opts, verbose, r, sol)
         sol.warnings += sol.error_estimate.warnings()

@@ -17,6 +17,32 @@ import tempfile
 import threading
 
 _seen = False
+#: A SIGINT arrived since :func:`install` (kept until the process handles it: a KeyboardInterrupt raised
+#: inside a finaliser or a weakref callback is printed and dropped by Python, so long-running commands
+#: also call :func:`check` at their safe points)
+_pending = False
+
+
+def install() -> None:
+    """For a long-running command (the report): every SIGINT is noted and raised as ``KeyboardInterrupt``;
+    :func:`check` raises it again at the command's safe points if Python dropped it (a SIGINT that lands in
+    a matplotlib weakref callback is "ignored" and the report went on to exit 0).  A SIGINT that whoever
+    started the process ignores stays ignored."""
+    if not _main_thread() or signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+        return
+
+    def note(signum, frame):
+        global _pending
+        _pending = True
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGINT, note)
+
+
+def check() -> None:
+    """Raise ``KeyboardInterrupt`` if a SIGINT arrived since :func:`install` (see there)."""
+    if _pending:
+        raise KeyboardInterrupt
 
 
 def _main_thread() -> bool:

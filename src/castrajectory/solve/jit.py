@@ -15,8 +15,13 @@ Cache.  The library is stored under :func:`cache_dir` with a name made of a
 SHA-256 hash of the generated C code, the compiler and its flags, so a later
 run (tests, the report, the benchmarks) loads it instead of recompiling.  A
 change to the function changes its code and therefore its hash; stale entries
-are never reused.  Writes go to a temporary file renamed into place, so
-concurrent processes can share the cache.
+are never reused.  Several processes (a process pool, Dask workers, two
+terminals) may share the cache: a library is compiled into a private
+temporary folder inside the cache folder and renamed into place with
+``os.replace`` (atomic on one file system), so a concurrent reader finds
+either no library or a whole one, never a half-written one.  Two processes
+compiling the same function at once both succeed; the later rename wins,
+with identical content.
 
 Fallback.  Whenever no C compiler is found, compilation or loading fails, the code is longer
 than :data:`MAX_CODE_CHARS`, or compilation is switched off, :func:`compiled` returns the function unchanged
@@ -65,6 +70,10 @@ stats: Dict[str, int] = {"compiled": 0, "cache_hits": 0, "memory_hits": 0, "fall
 MAX_CODE_CHARS = 400_000
 #: Largest number of compiled libraries kept in the cache (least recently used ones are deleted).
 MAX_ENTRIES = 2000
+#: A build folder (``.build-*``) older than this (seconds) belongs to a compilation that was killed
+#: (a cancelled worker, Ctrl-C): it is removed.  Far above :data:`COMPILE_TIMEOUT_S`, so a running
+#: compilation of another process is never touched.
+STALE_BUILD_S = 3600.0
 
 _loaded: Dict[str, ca.Function] = {}  # key -> loaded external function (this process)
 _failed: set = set()  # keys whose compilation or loading failed in this process
@@ -195,13 +204,21 @@ def _touch(lib: Path) -> None:
 
 
 def _prune(folder: Path) -> None:
-    """Keep at most :data:`MAX_ENTRIES` libraries, dropping the least recently used."""
+    """Keep at most :data:`MAX_ENTRIES` libraries, dropping the least recently used, and remove the
+    build folders of compilations killed midway (older than :data:`STALE_BUILD_S`)."""
     try:
         libs = sorted(folder.glob("*.so"), key=lambda q: q.stat().st_mtime)
         for old in libs[:max(0, len(libs) - MAX_ENTRIES)]:
             old.unlink()
     except OSError:
         pass
+    now = time.time()
+    for tmp in folder.glob(".build-*"):
+        try:
+            if now - tmp.stat().st_mtime > STALE_BUILD_S:
+                shutil.rmtree(tmp, ignore_errors=True)
+        except OSError:
+            pass
 
 
 def _build(code: str, cc: str, folder: Path, lib: Path) -> None:

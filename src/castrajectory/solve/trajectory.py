@@ -94,6 +94,9 @@ class Trajectory(Result):
     method: str = "whole"
     levels: List[Level] = field(default_factory=list)
     action: float = float("nan")  # discrete action S_d = Σ L_d
+    #: what the answer's NLP carries: the system's terms and the program's anatomy
+    #: (:meth:`~castrajectory.discretise.program.Program.anatomy`), with its number of steps
+    program: dict = field(default_factory=dict)
 
     def as_dict(self) -> dict:
         return {**super().as_dict(), **trajectory_keys(self), "mode": self.mode,
@@ -101,8 +104,11 @@ class Trajectory(Result):
 
 
 def trajectory_keys(run) -> dict:
-    """The keys every mechanics scene's JSON holds besides the contract: scheme, method, t, q, energy."""
-    return {k: getattr(run, k) for k in ("scheme", "method", "t", "q", "energy")}
+    """The keys every mechanics scene's JSON holds besides the contract: scheme, method, t, q, energy, and
+    ``program`` (what the whole-trajectory NLP carries; ``null`` for a time-stepping baseline)."""
+    out = {k: getattr(run, k) for k in ("scheme", "method", "t", "q", "energy")}
+    out["program"] = getattr(run, "program", None) or getattr(getattr(run, "detail", None), "program", None) or None
+    return out
 
 
 def _check_finite_state(system: LagrangianSystem, q0, qd0) -> None:
@@ -502,6 +508,7 @@ def _finish(tn: TrajectoryNLP, res: NLPResult, log: List[Level], mode: str) -> T
            "build_time_s": float(sum(lv.build_time_s for lv in log)),
            "solve_time_s": float(sum(lv.solve_time_s for lv in log))},
         scheme=dm.scheme.name, mode=mode, levels=log,
+        program={"terms": dm.system.terms(), "steps": int(N), **tn.nlp.anatomy()},
         action=float(np.sum(np.asarray(dm.Ld.map(N)(q[:-1].T, Z.T, q[1:].T, tn.h)))))
 
 

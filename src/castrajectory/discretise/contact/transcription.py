@@ -186,6 +186,9 @@ class ContactTranscription:
         # terminal condition: the last node force may not launch the body (its gap at the end node
         # q_L would otherwise be free; see the module docstring, "Look-ahead step")
         nlp.minimize_elements("end_penalty", cm.product_penalty, [X(Q[L]), X(NU[L - 1]), rho, ell * pref / Hc[L - 1]])
+        # the pairs those penalties hold, per contact: gap ⟂ node force, sub-node gap ⟂ impulse, Newton's
+        # law ⟂ impulse (the slacks), and the end node's gap ⟂ the last node force
+        nlp.declared_pairs.update({"node": L * cm.c, "sub": L * cm.c, "impact_law": L * cm.c, "end": cm.c})
 
     def law_lengths(self, guess) -> np.ndarray:
         """Weight length δ_kj of Newton's law, ``W = φ_j(q_{k+1})/δ_kj``, per step and contact.

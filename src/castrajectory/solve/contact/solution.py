@@ -65,6 +65,8 @@ class ContactTrajectory(Result):
     method: str = "whole"
     #: steps of the base grid (``t`` has more nodes where steps were halved around crowded impacts)
     n: int = 0
+    #: what the answer's NLP carries (see :attr:`castrajectory.solve.trajectory.Trajectory.program`)
+    program: dict = field(default_factory=dict)
 
     def as_dict(self) -> dict:
         return {**super().as_dict(), "solver_status": self.solver_status,
@@ -76,7 +78,7 @@ class ContactTrajectory(Result):
                 # JSON keys of the earlier second sub-node per step, kept for existing readers: a step
                 # now holds one sub-node (the grid is halved instead), so they are always empty
                 "steps_sub2": [], "t_sub2": [], "mu_sub2": [],
-                "homotopy": [vars(s) for s in self.homotopy], "attempts": self.attempts}
+                "homotopy": [vars(s) for s in self.homotopy], "attempts": self.attempts, "program": self.program}
 
 
 def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: float, attempts,
@@ -151,7 +153,8 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
         iterations=int(total_iter),
         build_time_s=float(sum(a["build_time_s"] for a in attempts)),
         solve_time_s=float(guess_time + sum(a["solve_time_s"] for a in attempts)),
-        scheme=cm.dm.scheme.name, homotopy=list(res.homotopy), attempts=attempts, n=int(round(float(t[-1]) / h)))
+        scheme=cm.dm.scheme.name, homotopy=list(res.homotopy), attempts=attempts, n=int(round(float(t[-1]) / h)),
+        program={"terms": sysm.terms(), "steps": int(tn.L), **tn.nlp.anatomy()})
 
 
 #: An elastic scene (e = 1) whose energy falls by more than this fraction is reported with a warning.
