@@ -31,6 +31,9 @@ Scene: double pendulum (unit masses and lengths, g = 9.81) from rest at
     ``--repeats`` > 1 each run's best time is kept.  Goal: whole-galerkin4
     faster than RK4 (ratio < 1).
 
+(d) scipy's DOP853 and RK45 (the ``bench`` extra) to the same error: goal whole-galerkin4 within 5x of
+    DOP853; the anatomy of the galerkin4 run and the ceiling (the level at N alone) are printed.
+
 One untimed warm-up solve runs first (loading the Ipopt plugin).  BLAS
 threads are pinned to 1 unless the caller set them (see bench_droplet.py).
 
@@ -297,6 +300,43 @@ def main(argv=None) -> int:
               f"its NLP alone takes {f0['build_time_s']:.4f} s = {f0['build_time_s'] / r['cost']:.1f}x rk4's whole run "
               f"to {TARGET:g}; rk4 is a compiled CasADi mapaccum at "
               f"{r['cost'] / max(r['n'], 1) * 1e6:.2f} us per step, so one Ipopt solve over the same steps cannot match it")
+
+    # (d) the peers a user would otherwise reach for: scipy's DOP853 and RK45 (the `bench` extra)
+    peers = study.peer_sweep(pendulum.double_pendulum, Q0, QD0, T, reference_rtol=REFERENCE_RTOL,
+                             rtols=(1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12))
+    print()
+    if not peers:
+        print("(d) scipy is not installed (pip install '.[bench]'): DOP853 and RK45 skipped")
+    else:
+        print(f"(d) time to final error {TARGET:g}: whole-galerkin4 vs scipy DOP853 and RK45 (right-hand side: the "
+              "system's compiled CasADi acceleration called from Python)")
+        for row in peers:
+            print(f"  {row['label']:16s} rtol {row['rtol']:.0e} nfev {row['n']:>7} {row['time_s']:8.4f} s "
+                  f"error {row['error_final']:9.2e}")
+        dop = study.time_to_error(peers, "scipy-DOP853", TARGET)
+        g = reach["whole-galerkin4"]
+        if dop["note"] == "not reached" or g["note"] == "not reached":
+            ok, detail = None, f"not comparable (DOP853 {dop['note']}, whole-galerkin4 {g['note']})"
+        else:
+            ratio = g["cost"] / dop["cost"]
+            ratios[f"time to {TARGET:g}: whole-galerkin4 / DOP853"] = ratio
+            ok, detail = ratio <= 5.0, f"whole-galerkin4 {g['cost']:.4f} s, DOP853 {dop['cost']:.4f} s, ratio {ratio:.1f}"
+        goals.append((f"(d) whole-galerkin4 within 5x of DOP853 at final error {TARGET:g}", ok, detail))
+        print(goal_line(*goals[-1]))
+        first = [row for row in rows if row["label"] == "whole-galerkin4" and row["error_final"] <= TARGET]
+        if first and dop["note"] != "not reached":
+            f0 = min(first, key=lambda row: row["n"])
+            run = simulate(pendulum.double_pendulum(), Q0, QD0, T, f0["n"], "galerkin4", "whole")
+            lv = run.detail.levels
+            i = max(j for j, x in enumerate(lv) if x.purpose == "solve")
+            at_n = lv[i].build_time_s + lv[i].solve_time_s
+            before = sum(x.build_time_s + x.solve_time_s for x in lv[:i])
+            print(f"  where the time goes at N = {f0['n']}: {len(lv[:i])} coarser levels {before:.4f} s; the level at N: "
+                  f"build {lv[i].build_time_s:.4f} s + {lv[i].iterations} Newton iteration(s) {lv[i].solve_time_s:.4f} s "
+                  f"(CasADi functions {lv[i].function_time_s:.4f} s, the rest Ipopt/MUMPS)")
+            print(f"  ceiling: the level at N alone (one build and at least one Newton iteration over all "
+                  f"{f0['n']} steps) costs {at_n:.4f} s = {at_n / dop['cost']:.1f}x DOP853's whole run to {TARGET:g}; "
+                  f"5x DOP853 = {5 * dop['cost']:.4f} s")
 
     # ------------------------------------------------------------------ summary
     print()

@@ -110,7 +110,12 @@ def _contact_work_precision(out: str, size: str):
             lines.append(f"| {case} | {method} | {order_s} | {errs[0]:.2e} | {errs[-1]:.2e} | "
                          f"{sel[0]['apex_error']:.2e} | {sel[-1]['apex_error']:.2e} | "
                          f"{sel[-1]['build_time_s'] + sel[-1]['solve_time_s']:.3f} |")
-    lines += ["", "![contact work-precision](contact_work_precision.png)", ""]
+    timed = [{**r, "label": f"{r['case']}: {r['method']}", "time_s": r["build_time_s"] + r["solve_time_s"]}
+             for r in rows]
+    spring = [lab for lab in dict.fromkeys(r["label"] for r in timed) if lab.startswith("spring_ball")]
+    lines += ["", "Reading (measured in this run, the ball on a spring): "
+              + study.reading(timed, spring, (1e-3, 1e-5, 1e-7), key="impact_time_error"), "",
+              "![contact work-precision](contact_work_precision.png)", ""]
     return ok, lines
 
 
@@ -156,7 +161,10 @@ def _rigid_body_work_precision(out: str, size: str):
         lines.append(f"| {label} | {order:.2f} | {'not reached' if not math.isfinite(t6) else f'{t6:.3g}'} | "
                      f"{max(r['angular_momentum_drift'] for r in sel):.1e} | "
                      f"{max(r['quaternion_norm_error'] for r in sel):.1e} | {all(r['success'] for r in sel)} |")
-    lines += ["", "![rigid-body work-precision](rigidbody_work_precision.png)", ""]
+    labels = list(dict.fromkeys(r["label"] for r in rows))
+    lines += ["", "Reading (measured in this run): " + study.reading(rows, labels, (1e-3, 1e-5, 1e-6),
+                                                                     key="flip_interval_error"), "",
+              "![rigid-body work-precision](rigidbody_work_precision.png)", ""]
     return ok, lines
 
 
@@ -223,7 +231,9 @@ def _work_precision(out: str, size: str):
     base = [n for n in (250, 500, 1000, 2000, 4000, 8000, 16000) if n <= top]
     ns = {"whole": base, "march": base, "rk4": base + [2 * top], "implicit-euler": base}
     rows = study.work_precision_sweep(pendulum.double_pendulum, [2.0, 1.0], [0.0, 0.0], 5.0, pairs, ns,
-                                      reference_rtol=1e-14)
+                                      reference_rtol=1e-14, quiet=True)
+    peers = study.peer_sweep(pendulum.double_pendulum, [2.0, 1.0], [0.0, 0.0], 5.0, reference_rtol=1e-14)
+    rows += peers
     study.write_csv([{k: v for k, v in r.items() if not isinstance(v, (list, dict))} for r in rows],
                     os.path.join(out, "work_precision.csv"))
     fig = plotting.work_precision_panels(rows, title="double pendulum, T = 5 s, θ = (2, 1)")
@@ -231,18 +241,25 @@ def _work_precision(out: str, size: str):
     ok = all(r["success"] for r in rows if r["method"] == "whole")
     lines = ["## Error against run time (double pendulum, T = 5 s, θ = (2, 1) at rest)", "",
              f"N = {base[0]} … {top}; reference: CVODES at rtol 1e-14; data in `work_precision.csv`. "
-             "Time = build + solve (whole: every level and window).", "",
-             "| method | observed order | time to error 1e-6 (s) | time to 1e-8 (s) | all converged |",
+             "Time = build + solve (whole: every level and window, and the error estimate's coarser grid). "
+             + ("scipy's DOP853 and RK45 (the peers a user would otherwise reach for; rtol = atol = 1e-4 … 1e-12, "
+                "N = their right-hand-side evaluations) on the same axes." if peers else
+                "scipy is not installed (the `bench` extra): its DOP853 and RK45 are not shown."), "",
+             "| method | observed order (fit range) | time to error 1e-6 (s) | time to 1e-8 (s) | all converged |",
              "|---|---|---|---|---|"]
-    for m, sch in pairs:
-        label = study.trajectory_label(m, sch)
+    labels = [study.trajectory_label(m, sch) for m, sch in pairs] + list(dict.fromkeys(r["label"] for r in peers))
+    for label in labels:
         sel = [r for r in rows if r["label"] == label]
-        order = study.trajectory_order(rows, label)["order"]
+        o = study.trajectory_order(rows, label)
+        order = (f"{o['order']:.2f} (N = {o['n_min']} … {o['n_max']}"
+                 + (f"; a floor from N = {o['stalled_at']:.0f}" if np.isfinite(o["stalled_at"]) else "") + ")"
+                 if np.isfinite(o["order"]) else o["note"]) if not label.startswith("scipy") else "adaptive"
         t6 = study.time_to_error(rows, label, 1e-6)["cost"]
         t8 = study.time_to_error(rows, label, 1e-8)["cost"]
         f = (lambda v: "not reached" if v is None or not np.isfinite(v) else f"{v:.3g}")  # noqa: E731
-        lines.append(f"| {label} | {order:.2f} | {f(t6)} | {f(t8)} | {all(r['success'] for r in sel)} |")
-    lines += ["", "![work-precision](work_precision.png)", ""]
+        lines.append(f"| {label} | {order} | {f(t6)} | {f(t8)} | {all(r['success'] for r in sel)} |")
+    lines += ["", "Reading (measured in this run): " + study.reading(rows, labels), "",
+              "![work-precision](work_precision.png)", ""]
     return ok, lines
 
 
@@ -415,7 +432,10 @@ def write_report(out: str, size: str = "default", quiet: bool = False) -> int:
         sel = [r for r in rows if r["formulation"] == f]
         lines.append(f"| {f} | " + " | ".join(f"{orders[k]:.2f}" for k in study.DROPLET_ERRORS)
                      + f" | {max(r['iterations'] for r in sel)} | {all(r['status'] == 'ok' for r in sel)} |")
-    lines += ["", "![convergence](droplet_convergence.png)", ""]
+    timed = [{**r, "label": r["formulation"], "time_s": r["total_time_s"]} for r in rows]
+    lines += ["", "Reading (measured in this run, the shape error): "
+              + study.reading(timed, list(droplet.FORMULATIONS), (1e-4, 1e-6, 1e-8), key="err_shape"), "",
+              "![convergence](droplet_convergence.png)", ""]
 
     # ---- the scenes through their problem scripts, the studies, the stability table: in this order
     parts = [

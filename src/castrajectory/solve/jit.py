@@ -78,6 +78,7 @@ STALE_BUILD_S = 3600.0
 _loaded: Dict[str, ca.Function] = {}  # key -> loaded external function (this process)
 _failed: set = set()  # keys whose compilation or loading failed in this process
 _too_large: Dict[int, ca.Function] = {}  # functions whose code exceeds MAX_CODE_CHARS (this process)
+_by_form: Dict[str, str] = {}  # sha256 of a function's serialize() -> its key in _loaded (this process)
 _compiler_checked: Dict[str, Optional[str]] = {}
 
 
@@ -141,6 +142,12 @@ def compiled(fn: ca.Function, build: bool = True) -> ca.Function:
             return fn
         if id(fn) in _too_large:
             return fn
+        # in this process, a function already compiled is found by its serialised form (3x cheaper than
+        # generating its C code: 0.2 against 0.65 ms for galerkin4's DEL element, 20 per solve)
+        form = hashlib.sha256(fn.serialize().encode()).hexdigest()
+        if _by_form.get(form) in _loaded:
+            stats["memory_hits"] += 1
+            return _loaded[_by_form[form]]
         code = c_code(fn)
         if len(code) > MAX_CODE_CHARS:
             _too_large[id(fn)] = fn          # (the reference keeps the id valid)
@@ -149,6 +156,7 @@ def compiled(fn: ca.Function, build: bool = True) -> ca.Function:
         key = _key(code, cc)
         if key in _loaded:
             stats["memory_hits"] += 1
+            _by_form[form] = key
             return _loaded[key]
         if key in _failed:
             return fn
@@ -171,6 +179,7 @@ def compiled(fn: ca.Function, build: bool = True) -> ca.Function:
             lib.unlink(missing_ok=True)  # a damaged library: the next run compiles it again
             raise
         _loaded[key] = out
+        _by_form[form] = key
         return out
     except Exception as exc:  # no compiler, failed compile, unwritable cache, failed load: use the VM
         interrupt.reraise(exc)          # ... but an interrupt inside CasADi's code generation stops
