@@ -51,8 +51,11 @@ from ..validation import InputError, integer_at_least, positive
 #: ``min_refinement_steps 0``: no forced iterative-refinement solve per KKT solve (Ipopt still
 #: refines when the residual ratio asks for it); measured 0.17 -> 0.145 s for the 1-iteration
 #: final solve of the double pendulum at N = 32000 (midpoint), 0.33 -> 0.28 s (galerkin4).
+#: ``mumps_pivot_order = 6`` (QAMD) instead of MUMPS' automatic choice: wall time of simulate(), best of 4,
+#: alternating in one process (double pendulum, T = 5): galerkin4 N = 4000 0.188 -> 0.137 s, N = 8000
+#: 0.281 -> 0.185 s; midpoint N = 32000 0.725 -> 0.512 s.
 TRAJECTORY_IPOPT = {"tol": 1e-12, "max_iter": 100, "constr_mult_init_max": 0, "min_refinement_steps": 0,
-                    "mumps_pivtol": 1e-8}
+                    "mumps_pivtol": 1e-8, "mumps_pivot_order": 6}
 
 
 @dataclass
