@@ -14,6 +14,19 @@ The package is built in layers; each folder is one room, and imports only point 
 
 ``result`` (the one result contract) and ``validation`` (the bad-input error) sit under all of them.
 
+The public API is what a user composes into a system of their own (each name's docstring holds a
+runnable example, run by ``tests/test_api.py``)::
+
+    import castrajectory as ct
+    system = ct.LagrangianSystem(q, ct.Atoms(positions, masses), [ct.Gravity(9.81), ct.Spring(...)],
+                                 constraints=[...], contact=ct.Contact(gaps, restitution=0.9))
+    run = ct.simulate(system, q0, qd0, T, N, scheme="galerkin4", rtol=1e-6)
+
+``LagrangianSystem``, ``Atoms``, ``MassMatrix``, ``Gravity``, ``Spring``, ``Potential``, ``Contact``,
+``RigidBody`` and ``Inertia`` describe; ``simulate`` solves (one whole-trajectory stationary-action
+problem) and returns the result contract with ``t``, ``q``, ``energy``, ``error_estimate`` and
+``warnings``.  Everything else is internal.
+
 The flat module names of earlier versions (``castrajectory.droplet``, ``castrajectory.nlp``, ...)
 still import: they are aliases of the modules that now hold their contents (see ``_MOVED``).
 """
@@ -64,6 +77,13 @@ class _Alias(importlib.abc.MetaPathFinder, importlib.abc.Loader):
 
 if not any(isinstance(f, _Alias) for f in sys.meta_path):
     sys.meta_path.append(_Alias())
+
+from .models.mechanics import Atoms, Contact, Gravity, LagrangianSystem, MassMatrix, Potential, Spring  # noqa: E402
+from .models.rigidbody import Inertia, RigidBody  # noqa: E402
+from .solve.simulate import simulate  # noqa: E402
+
+__all__ = ["LagrangianSystem", "Atoms", "MassMatrix", "Gravity", "Spring", "Potential", "Contact", "RigidBody",
+           "Inertia", "simulate"]
 
 
 def __getattr__(name):

@@ -45,7 +45,17 @@ from ..validation import InputError, finite
 # ----------------------------------------------------------------------------- kinetic energy
 @dataclass
 class MassMatrix:
-    """``K = ½ q̇ᵀ M(q) q̇`` for a symmetric positive definite ``M`` (SX expression of q or constant)."""
+    """``K = ½ q̇ᵀ M(q) q̇`` for a symmetric positive definite ``M`` (SX expression of q or constant).
+
+    A planar rigid body, coordinates ``(x, y, θ)``, mass 2 and inertia 0.5 about its centre:
+
+    >>> import casadi as ca, castrajectory as ct
+    >>> q = ca.SX.sym("q", 3)
+    >>> body = ct.LagrangianSystem(q, ct.MassMatrix(ca.diag(ca.DM([2.0, 2.0, 0.5]))),
+    ...                            [ct.Gravity(9.81, heights=[q[1]], masses=[2.0])])
+    >>> float(body.energy([0, 1, 0], [1, 0, 2]))   # ½·2·1² + ½·0.5·2² + 2·9.81·1
+    21.62
+    """
 
     matrix: object
 
@@ -56,7 +66,17 @@ class MassMatrix:
 
 @dataclass
 class Atoms:
-    """Atoms at positions ``x_a = f_a(q)`` with masses ``m_a``: ``K = Σ ½ m_a |J_a q̇|²``."""
+    """Atoms at positions ``x_a = f_a(q)`` with masses ``m_a``: ``K = Σ ½ m_a |J_a q̇|²``.
+
+    A pendulum of length 2 (angle from the downward vertical), its bob of mass 3:
+
+    >>> import casadi as ca, castrajectory as ct
+    >>> th = ca.SX.sym("theta", 1)
+    >>> bob = 2.0 * ca.vertcat(ca.sin(th), -ca.cos(th))
+    >>> pendulum = ct.LagrangianSystem(th, ct.Atoms([bob], [3.0]), [ct.Gravity(9.81)])
+    >>> float(pendulum.energy([0.0], [1.0]))       # ½·3·(2·1)² − 3·9.81·2
+    -52.86
+    """
 
     positions: Sequence[object]
     masses: Sequence[float]
@@ -81,7 +101,13 @@ class Gravity:
     """Uniform gravity ``g`` acting along ``-e_y`` on every atom: ``U = Σ m_a g y_a``.
 
     For a :class:`MassMatrix` system give ``heights`` (expressions) and ``masses``
-    explicitly.
+    explicitly.  A scene without gravity leaves the term out (``g = 0`` adds nothing):
+
+    >>> import casadi as ca, castrajectory as ct
+    >>> y = ca.SX.sym("y", 1)
+    >>> ball = ct.LagrangianSystem(y, ct.Atoms([ca.vertcat(0, y)], [1.0]), [ct.Gravity(9.81)])
+    >>> float(ball.acceleration([1.0], [0.0]))
+    -9.81
     """
 
     g: float
@@ -101,7 +127,16 @@ class Gravity:
 
 @dataclass
 class Spring:
-    """Linear spring of stiffness ``k`` and rest length ``rest`` between points ``a`` and ``b``."""
+    """Linear spring of stiffness ``k`` and rest length ``rest`` between points ``a`` and ``b``.
+
+    A mass on a spring of rest length 1 hung from the origin, released at length 1.5:
+
+    >>> import casadi as ca, castrajectory as ct
+    >>> x = ca.SX.sym("x", 2)
+    >>> s = ct.LagrangianSystem(x, ct.Atoms([x], [1.0]), [ct.Spring(100.0, 1.0, x, ca.DM.zeros(2))])
+    >>> (s.acceleration([0.0, -1.5], [0.0, 0.0]).full().ravel().round(9) + 0.0).tolist()   # k (1.5 − 1) / m up
+    [0.0, 50.0]
+    """
 
     stiffness: float
     rest: float
@@ -115,7 +150,14 @@ class Spring:
 
 @dataclass
 class Potential:
-    """A user-supplied potential energy expression of ``q``."""
+    """A user-supplied potential energy expression of ``q`` (``name`` labels it in tables).
+
+    >>> import casadi as ca, castrajectory as ct
+    >>> x = ca.SX.sym("x", 1)
+    >>> quartic = ct.LagrangianSystem(x, ct.MassMatrix(1.0), [ct.Potential(x[0] ** 4, "quartic well")])
+    >>> float(quartic.acceleration([2.0], [0.0])), quartic.terms()
+    (-32.0, ['kinetic: mass matrix', 'quartic well'])
+    """
 
     expr: object
     name: str = "potential"
@@ -132,6 +174,15 @@ class Contact:
     An impact of contact ``j`` reverses its normal velocity ``∇φ_j q̇`` by the
     factor ``e`` (``e = 1``: elastic, the default); impulses act along
     ``M⁻¹∇φ_jᵀ`` with ``μ_j ≥ 0``.  ``names`` label the contact points in output.
+    A ball dropped from 1 m bounces at ``t = √(2/g)``:
+
+    >>> import casadi as ca, castrajectory as ct
+    >>> y = ca.SX.sym("y", 1)
+    >>> ball = ct.LagrangianSystem(y, ct.Atoms([ca.vertcat(0, y)], [1.0]), [ct.Gravity(9.81)],
+    ...                            contact=ct.Contact([y[0]], restitution=0.8))
+    >>> run = ct.simulate(ball, [1.0], [0.0], T=0.6, N=120)
+    >>> run.success, round(run.detail.impacts[0].t, 9) == round((2 / 9.81) ** 0.5, 9)
+    (True, True)
     """
 
     gaps: Sequence[object]
@@ -157,6 +208,17 @@ class Contact:
 @dataclass
 class LagrangianSystem:
     """``L(q, q̇) = K(q, q̇) − U(q)`` with optional holonomic constraints ``c(q) = 0``.
+
+    A pendulum written in Cartesian coordinates, held on its circle by a constraint; its multiplier
+    is the rod's tension per unit length:
+
+    >>> import casadi as ca, castrajectory as ct
+    >>> x = ca.SX.sym("x", 2)
+    >>> p = ct.LagrangianSystem(x, ct.Atoms([x], [1.0]), [ct.Gravity(9.81)],
+    ...                         constraints=[(ca.dot(x, x) - 1.0) / 2], names=["x", "y"])
+    >>> run = ct.simulate(p, [1.0, 0.0], [0.0, 0.0], T=0.5, N=200)
+    >>> run.success, abs(float(sum(run.q[-1] ** 2)) - 1.0) < 1e-12
+    (True, True)
 
     Parameters
     ----------

@@ -133,6 +133,10 @@ class Inertia:
     Refused: a non-finite or non-positive moment, and a moment larger than the sum of the
     other two (the triangle inequality ``I_i ≤ I_j + I_k``: a real mass distribution has
     non-negative second moments ``J_i = (I_j + I_k − I_i)/2``).
+
+    >>> import castrajectory as ct
+    >>> ct.Inertia.box(1.0, 2.0, 3.0, mass=12.0).moments.tolist()
+    [13.0, 10.0, 5.0]
     """
 
     I1: float
@@ -182,7 +186,18 @@ class RigidBody:
     ``K = ½ Σ_i J_i |Ṙ(quat) e_i|² + ½ mass |ċ|²`` with ``J`` the :attr:`Inertia.second_moments`
     (about the reference point) and, when ``center`` (3 SX expressions of q) and ``mass`` are
     given, the translation of the reference point.  Composes with other kinetic terms in a
-    :class:`~castrajectory.models.mechanics.LagrangianSystem` (a list of terms).
+    :class:`~castrajectory.models.mechanics.LagrangianSystem` (a list of terms); the quaternion's
+    norm is a holonomic constraint (:func:`unit_norm`).  A free body spun about its middle axis flips
+    (the Dzhanibekov effect), its spatial angular momentum kept by the discrete Noether theorem:
+
+    >>> import casadi as ca, numpy as np, castrajectory as ct
+    >>> from castrajectory.models.rigidbody import quaternion_rate, unit_norm
+    >>> q = ca.SX.sym("q", 4)
+    >>> body = ct.LagrangianSystem(q, ct.RigidBody(q, ct.Inertia(1.0, 2.0, 3.0)), constraints=[unit_norm(q)])
+    >>> q0 = np.array([1.0, 0, 0, 0])
+    >>> run = ct.simulate(body, q0, quaternion_rate(q0, [1e-3, 1.0, 1e-3]), T=20.0, N=800)
+    >>> run.success, float(np.max(np.abs(np.sum(run.q ** 2, axis=1) - 1))) < 1e-10
+    (True, True)
     """
 
     quat: object
