@@ -1,7 +1,7 @@
 """The command line: problem-script plumbing (:mod:`.scene`), the scene registry, the console command.
 
-``castrajectory list``, ``castrajectory run <scene> [flags]`` and ``castrajectory report --out DIR``
-(:mod:`.report`).  Problem scripts use the plumbing re-exported here (``cli.run_scene``, ...).
+``castrajectory list``, ``castrajectory run <scene> [flags]``, ``castrajectory system FILE.py [flags]``
+(:mod:`.system`: a system the user describes) and ``castrajectory report --out DIR`` (:mod:`.report`).  Problem scripts use the plumbing re-exported here (``cli.run_scene``, ...).
 """
 from __future__ import annotations
 
@@ -33,6 +33,11 @@ def main(argv: Optional[List[str]] = None) -> int:
     size.add_argument("--quick", action="store_true", help="the smallest sweeps (for tests: N up to 2048)")
     size.add_argument("--full", action="store_true", help="the larger sweeps (droplet to N = 1e5, pendulum to 16000)")
     rep.add_argument("--quiet", action="store_true", help="no progress lines")
+    sub.add_parser("system", help="solve the system described in FILE.py: castrajectory system FILE.py [flags]",
+                   add_help=False)
+    if argv[:1] == ["system"]:
+        from . import system
+        return system.main(argv[1:])
     if argv[:1] == ["run"]:
         if len(argv) < 2 or argv[1].startswith("-"):
             print("castrajectory: error: run needs a scene name; see `castrajectory list`", file=sys.stderr)

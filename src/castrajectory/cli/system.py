@@ -1,0 +1,127 @@
+"""``castrajectory system FILE.py``: a system the user describes in a file, solved as one whole-trajectory
+stationary-action problem, with the conventions of every scene (:func:`.scene.run_scene`).
+
+The file is plain Python and defines:
+
+* ``system()`` returning a :class:`castrajectory.LagrangianSystem` built from the public API;
+* ``q0`` and ``qd0``, the initial coordinates and velocities;
+* optionally ``T`` and ``n`` (the flags override them), ``title``, and for pictures ``links``
+  (``True``: the atoms joined in order from ``pivot``) and ``pivot`` (a point, or ``None``).
+
+Bad input is refused before any solve (exit 2, one line): a file that does not exist or does not
+import, no ``system()``, a ``system()`` that does not return a ``LagrangianSystem``, ``q0`` / ``qd0`` of
+the wrong length or not finite, a mass matrix that is not positive definite at ``q0`` (naming the
+coordinate without inertia), initial conditions off the holonomic constraints.
+"""
+from __future__ import annotations
+
+import importlib.util
+import os
+import sys
+from typing import List, Optional
+
+import numpy as np
+
+from ..validation import InputError
+from .scene import (ArgumentParser, accuracy, add_trajectory_flags, check_animation_path, ipopt_options, run_scene,
+                    trajectory_outcome)
+
+#: Horizon and steps when neither the file nor the flags give them.
+DEFAULT_T, DEFAULT_N = 5.0, 1000
+#: A mass matrix whose smallest eigenvalue is below this fraction of its largest is refused.
+PD_TOL = 1e-12
+
+
+def parser() -> ArgumentParser:
+    p = ArgumentParser(prog="castrajectory system",
+                       description="Solve the system described in FILE.py as one whole-trajectory NLP.")
+    p.add_argument("file", metavar="FILE.py", help="a Python file defining system(), q0, qd0 (T, n optional)")
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout and nothing else")
+    p.add_argument("--verbose", action="store_true", help="stream Ipopt's log (to stderr with --json)")
+    p.add_argument("--max-iter", type=int, default=None, help="Ipopt iterations of the whole run")
+    add_trajectory_flags(p, T=None, n=None)
+    return p
+
+
+def load(path: str):
+    """Import the user's file as a module (``InputError`` with one line if it cannot be)."""
+    if not os.path.isfile(path):
+        raise InputError(f"{path}: no such file")
+    name = "castrajectory_user_" + "".join(c if c.isalnum() else "_" for c in os.path.splitext(os.path.basename(path))[0])
+    spec = importlib.util.spec_from_file_location(name, path)
+    if spec is None or spec.loader is None:
+        raise InputError(f"{path}: not a Python file")
+    module = importlib.util.module_from_spec(spec)
+    try:
+        spec.loader.exec_module(module)
+    except InputError as exc:
+        raise InputError(f"{path}: {exc}") from None
+    except Exception as exc:  # noqa: BLE001 - whatever the user's file raises is bad input
+        raise InputError(f"{path} does not import: {type(exc).__name__}: {exc}".splitlines()[0]) from None
+    return module
+
+
+def described(module, path: str):
+    """``(system, q0, qd0)`` from the user's module, checked (see the module docstring)."""
+    from ..models.mechanics import LagrangianSystem
+
+    fn = getattr(module, "system", None)
+    if not callable(fn):
+        raise InputError(f"{path} defines no system() function")
+    try:
+        system = fn()
+    except InputError as exc:
+        raise InputError(f"{path}: system(): {exc}") from None
+    except Exception as exc:  # noqa: BLE001
+        raise InputError(f"{path}: system() raised {type(exc).__name__}: {exc}".splitlines()[0]) from None
+    if not isinstance(system, LagrangianSystem):
+        raise InputError(f"{path}: system() returned a {type(system).__name__}, not a castrajectory.LagrangianSystem")
+    vectors = []
+    for name in ("q0", "qd0"):
+        if not hasattr(module, name):
+            raise InputError(f"{path} defines no {name}")
+        try:
+            v = np.asarray(getattr(module, name), dtype=float).reshape(-1)
+        except (TypeError, ValueError):
+            raise InputError(f"{path}: {name} is not a list of numbers") from None
+        if v.size != system.nq:
+            raise InputError(f"{path}: {name} has {v.size} values, the system has {system.nq} coordinates "
+                             f"({', '.join(system.names)})")
+        if not np.all(np.isfinite(v)):
+            raise InputError(f"{path}: {name} must be finite (got {v.tolist()})")
+        vectors.append(v)
+    q0, qd0 = vectors
+    M = np.asarray(system.mass_matrix(q0), float)
+    lam, vec = np.linalg.eigh(0.5 * (M + M.T))
+    if not np.all(np.isfinite(lam)) or lam[0] <= PD_TOL * max(abs(lam[-1]), 1e-300):
+        j = int(np.argmax(np.abs(vec[:, 0])))
+        raise InputError(f"{path}: the mass matrix is not positive definite at q0 (smallest eigenvalue "
+                         f"{lam[0]:.3g}): coordinate {system.names[j]!r} has no inertia")
+    if system.nc:
+        c, C = (np.asarray(x, float) for x in system.constraint(q0))
+        if np.max(np.abs(c), initial=0.0) > 1e-9 or np.max(np.abs(C @ qd0), initial=0.0) > 1e-9:
+            raise InputError(f"{path}: q0, qd0 violate the holonomic constraints (|c(q0)| = "
+                             f"{np.max(np.abs(c)):.3g}, |C(q0) qd0| = {np.max(np.abs(C @ qd0)):.3g})")
+    return system, q0, qd0
+
+
+def run(args):
+    check_animation_path(args.animate)
+    module = load(args.file)
+    system, q0, qd0 = described(module, args.file)
+    T = args.T if args.T is not None else float(getattr(module, "T", DEFAULT_T))
+    n = args.n if args.n is not None else int(getattr(module, "n", DEFAULT_N))
+    args.T, args.n = T, n
+    from ..solve import simulate
+    res = simulate.simulate(system, q0, qd0, T, n, args.scheme, args.method, options=ipopt_options(args),
+                            verbose=args.verbose, **accuracy(args))
+    title = str(getattr(module, "title", os.path.splitext(os.path.basename(args.file))[0]))
+    return trajectory_outcome(title, system, res, links=bool(getattr(module, "links", True)))
+
+
+def main(argv: Optional[List[str]] = None) -> int:
+    return run_scene(parser(), run, argv)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

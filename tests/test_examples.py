@@ -1,0 +1,136 @@
+"""The system files of examples/ (and one that lives only here), through `castrajectory system`.
+
+Oracles: CVODES on the same Euler–Lagrange equations (at the scheme's order: the error falls 4x when N
+doubles), the normal-mode beats of the coupled pendulums, the hoop's angle form, bounded energy."""
+import json
+import math
+import os
+import subprocess
+import sys
+
+import casadi as ca
+import numpy as np
+import pytest
+
+import castrajectory as ct
+from castrajectory.baselines import stepping
+from castrajectory.cli import system as cli_system
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+EXAMPLES = ["coupled_pendulums", "cart_pendulum_spring", "bead_on_rotating_hoop"]
+KEYS = ("status", "iterations", "build_time_s", "solve_time_s", "scheme", "method", "t", "q", "energy",
+        "error_estimate", "warnings")
+
+
+def example(name):
+    path = os.path.join(ROOT, "examples", f"{name}.py")
+    mod = cli_system.load(path)
+    return (mod,) + cli_system.described(mod, path)
+
+
+def cli(*args, cwd=ROOT):
+    return subprocess.run([sys.executable, "-m", "castrajectory.cli", "system", *args], capture_output=True,
+                          text=True, cwd=cwd, env={**os.environ, "MPLBACKEND": "Agg"}, timeout=300)
+
+
+@pytest.mark.parametrize("name", EXAMPLES)
+def test_example_runs_from_the_command_line(name):
+    p = cli(f"examples/{name}.py", "--T", "2", "--n", "400", "--json")
+    assert p.returncode == 0, p.stderr
+    out = json.loads(p.stdout)
+    assert all(k in out for k in KEYS) and out["status"] == "ok"
+    assert out["error_estimate"]["available"] and out["warnings"] == []
+
+
+def _reference_angles(name, mod, system, q0, qd0, t):
+    """CVODES on the example's equations; the hoop in its angle form (CVODES takes no constraints)."""
+    if name != "bead_on_rotating_hoop":
+        return stepping.reference(system, q0, qd0, t[1:], rtol=1e-12, atol=1e-12)[0]
+    th = ca.SX.sym("theta", 1)
+    pos = mod.R * ca.vertcat(ca.sin(th), -ca.cos(th))
+    angle_form = ct.LagrangianSystem(th, ct.Atoms([pos], [mod.m]),
+                                     [ct.Potential(mod.m * mod.g * pos[1], "gravity"),
+                                      ct.Potential(-0.5 * mod.m * mod.omega ** 2 * pos[0] ** 2, "centrifugal")])
+    return stepping.reference(angle_form, [mod.theta0], [0.0], t[1:], rtol=1e-12, atol=1e-12)[0]
+
+
+def _angles(name, q):
+    return np.arctan2(q[:, 0], -q[:, 1])[:, None] if name == "bead_on_rotating_hoop" else q
+
+
+@pytest.mark.parametrize("name", EXAMPLES)
+def test_example_agrees_with_cvodes_at_second_order(name):
+    mod, system, q0, qd0 = example(name)
+    T = 2.0
+    errs = []
+    for n in (400, 800):
+        run = ct.simulate(system, q0, qd0, T, n)
+        assert run.success
+        ref = _reference_angles(name, mod, system, q0, qd0, run.t)
+        errs.append(float(np.max(np.abs(_angles(name, run.q)[1:] - ref))))
+    assert 3.0 < errs[0] / errs[1] < 5.0, errs          # midpoint: second order
+    assert errs[1] < 1e-3
+
+
+def test_coupled_pendulums_beat_at_the_normal_mode_frequencies():
+    mod, system, q0, qd0 = example("coupled_pendulums")
+    run = ct.simulate(system, q0, qd0, 30.0, 6000, "galerkin4")
+    w1 = math.sqrt(mod.g / mod.l)
+    w2 = math.sqrt(mod.g / mod.l + 2 * mod.k / mod.m)
+    th0 = q0[0]
+    lin1 = th0 / 2 * (np.cos(w1 * run.t) + np.cos(w2 * run.t))
+    lin2 = th0 / 2 * (np.cos(w1 * run.t) - np.cos(w2 * run.t))
+    # small angles: the nonlinear correction is O(θ0³) relative to the linear modes
+    assert np.max(np.abs(run.q[:, 0] - lin1)) < 0.02 * th0
+    assert np.max(np.abs(run.q[:, 1] - lin2)) < 0.02 * th0
+    # half a beat period later the energy sits in the second pendulum
+    half = np.argmin(np.abs(run.t - math.pi / (w2 - w1)))
+    assert abs(run.q[half, 0]) < 0.05 * th0
+
+
+def test_energy_stays_bounded_over_a_long_horizon():
+    mod, system, q0, qd0 = example("cart_pendulum_spring")
+    run = ct.simulate(system, q0, qd0, 200.0, 20000)
+    dev = np.abs(run.energy - run.energy[0])
+    assert np.max(dev) / abs(run.energy[0]) < 1e-3
+    assert np.max(dev[10000:]) < 2.0 * np.max(dev[:10000])    # bounded, no drift
+
+
+def test_a_system_file_that_lives_only_in_the_tests(tmp_path):
+    """A spherical pendulum: a 3-D bob on a rod of length 1 (a constraint) under gravity; |x| stays 1."""
+    f = tmp_path / "rod.py"
+    f.write_text("import casadi as ca\nimport castrajectory as ct\n"
+                 "q0 = [1.0, 0.0, 0.0]\nqd0 = [0.0, 0.0, 1.5]\nT, n = 3.0, 600\n"
+                 "def system():\n    x = ca.SX.sym('x', 3)\n"
+                 "    return ct.LagrangianSystem(x, ct.MassMatrix(ca.DM.eye(3)), [ct.Potential(9.81 * x[1], 'gravity')],\n"
+                 "                               constraints=[(ca.dot(x, x) - 1) / 2], names=['x', 'y', 'z'])\n")
+    p = cli(str(f), "--json")
+    assert p.returncode == 0, p.stderr
+    q = np.asarray(json.loads(p.stdout)["q"])
+    assert np.max(np.abs(np.sum(q ** 2, axis=1) - 1.0)) < 1e-10
+
+
+@pytest.mark.parametrize("text,needle", [
+    (None, "no such file"),
+    ("import nosuchmodule_xyz\n", "does not import"),
+    ("x = 1\n", "defines no system()"),
+    ("def system():\n    return 42\nq0 = [0]\nqd0 = [0]\n", "not a castrajectory.LagrangianSystem"),
+    ("import casadi as ca, castrajectory as ct\ndef system():\n    q = ca.SX.sym('q', 2)\n"
+     "    return ct.LagrangianSystem(q, ct.MassMatrix(ca.DM.eye(2)))\nq0 = [0.0]\nqd0 = [0.0, 0.0]\n", "q0 has 1 values"),
+    ("import casadi as ca, castrajectory as ct\ndef system():\n    q = ca.SX.sym('q', 2)\n"
+     "    return ct.LagrangianSystem(q, ct.MassMatrix(ca.DM.eye(2)))\nq0 = [0.0, float('nan')]\nqd0 = [0.0, 0.0]\n",
+     "must be finite"),
+    ("import casadi as ca, castrajectory as ct\ndef system():\n    q = ca.SX.sym('q', 2)\n"
+     "    return ct.LagrangianSystem(q, ct.MassMatrix(ca.diag(ca.DM([1.0, 0.0]))), names=['a', 'b'])\n"
+     "q0 = [0.0, 0.0]\nqd0 = [0.0, 0.0]\n", "coordinate 'b' has no inertia"),
+    ("import casadi as ca, castrajectory as ct\ndef system():\n    x = ca.SX.sym('x', 2)\n"
+     "    return ct.LagrangianSystem(x, ct.MassMatrix(ca.DM.eye(2)), constraints=[(ca.dot(x, x) - 1) / 2])\n"
+     "q0 = [2.0, 0.0]\nqd0 = [0.0, 0.0]\n", "violate the holonomic constraints"),
+])
+def test_bad_system_files_are_refused(tmp_path, text, needle):
+    f = tmp_path / "user.py"
+    if text is not None:
+        f.write_text(text)
+    p = cli(str(f))
+    assert p.returncode == 2 and p.stdout == ""
+    assert len(p.stderr.strip().splitlines()) == 1 and needle in p.stderr, p.stderr
