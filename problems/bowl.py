@@ -15,7 +15,7 @@ import numpy as np
 from castrajectory import cli
 from castrajectory.models import collision
 from castrajectory.solve import trajectory
-from castrajectory.problems.rectangle_drop import add_body_flags, initial_state
+from castrajectory.problems.rectangle_drop import add_body_flags, impact_panel, initial_state
 from castrajectory.validation import finite, positive
 
 
@@ -41,11 +41,28 @@ def run(args):
         lines.append(f"  t = {imp.t:.5f} s  {system.contact.names[imp.contact]:11s} μ = {imp.mu:.6g}")
     data = {"t": tr.t, "q": tr.q, "gap": tr.gap.min(axis=1), "mu": tr.node_impulse, "mu_sub": tr.mu,
             "t_sub": tr.t_sub, "energy": tr.energy, "radius": R,
-            "impacts": [{"t": i.t, "corner": system.contact.names[i.contact], "mu": i.mu,
-                         "v_before": i.v_before, "v_after": i.v_after, "caught": i.caught} for i in tr.impacts]}
-    xs = np.linspace(-3 * R, 3 * R, 601)
-    return cli.contact_outcome("body in a bowl", system, tr, data, lines,
-                               ground=np.stack([xs, xs ** 2 / (2 * R)], axis=1))
+            "impacts": [{"t": i.t, "corner": system.contact.names[i.contact], "contact": i.contact, "mu": i.mu,
+                         "q": i.q, "v_before": i.v_before, "v_after": i.v_after, "caught": i.caught}
+                        for i in tr.impacts]}
+    out = cli.contact_outcome("body in a bowl", system, tr, data, lines, ground=bowl_curve(R))
+    out.writers["plot"] = lambda path: figure(out, system).savefig(path)
+    return out
+
+
+def bowl_curve(R, n=2401):
+    """The bowl y = x²/(2R) as a polyline over |x| ≤ 3R."""
+    xs = np.linspace(-3 * R, 3 * R, n)
+    return np.stack([xs, xs ** 2 / (2 * R)], axis=1)
+
+
+def figure(out, system):
+    """The --plot picture: the body drawn at each impact over the bowl (the corner that struck marked,
+    the centre's path under it), beside the smallest gap and the impulses against time."""
+    from castrajectory.inspect import plotting
+    d = out.data
+    return plotting.contact_plot(
+        d["t"], {"smallest gap": d["gap"]}, d["t"], np.sum(d["mu"], axis=1), title="body in a bowl",
+        impacts=impact_panel(out, system, bowl_curve(d["radius"]), "bowl y = x²/(2R)"))
 
 
 def main(argv=None):

@@ -43,16 +43,18 @@ def run(args):
                             **cli.accuracy(args))
     # inspect
     out = cli.trajectory_outcome("double pendulum", system, res)
-    out.writers["plot"] = lambda path: figure(out).savefig(path)
+    out.writers["plot"] = lambda path: figure(out, system).savefig(path)
     return out
 
 
-def figure(out):
-    """The --plot picture: both angles against time over the energy error."""
+def figure(out, system=None):
+    """The --plot picture: both angles against time over the energy error and, with the ``system``, the
+    bobs' paths in the plane."""
     d = out.data
     how = f"{d['method']}" + (f", {d['scheme']}" if d["scheme"] else "")
     return plotting.trajectory_plot(d["t"], d["q"], ["θ1", "θ2"], panels=[("angle (rad)", [0, 1])],
-                                    energies={how: d["energy"]}, title=f"double pendulum ({how}): angles")
+                                    energies={how: d["energy"]}, title=f"double pendulum ({how}): angles",
+                                    plane=None if system is None else system.positions(d["q"]))
 
 
 def main(argv=None):

@@ -42,18 +42,20 @@ def run(args):
                             options=cli.ipopt_options(args), verbose=args.verbose,
                             **cli.accuracy(args))
     out = cli.trajectory_outcome(f"{k}-link pendulum", system, res, extra={"links": k})
-    out.writers["plot"] = lambda path: figure(out).savefig(path)
+    out.writers["plot"] = lambda path: figure(out, system).savefig(path)
     return out
 
 
-def figure(out):
-    """The --plot picture: every link's angle against time over the energy error."""
+def figure(out, system=None):
+    """The --plot picture: every link's angle against time over the energy error and, with the ``system``,
+    the bobs' paths in the plane."""
     d = out.data
     k = d["links"]
     how = f"{d['method']}" + (f", {d['scheme']}" if d["scheme"] else "")
     return plotting.trajectory_plot(d["t"], d["q"], [f"θ{i + 1}" for i in range(k)],
                                     panels=[("angle (rad)", range(k))], energies={how: d["energy"]},
-                                    title=f"{k}-link pendulum ({how}): angles")
+                                    title=f"{k}-link pendulum ({how}): angles",
+                                    plane=None if system is None else system.positions(d["q"]))
 
 
 def main(argv=None):

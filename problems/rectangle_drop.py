@@ -66,7 +66,7 @@ def impact_table(tr, body, e):
     for imp in tr.impacts:
         if imp.caught:
             rows.append({"t": imp.t, "corner": cs[imp.contact], "corner_name": CORNER_NAMES[imp.contact],
-                         "angle": float(imp.q[2]), "v_before": imp.v_before, "v_after": imp.v_after,
+                         "contact": imp.contact, "q": imp.q, "angle": float(imp.q[2]), "v_before": imp.v_before, "v_after": imp.v_after,
                          "mu": imp.mu, "mu_exact": None, "v_after_exact": None, "law_error": None,
                          "simultaneous": False, "caught": True})
             continue
@@ -82,7 +82,7 @@ def impact_table(tr, body, e):
         err = float(np.max(np.abs(v_exact - imp.v_after)))
         worst = max(worst, err)
         rows.append({"t": imp.t, "corner": cs[imp.contact], "corner_name": CORNER_NAMES[imp.contact],
-                     "angle": float(imp.q[2]), "v_before": imp.v_before, "v_after": imp.v_after, "mu": imp.mu,
+                     "contact": imp.contact, "q": imp.q, "angle": float(imp.q[2]), "v_before": imp.v_before, "v_after": imp.v_after, "mu": imp.mu,
                      "mu_exact": mu_exact, "v_after_exact": v_exact, "law_error": err,
                      "simultaneous": len(same) > 1, "caught": False})
     return rows, worst
@@ -108,9 +108,37 @@ def run(args):
     data = {"t": tr.t, "q": tr.q, "mu": tr.node_impulse, "mu_sub": tr.mu, "t_sub": tr.t_sub, "nu": tr.nu,
             "mass": body.mass, "width": body.width, "height": body.height, "restitution": e,
             "impacts": rows, "impact_law_error": worst, "energy": tr.energy, "gap": tr.gap.min(axis=1)}
-    return cli.contact_outcome("rectangle drop", system, tr, data, lines,
-                               ground=np.array([[-1e3, 0.0], [1e3, 0.0]]),
-                               series={"c_y": tr.q[:, 1], "smallest corner gap": tr.gap.min(axis=1)})
+    out = cli.contact_outcome("rectangle drop", system, tr, data, lines, ground=GROUND,
+                              series={"c_y": tr.q[:, 1], "smallest corner gap": tr.gap.min(axis=1)})
+    out.writers["plot"] = lambda path: figure(out, system).savefig(path)
+    return out
+
+
+#: The ground y = 0, as a polyline wider than any motion (plots clip it to their window).
+GROUND = np.array([[-1e3, 0.0], [1e3, 0.0]])
+
+
+def impact_panel(out, system, ground, ground_label: str) -> dict:
+    """What the impacts panel draws (plotting.contact_plot's ``impacts``): the body's outline at each impact,
+    the corner that struck, the centre's path and the ground (shared by this scene and the bowl)."""
+    d = out.data
+    imps = d["impacts"]
+    qs = np.array([i["q"] for i in imps], float).reshape(-1, 3)
+    outlines = system.positions(qs) if len(imps) else np.zeros((0, 5, 2))
+    return {"outlines": list(outlines), "times": [i["t"] for i in imps], "ground": ground,
+            "path": np.asarray(d["q"], float)[:, :2], "contacts": [o[i["contact"]] for o, i in zip(outlines, imps)],
+            "ground_label": ground_label}
+
+
+def figure(out, system):
+    """The --plot picture: the body drawn at each impact over the ground (the corner that struck marked,
+    the centroid's path under it), beside its height and smallest gap and the impulses against time."""
+    from castrajectory.inspect import plotting
+    d = out.data
+    q = np.asarray(d["q"], float)
+    return plotting.contact_plot(
+        d["t"], {"c_y": q[:, 1], "smallest corner gap": d["gap"]}, d["t"], np.sum(d["mu"], axis=1),
+        title="rectangle drop", impacts=impact_panel(out, system, GROUND, "ground y = 0"))
 
 
 def main(argv=None):

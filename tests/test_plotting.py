@@ -164,7 +164,8 @@ def test_animate_points_bad_input(tmp_path):
 
 
 def test_animate_points_full_size_is_fast(tmp_path):
-    """300 frames, the default cap, from a long fine trajectory: a few seconds, one palette."""
+    """200 frames, the default cap, 640 px wide, from a long fine trajectory: a few seconds, one small
+    palette, under 1.5 MB (measured: 1.1 s and 0.8 MB)."""
     import time
     t, P = _double_pendulum_positions(K=3000, T=10.0)
     path = tmp_path / "long.gif"
@@ -172,8 +173,10 @@ def test_animate_points_full_size_is_fast(tmp_path):
     plotting.animate_points(P, t, str(path), title="double pendulum")
     elapsed = time.perf_counter() - t0
     with Image.open(path) as im:
-        assert 250 <= im.n_frames <= 300
-        assert im.size[0] % 2 == 0 and im.size[1] % 2 == 0
+        assert 180 <= im.n_frames <= 200
+        assert im.size[0] >= 640 and im.size[0] % 2 == 0 and im.size[1] % 2 == 0
+        assert len(im.getpalette()) // 3 <= 64
+    assert path.stat().st_size < 1.5e6
     assert elapsed < 15.0
 
 
@@ -339,3 +342,146 @@ def test_droplet_angle_plot_draws_the_contact_angle():
     sol = droplet_solve.solve_angle(droplet_solve.Droplet(1.0, 0.2, 1.0, 1.0))
     fig = plotting.reduced_energy_figure(sol)
     _check_contact_angle(fig.axes[1], sol.contact_angle, (0.0, 0.0))
+
+
+# ----------------------------------------------------------------------------- animations a reader can see (#15)
+def test_animation_frames_are_640_px_with_the_time_stamped():
+    """Each frame is at least 640 px wide, shows "t = … s" at its own sample, and the rendered frame
+    (blitted) has the figure's size and differs from the next one."""
+    t, P = _double_pendulum_positions(K=300, T=3.0)
+    anim = plotting.PointsAnimation(P, t, max_frames=30, title="test")
+    w, h = anim.fig.canvas.get_width_height()
+    assert w >= 640 and w % 2 == 0 and h % 2 == 0
+    frames = []
+    for i in anim.frames[:3]:
+        frames.append(anim.render(i))
+        assert anim._stamp.get_text() == f"t = {t[i]:.2f} s"
+        assert re.fullmatch(r"t = \d+\.\d\d s", anim._stamp.get_text())
+        assert frames[-1].shape == (h, w, 4)
+    assert not np.array_equal(frames[0], frames[1])
+    # the bob drawn in the rendered pixels: the marker colour (C0) appears near the projected bob
+    x, y = anim.ax.transData.transform(P[anim.frames[2], -1])
+    px = frames[2][int(round(h - y)) - 3:int(round(h - y)) + 4, int(round(x)) - 3:int(round(x)) + 4, :3].astype(int)
+    assert np.any(np.abs(px - np.array([31, 119, 180])).sum(axis=-1) < 60)
+
+
+def test_rigid_body_animation_is_640_px(tmp_path):
+    t = np.linspace(0.0, 1.0, 50)
+    c, s = np.cos(t), np.sin(t)
+    R = np.zeros((50, 3, 3))
+    R[:, 0, 0], R[:, 0, 1], R[:, 1, 0], R[:, 1, 1], R[:, 2, 2] = c, -s, s, c, 1.0
+    path = tmp_path / "box.gif"
+    plotting.animate_rigid_body(t, R, str(path), (1.0, 0.6, 0.3), momentum=(0, 0, 1), max_frames=20)
+    with Image.open(path) as im:
+        assert im.size[0] >= 640 and im.n_frames == 20
+
+
+@pytest.mark.skipif(not plotting.mp4_available(), reason="ffmpeg not installed: no MP4 encoder")
+@pytest.mark.parametrize("kind", ["points", "rigid"])
+def test_animation_writes_mp4_with_ffmpeg(tmp_path, kind):
+    """With ffmpeg a path ending in .mp4 is an H.264 MP4 (yuv420p: what browsers play) of the frame's size."""
+    import shutil
+    import subprocess
+    path = tmp_path / "a.mp4"
+    if kind == "points":
+        t, P = _double_pendulum_positions(K=100, T=2.0)
+        plotting.animate_points(P, t, str(path), max_frames=25)
+        size = plotting.PointsAnimation(P, t, max_frames=25).fig.canvas.get_width_height()
+    else:
+        t = np.linspace(0.0, 1.0, 30)
+        plotting.animate_rigid_body(t, np.repeat(np.eye(3)[None], 30, axis=0), str(path), (1, 1, 1), max_frames=25)
+        size = (640, 640)
+    data = path.read_bytes()
+    assert data[4:8] == b"ftyp"
+    if shutil.which("ffprobe"):
+        p = subprocess.run(["ffprobe", "-v", "error", "-select_streams", "v:0", "-count_frames", "-show_entries",
+                            "stream=codec_name,width,height,pix_fmt,nb_read_frames", "-of", "json", str(path)],
+                           capture_output=True, text=True, check=True)
+        import json
+        (st,) = json.loads(p.stdout)["streams"]
+        assert (st["codec_name"], st["pix_fmt"]) == ("h264", "yuv420p")
+        assert (st["width"], st["height"]) == tuple(size) and int(st["nb_read_frames"]) == 25
+
+
+# ----------------------------------------------------------------------------- plots that show the motion (#15)
+def _system_of(name, args):
+    from castrajectory.models import collision, pendulum
+    if name == "double_pendulum":
+        return pendulum.double_pendulum(args.m1, args.m2, args.l1, args.l2, args.g)
+    if name == "n_link_pendulum":
+        return pendulum.n_link_pendulum([args.mass] * args.links, [args.length] * args.links, args.g)
+    body = collision.Body(args.mass, args.width, args.height)
+    ground = collision.bowl_ground(args.radius) if name == "bowl" else collision.flat_ground
+    return collision.rectangle_contact_system(body, args.g, args.restitution, ground)
+
+
+@pytest.mark.parametrize("name,argv,links", [
+    ("double_pendulum", ["--T", "1", "--n", "100"], [1.0, 1.0]),
+    ("n_link_pendulum", ["--links", "3", "--T", "1", "--n", "100", "--length", "0.7"], [0.7, 0.7, 0.7]),
+])
+def test_pendulum_plot_shows_the_paths_in_the_plane(tmp_path, name, argv, links):
+    """The first panel holds one path per bob: its data are system.positions(q), each bob at its link's
+    length from the one before (from the pivot), drawn at equal aspect."""
+    mod, args, out = _scene(name, argv)
+    system = _system_of(name, args)
+    fig = mod.figure(out, system)
+    ax = fig.axes[0]
+    assert ax.get_aspect() == 1.0 and ax.get_xlabel() == "x" and ax.get_ylabel() == "y"
+    paths = [l for l in ax.get_lines() if l.get_label().endswith(" path")]
+    assert [l.get_label() for l in paths] == [f"bob {j + 1} path" for j in range(len(links))]
+    P = system.positions(np.asarray(out.data["q"], float))
+    prev = np.zeros((P.shape[0], 2))
+    for j, (line, length) in enumerate(zip(paths, links)):
+        xy = np.column_stack(line.get_data())
+        assert np.array_equal(xy, P[:, j])
+        assert np.allclose(np.linalg.norm(xy - prev, axis=1), length, rtol=0, atol=1e-9)
+        prev = xy
+    # the time panels are still there, and the --plot writer draws this figure
+    assert any("angle" in a.get_ylabel() for a in fig.axes) and fig.axes[-1].get_xlabel() == "t"
+    out.writers["plot"](str(tmp_path / "p.png"))
+    with Image.open(tmp_path / "p.png") as im:
+        assert im.size[0] > 1000  # two columns: the time panels and the plane
+
+
+@pytest.mark.parametrize("name,argv", [
+    ("bowl", ["--T", "1", "--n", "200"]),
+    ("rectangle_drop", ["--T", "1.2", "--n", "300"]),
+])
+def test_contact_plot_draws_the_body_at_its_impacts(tmp_path, name, argv):
+    """The first panel draws the body at each impact over the ground: one closed outline per impact,
+    labelled with its time, each touching the ground (its lowest corner's gap ~ 0, none below), the
+    corner that struck marked on the ground; the ground drawn is y = x²/(2R) (bowl) or y = 0."""
+    mod, args, out = _scene(name, argv)
+    system = _system_of(name, args)
+    fig = mod.figure(out, system)
+    ax = fig.axes[0]
+    impacts = out.data["impacts"]
+    assert impacts, "the scene hits the ground"
+    R = getattr(args, "radius", None)
+
+    def gap(xy):
+        return xy[:, 1] - (xy[:, 0] ** 2 / (2 * R) if R else 0.0)
+
+    outlines = [l for l in ax.get_lines() if l.get_label().startswith("impact at t = ")]
+    assert len(outlines) == len(impacts)
+    for line, imp in zip(outlines, impacts):
+        xy = np.column_stack(line.get_data())
+        assert xy.shape == (5, 2) and np.array_equal(xy[0], xy[-1])  # a closed rectangle
+        assert float(line.get_label().split("= ")[1].split(" s")[0]) == pytest.approx(imp["t"], abs=1e-4)
+        g = gap(xy[:4])
+        assert abs(g.min()) < 1e-6 and abs(g[imp["contact"]]) < 1e-6
+        assert np.isclose(np.linalg.norm(xy[1] - xy[0]), args.width) and np.isclose(np.linalg.norm(xy[2] - xy[1]), args.height)
+    (struck,) = [l for l in ax.get_lines() if l.get_label() == "corner that struck"]
+    assert np.all(np.abs(gap(np.column_stack(struck.get_data())).astype(float)) < 1e-6)
+    (ground,) = [l for l in ax.get_lines() if l.get_label().startswith(("bowl", "ground"))]
+    gxy = np.column_stack(ground.get_data())
+    gxy = gxy[~np.isnan(gxy[:, 0])]
+    assert len(gxy) >= 2 and np.allclose(gap(gxy[1:-1]), 0.0, atol=1e-12)  # the ends: cut mid-chord
+    assert np.allclose(gap(gxy), 0.0, atol=1e-5)
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    assert np.isclose(gxy[0, 0], x0) and np.isclose(gxy[-1, 0], x1)  # across the window, cut to it
+    assert ax.get_aspect() == 1.0
+    # the time panels of the contact plot follow it, and --plot writes this figure
+    assert fig.axes[-1].get_xlabel() == "t" and fig.axes[-1].get_ylabel() == "impulse"
+    out.writers["plot"](str(tmp_path / "c.png"))
+    assert (tmp_path / "c.png").stat().st_size > 20_000

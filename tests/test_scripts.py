@@ -114,16 +114,14 @@ def test_solver_failure_exits_1_and_writes_nothing(tmp_path):
     assert out.read_bytes() == b"earlier output"
 
 
-def test_console_list_run_and_report(tmp_path):
+def test_console_list_run_and_report(quick_report):
     p = run(["-m", "castrajectory.cli", "list"])
     assert p.returncode == 0 and "droplet" in p.stdout and "droplet_angle" in p.stdout
     p = run(["-m", "castrajectory.cli", "run", "droplet", "--n", "30", "--json"])
     assert p.returncode == 0 and json.loads(p.stdout)["status"] == "ok"
     p = run(["-m", "castrajectory.cli", "run", "nosuchscene"])
     assert p.returncode == 2 and "unknown scene" in p.stderr
-    out = tmp_path / "rep"
-    p = run(["-m", "castrajectory.cli", "report", "--out", str(out), "--quick"])
-    assert p.returncode == 0, p.stderr
+    out = quick_report
     summary = (out / "summary.md").read_text()
     for f in ("droplet_curve.png", "droplet_angle.png", "droplet_convergence.png", "droplet_overhang.png"):
         assert f in summary and (out / f).exists()

@@ -152,8 +152,8 @@ def _rigid_body_work_precision(out: str, size: str):
              f"I = (1, 2, 3), ω₀ = (1e-3, 1, 1e-3), T = 100 s, N = {ns[0]} … {ns[-1]}; the flip-interval error is "
              "against 2K(m)/s; RK4 integrates Euler's equations with quaternion kinematics, not renormalised; "
              "data in `rigidbody_work_precision.csv`.", "",
-             "| method | observed order (flip interval) | time to 1e-6 (s) | max |L − L₀|/|L₀| over the sweep "
-             "| max ||q|| − 1 | all converged |", "|---|---|---|---|---|---|"]
+             "| method | observed order (flip interval) | time to 1e-6 (s) | max ‖L − L₀‖/‖L₀‖ over the sweep "
+             "| max ‖q‖ − 1 | all converged |", "|---|---|---|---|---|---|"]
     for label in dict.fromkeys(r["label"] for r in rows):
         sel = [r for r in rows if r["label"] == label]
         order = study.trajectory_order(rows, label, key="flip_interval_error", ceiling=1.0)["order"]
@@ -287,7 +287,7 @@ def _long_horizon(out: str, size: str):
                                      title=f"pendulum, amplitude {amp} rad, {periods} periods, {steps} steps/period")
     files.save_figure(fig, os.path.join(out, "long_horizon.png"))
     lines = ["## Long horizon: energy over " + f"{periods} periods", "",
-             "| method | status | time (s) | max |ΔE| first half | max |ΔE| second half | ratio |",
+             "| method | status | time (s) | max ΔE first half | max ΔE second half | ratio |",
              "|---|---|---|---|---|---|"]
     ok = True
     for r in rows:
@@ -477,6 +477,8 @@ def write_report(out: str, size: str = "default", quiet: bool = False) -> int:
     lines[2:2] = ["What was solved, how accurately and at what cost (the scenes' own answers below; "
                   f"{size} report, {elapsed:.0f} s in all):", "", *_headline(out, f"Stability: {passed}")]
     files.write_text(os.path.join(out, "summary.md"), "\n".join(lines) + "\n")
-    print(f"report written to {os.path.join(out, 'summary.md')} in {elapsed:.1f} s "
+    from . import html  # the same content as one self-contained page: figures inline, animations playing
+    html.write_index(out, "\n".join(lines) + "\n")
+    print(f"report written to {os.path.join(out, 'summary.md')} and index.html in {elapsed:.1f} s "
           f"({'every solve converged, every stability case passed' if ok else 'SOME SOLVES OR CASES FAILED'})")
     return 0 if ok else 1

@@ -140,7 +140,7 @@ def _flip_interval(tol: float) -> Check:
         if exact is None or err is None:
             return math.inf, tol, "flip interval against 2K(m)/s (no flips measured)"
         return float(err) / float(exact), tol, \
-            f"flip interval against 2K(m)/s (relative), |L| drift {d['angular_momentum_drift']:.0e}"
+            f"flip interval against 2K(m)/s (relative), ‖L‖ drift {d['angular_momentum_drift']:.0e}"
     return check
 
 
@@ -242,7 +242,7 @@ def run_case(case: Case) -> Row:
             residual = abs(float(d[key])) if residual is None else max(residual, abs(float(d[key])))
     E = np.asarray(d["energy"], float) if d.get("energy") is not None and np.ndim(d["energy"]) == 1 else None
     if d.get("angular_momentum_drift") is not None:
-        drift = f"|L| {float(d['angular_momentum_drift']):.1e} relative"
+        drift = f"‖L‖ {float(d['angular_momentum_drift']):.1e} relative"
     elif E is not None and case.family == "contact":  # restitution below 1 loses energy by design
         drift = f"E {E[0]:.4g} → {E[-1]:.4g}"
     elif E is not None:

@@ -207,15 +207,49 @@ def energy_plot(t, energies: Dict[str, np.ndarray], title: Optional[str] = None,
 _MAX_LEGEND = 12
 
 
+def plane_paths_axes(ax, positions, names: Optional[Sequence[str]] = None, pivot=None) -> None:
+    """The paths of moving points in the plane on ``ax``, equal aspect.
+
+    ``positions`` (K, n_points, 2), e.g. ``system.positions(q)`` of a pendulum's bobs: one line per
+    point labelled ``"<name> path"`` (``names`` default ``bob 1`` …), the configuration at the start
+    (dashed, through ``pivot`` when given) and at the end (solid), and the ``pivot`` as a square.
+    """
+    P = np.asarray(positions, dtype=float)
+    if P.ndim == 2:
+        P = P[:, None, :]
+    if P.ndim != 3 or P.shape[-1] != 2 or P.shape[0] == 0:
+        raise ValueError(f"plane_paths_axes: positions must have shape (K, n_points, 2), got {np.shape(positions)}")
+    names = list(names) if names is not None else [f"bob {j + 1}" for j in range(P.shape[1])]
+    if len(names) != P.shape[1]:
+        raise ValueError(f"plane_paths_axes: {P.shape[1]} points but {len(names)} names")
+    for j, name in enumerate(names):
+        ax.plot(P[:, j, 0], P[:, j, 1], "-", color=f"C{j % 10}", lw=0.8, alpha=0.8, label=f"{name} path")
+    for k, style, label in ((0, "--", "start"), (-1, "-", "end")):
+        chain = P[k] if pivot is None else np.vstack([np.asarray(pivot, float).reshape(1, 2), P[k]])
+        ax.plot(chain[:, 0], chain[:, 1], style, color="k", lw=1.2, marker="o", ms=4,
+                mfc="white" if k == 0 else "k", label=label)
+    if pivot is not None:
+        ax.plot([pivot[0]], [pivot[1]], "s", color="k", ms=5, label="pivot")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x")
+    ax.set_ylabel("y")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7, loc="best")
+
+
 def trajectory_plot(t, q, names: Sequence[str], title: Optional[str] = None,
                     panels: Optional[Sequence[tuple]] = None,
-                    energies: Optional[Dict[str, np.ndarray]] = None) -> Figure:
+                    energies: Optional[Dict[str, np.ndarray]] = None, plane=None,
+                    plane_names: Optional[Sequence[str]] = None, pivot=(0.0, 0.0)) -> Figure:
     """Generalised coordinates ``q`` (shape (K, n)) against time, one line per coordinate.
 
     ``panels`` is a list of ``(ylabel, columns)``, one axes each (e.g. ``[("angle (rad)", [1]),
     ("r (m)", [0])]`` keeps a length apart from an angle); by default every coordinate shares one
     axes labelled ``q``.  ``energies`` (label -> ``E(t)``) adds the relative energy error below, as
-    :func:`energy_plot` draws it.  The axes share the time axis.
+    :func:`energy_plot` draws it.  The axes share the time axis.  ``plane`` (K, n_points, 2), the
+    points' positions at ``t`` (e.g. a pendulum's bobs), adds a panel on the right with their paths
+    in the plane (:func:`plane_paths_axes`, from ``pivot``; ``None`` for no pivot); it is the
+    figure's first axes.
     """
     t = _as_time(t, "trajectory_plot")
     q = np.asarray(q, dtype=float)
@@ -228,8 +262,22 @@ def trajectory_plot(t, q, names: Sequence[str], title: Optional[str] = None,
         raise ValueError(f"trajectory_plot: {q.shape[1]} coordinates but {len(names)} names")
     panels = list(panels) if panels else [("q", range(q.shape[1]))]
     rows = len(panels) + (1 if energies else 0)
-    fig = Figure(figsize=(6.4, 2.2 + 1.8 * rows), layout="constrained")
-    axes = fig.subplots(rows, 1, sharex=True, squeeze=False)[:, 0]
+    if plane is None:
+        fig = Figure(figsize=(6.4, 2.2 + 1.8 * rows), layout="constrained")
+        axes = fig.subplots(rows, 1, sharex=True, squeeze=False)[:, 0]
+    else:
+        P = np.asarray(plane, dtype=float)
+        if P.shape[0] != t.size:
+            raise ValueError(f"trajectory_plot: {P.shape[0]} rows of plane positions but {t.size} times")
+        fig = Figure(figsize=(11.5, max(2.2 + 1.8 * rows, 5.0)), layout="constrained")
+        grid = fig.add_gridspec(rows, 2, width_ratios=[1.2, 1.0])
+        pax = fig.add_subplot(grid[:, 1])
+        plane_paths_axes(pax, P, plane_names, pivot)
+        pax.set_title("paths in the plane", fontsize=10)
+        first = fig.add_subplot(grid[0, 0])
+        axes = [first] + [fig.add_subplot(grid[r, 0], sharex=first) for r in range(1, rows)]
+        for a in axes[:-1]:
+            a.tick_params(labelbottom=False)
     for ax, (ylabel, cols) in zip(axes, panels):
         cols = list(cols)
         for j in cols:
@@ -415,8 +463,12 @@ class _SharedPaletteGifWriter(animation.PillowWriter):
     Pillow otherwise builds an adaptive palette per RGB frame while saving,
     which costs more than drawing the frames; mapping all frames onto one
     palette (taken from a mosaic of a few frames) is about ten times faster
-    and gives a smaller file.  Frames must be opaque.
+    and gives a smaller file.  The palette has :attr:`colors` entries: 64 keep
+    the antialiased lines and text of a plot clean and make a 640-px, 200-frame
+    GIF about 0.8 MB (255: 1.1 MB).  Frames must be opaque.
     """
+
+    colors = 64
 
     def setup(self, fig, outfile, dpi=None):
         super().setup(fig, outfile, dpi=dpi)
@@ -428,6 +480,10 @@ class _SharedPaletteGifWriter(animation.PillowWriter):
         self._rgb.append(Image.frombuffer("RGBA", self.frame_size, buf.getbuffer(), "raw", "RGBA", 0, 1)
                          .convert("RGB"))
 
+    def grab_rgba(self, rgba: np.ndarray) -> None:
+        """Add a frame already rendered (an (H, W, 4) uint8 array, e.g. a blitted canvas buffer)."""
+        self._rgb.append(Image.fromarray(np.ascontiguousarray(rgba[..., :3])))
+
     def finish(self):
         frames = self._rgb
         picks = [frames[i] for i in np.unique(np.linspace(0, len(frames) - 1, 8).round().astype(int))]
@@ -435,10 +491,20 @@ class _SharedPaletteGifWriter(animation.PillowWriter):
         mosaic = Image.new("RGB", (w, h * len(picks)))
         for k, im in enumerate(picks):
             mosaic.paste(im, (0, k * h))
-        palette = mosaic.quantize(colors=255)
+        palette = mosaic.quantize(colors=self.colors)
         quantised = [im.quantize(palette=palette, dither=Image.Dither.NONE) for im in frames]
         quantised[0].save(self.outfile, save_all=True, append_images=quantised[1:],
                           duration=int(1000 / self.fps), loop=0)
+
+
+class _RawFFMpegWriter(animation.FFMpegWriter):
+    """:class:`~matplotlib.animation.FFMpegWriter` that also takes frames already rendered (H.264, yuv420p)."""
+
+    def grab_rgba(self, rgba: np.ndarray) -> None:
+        """Pipe an (H, W, 4) uint8 frame of the writer's frame size to ffmpeg."""
+        if (rgba.shape[1], rgba.shape[0]) != tuple(self.frame_size):
+            raise ValueError(f"frame of {rgba.shape[1]} x {rgba.shape[0]} px, the movie is {self.frame_size}")
+        self._proc.stdin.write(np.ascontiguousarray(rgba).tobytes())
 
 
 def _writer(path, fps: int):
@@ -450,7 +516,7 @@ def _writer(path, fps: int):
         if not animation.FFMpegWriter.isAvailable():
             raise ValueError(f"cannot write {path}: MP4 needs ffmpeg, which was not found; "
                              "install ffmpeg or ask for a .gif")
-        return animation.FFMpegWriter(fps=fps)
+        return _RawFFMpegWriter(fps=fps, codec="h264", extra_args=["-pix_fmt", "yuv420p"])
     raise ValueError(f"cannot write {path}: the animation path must end in .gif or .mp4")
 
 
@@ -458,6 +524,17 @@ def _frames(t: np.ndarray, max_frames: int) -> np.ndarray:
     """Frame indices evenly in time: the last sample at or before each of ``max_frames`` target times."""
     targets = np.linspace(t[0], t[-1], min(t.size, int(max_frames)))
     return np.unique(np.clip(np.searchsorted(t, targets, side="right") - 1, 0, t.size - 1))
+
+
+#: Every animation's frame: this many inches wide at this many dots per inch (640 px; text and lines
+#: scale with the dpi, so they stay readable at the larger size).
+ANIMATION_WIDTH_IN = 4.0
+ANIMATION_DPI = 160
+
+
+def time_stamp(t: float) -> str:
+    """The time shown in an animation's frame: ``"t = 1.23 s"``."""
+    return f"t = {t:.2f} s"
 
 
 #: Margin of an animation's window around the motion, as a fraction of the motion's largest half-extent.
@@ -523,12 +600,14 @@ class PointsAnimation:
 
     ``fig`` and ``ax`` are fixed for the whole animation (limits from :func:`view_window`);
     ``frames`` are the sample indices drawn; ``ground`` is the scenery polyline drawn (clipped to the
-    window) or ``None``; ``markers`` and ``links`` are the moving artists, set by :meth:`draw`.
+    window) or ``None``; ``markers`` and ``links`` are the moving artists, set by :meth:`draw`;
+    :meth:`render` gives a frame's pixels.  The frame is ``ANIMATION_WIDTH_IN * dpi`` pixels wide
+    (640 by default), with the time stamped in its corner (:func:`time_stamp`).
     """
 
-    def __init__(self, positions, t, trail: bool = True, max_frames: int = 300, links: bool = True,
-                 pivot=(0.0, 0.0), title: Optional[str] = None, trail_time: float = 1.0, dpi: int = 80,
-                 ground=None):
+    def __init__(self, positions, t, trail: bool = True, max_frames: int = 200, links: bool = True,
+                 pivot=(0.0, 0.0), title: Optional[str] = None, trail_time: float = 1.0,
+                 dpi: int = ANIMATION_DPI, ground=None):
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.collections import LineCollection
 
@@ -558,13 +637,13 @@ class PointsAnimation:
             moving = np.vstack([moving, self.pivot])
         lo, hi = view_window(moving)
         self.ground = None if ground is None else clip_polyline(ground, lo, hi)
-        centre, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
+        half = 0.5 * (hi - lo)
 
         # figure shaped to the window (aspect clamped), in even pixel counts as ffmpeg wants
         dpi = int(dpi)
         left, right, bottom, top_in = 0.5, 0.12, 0.35, (0.35 if title else 0.12)
-        aspect = float(np.clip(half[1] / half[0], 0.4, 1.6))
-        width_px = 2 * round(4.0 * dpi / 2)
+        aspect = float(np.clip(half[1] / half[0], 0.4, 1.2))
+        width_px = 2 * round(ANIMATION_WIDTH_IN * dpi / 2)
         axes_w = width_px / dpi - left - right
         height_px = 2 * round((axes_w * aspect + bottom + top_in) * dpi / 2)
         fig = Figure(figsize=(width_px / dpi, height_px / dpi), dpi=dpi)
@@ -583,22 +662,26 @@ class PointsAnimation:
             ax.plot([self.pivot[0]], [self.pivot[1]], "s", color="k", ms=4)
         if self.ground is not None:
             ax.plot(self.ground[:, 0], self.ground[:, 1], "-", color="0.3", lw=1.5)
-        # The static part (frame, ticks, grid, title, pivot, ground) is rendered once and laid under
-        # the axes as a figure image; each frame then redraws only the moving artists, which keeps a
-        # 300-frame GIF at a few seconds.
-        canvas.draw()
-        background = np.asarray(canvas.buffer_rgba()).copy()
-        for artist in list(ax.lines):
-            artist.remove()
-        ax.set_title("")
-        ax.set_axis_off()
-        fig.figimage(background, origin="upper", resize=False).set_zorder(-1)
-        (self.links,) = ax.plot([], [], "-", color="0.25", lw=1.6, visible=links)
-        (self.markers,) = ax.plot([], [], "o", color="C0", ms=7, mec="k", mew=0.6, zorder=3)
-        self._trail = LineCollection([], linewidths=1.5)
+        # The moving artists are animated: the static part (frame, ticks, grid, title, pivot, ground)
+        # is rendered once and kept as a background; each frame restores it and draws only the moving
+        # artists on it (blitting), which keeps a 200-frame GIF of 640 px around a second.
+        (self.links,) = ax.plot([], [], "-", color="0.25", lw=1.6, visible=links, animated=True)
+        self._trail = LineCollection([], linewidths=1.5, animated=True)
         ax.add_collection(self._trail, autolim=False)
-        self._stamp = ax.text(0.02, 0.97, "", transform=ax.transAxes, va="top", fontsize=8)
-        self.fig, self.ax, self.dpi = fig, ax, dpi
+        (self.markers,) = ax.plot([], [], "o", color="C0", ms=7, mec="k", mew=0.6, zorder=3, animated=True)
+        self._stamp = ax.text(0.02, 0.97, "", transform=ax.transAxes, va="top", fontsize=9, animated=True,
+                              bbox=dict(boxstyle="round,pad=0.2", fc="white", ec="0.7", lw=0.5, alpha=0.85))
+        canvas.draw()
+        self._background = canvas.copy_from_bbox(fig.bbox)
+        self.fig, self.ax, self.dpi, self.canvas = fig, ax, dpi, canvas
+
+    def render(self, i: int) -> np.ndarray:
+        """The pixels of sample ``i``'s frame: an (H, W, 4) uint8 array (a copy)."""
+        self.draw(i)
+        self.canvas.restore_region(self._background)
+        for artist in (self.links, self._trail, self.markers, self._stamp):
+            self.ax.draw_artist(artist)
+        return np.array(self.canvas.buffer_rgba())
 
     def draw(self, i: int) -> None:
         """Set the moving artists to sample ``i``."""
@@ -624,12 +707,12 @@ class PointsAnimation:
                 self._trail.set_color(colors)
             else:
                 self._trail.set_segments([])
-        self._stamp.set_text(f"t = {t[i]:.2f}")
+        self._stamp.set_text(time_stamp(t[i]))
 
 
-def animate_points(positions, t, path: str, trail: bool = True, fps: int = 30, max_frames: int = 300,
+def animate_points(positions, t, path: str, trail: bool = True, fps: int = 20, max_frames: int = 200,
                    links: bool = True, pivot=(0.0, 0.0), title: Optional[str] = None,
-                   trail_time: float = 1.0, dpi: int = 80, ground=None) -> str:
+                   trail_time: float = 1.0, dpi: int = ANIMATION_DPI, ground=None) -> str:
     """Animate moving points (e.g. a pendulum's bobs) and write a GIF or an MP4.
 
     ``positions`` has shape (K, n_points, 2) and ``t`` length K.  With
@@ -643,7 +726,8 @@ def animate_points(positions, t, path: str, trail: bool = True, fps: int = 30, m
     it.  ``pivot=None`` joins only the points (a rigid body's outline);
     ``ground`` (an (M, 2) polyline, e.g. the floor or a bowl, as long as
     wanted) is drawn clipped to the window.  The figure is
-    :class:`PointsAnimation`.  Returns ``path``.
+    :class:`PointsAnimation`: 640 px wide at the default ``dpi``, the time
+    stamped in each frame.  Returns ``path``.
     """
     writer = _writer(path, fps)
     if fps <= 0:
@@ -652,21 +736,81 @@ def animate_points(positions, t, path: str, trail: bool = True, fps: int = 30, m
                            title=title, trail_time=trail_time, dpi=dpi, ground=ground)
     with writer.saving(anim.fig, str(path), dpi=anim.dpi):
         for i in anim.frames:
-            anim.draw(i)
-            writer.grab_frame()
+            writer.grab_rgba(anim.render(i))
     return str(path)
 
 
+def impacts_axes(ax, outlines, times, ground=None, path=None, contacts=None, ground_label: str = "ground"):
+    """A body drawn at its impacts over the ground, on ``ax`` (equal aspect).
+
+    ``outlines`` are closed polylines (M, 2), the body at each impact, at ``times`` (coloured by time,
+    with a colour bar; each line labelled ``"impact at t = … s"``); ``ground`` (G, 2) is the scenery,
+    clipped to a window around the motion; ``path`` (K, 2), e.g. the centre's, is drawn thin;
+    ``contacts`` (one (x, y) per impact) marks the corner that struck.
+    """
+    from matplotlib import cm
+    from matplotlib import colors as mcolors
+    from matplotlib.lines import Line2D
+
+    outlines = [np.asarray(o, float).reshape(-1, 2) for o in outlines]
+    times = np.asarray(times, float).reshape(-1)
+    if len(outlines) != times.size:
+        raise ValueError(f"impacts_axes: {len(outlines)} outlines but {times.size} times")
+    moving = outlines + ([np.asarray(path, float).reshape(-1, 2)] if path is not None else [])
+    handles = []
+    if moving:
+        lo, hi = view_window(np.vstack(moving), min_aspect=0.3)
+        if ground is not None:
+            g = clip_polyline(ground, lo, hi)
+            if g is not None:
+                handles += ax.plot(g[:, 0], g[:, 1], "-", color="0.3", lw=2.0, label=ground_label)
+        ax.set_xlim(lo[0], hi[0])
+        ax.set_ylim(lo[1], hi[1])
+    if path is not None:
+        p = np.asarray(path, float).reshape(-1, 2)
+        handles += ax.plot(p[:, 0], p[:, 1], "-", color="0.55", lw=0.8, label="centre path")
+    hi_t = float(times.max()) if times.size else 1.0
+    lo_t = float(times.min()) if times.size else 0.0
+    norm = mcolors.Normalize(lo_t, hi_t if hi_t > lo_t else lo_t + 1.0)
+    cmap = cm.viridis
+    for o, tk in zip(outlines, times):
+        ax.plot(o[:, 0], o[:, 1], "-", color=cmap(norm(tk)), lw=1.4, label=f"impact at t = {tk:.4f} s")
+    if outlines:
+        handles.append(Line2D([], [], color=cmap(0.5), lw=1.4, label=f"the body at its {len(outlines)} impacts"))
+        ax.figure.colorbar(cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="impact time (s)", shrink=0.8)
+    if contacts is not None and len(contacts):
+        c = np.asarray(contacts, float).reshape(-1, 2)
+        handles += ax.plot(c[:, 0], c[:, 1], "x", color="C3", ms=6, mew=1.5, label="corner that struck")
+    ax.set_aspect("equal", adjustable="box")
+    ax.set_xlabel("x")
+    ax.set_ylabel("y")
+    ax.grid(True, alpha=0.3)
+    if handles:
+        ax.legend(handles=handles, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2)
+
+
 def contact_plot(t, series: Dict[str, np.ndarray], t_impulse, impulses, reference: Optional[Dict[str, tuple]] = None,
-                 ylabel: str = "height", title: Optional[str] = None) -> Figure:
+                 ylabel: str = "height", title: Optional[str] = None, impacts: Optional[dict] = None) -> Figure:
     """A contact trajectory: curves against time (with analytic references) over a stem plot of impulses.
 
     ``series`` maps labels to values at ``t``; ``reference`` maps labels to
     ``(t_ref, y_ref)`` drawn dashed; ``impulses`` (at ``t_impulse``) go in the
-    lower panel.
+    lower panel.  ``impacts`` (the keyword arguments of :func:`impacts_axes`:
+    ``outlines``, ``times``, ``ground``, ...) adds a panel on the left with the
+    body drawn at its impacts over the ground; it is the figure's first axes.
     """
-    fig = Figure(figsize=(6.4, 5.2), layout="constrained")
-    ax, bx = fig.subplots(2, 1, sharex=True, height_ratios=[2, 1])
+    if impacts is None:
+        fig = Figure(figsize=(6.4, 5.2), layout="constrained")
+        ax, bx = fig.subplots(2, 1, sharex=True, height_ratios=[2, 1])
+    else:
+        fig = Figure(figsize=(13.0, 5.2), layout="constrained")
+        grid = fig.add_gridspec(2, 2, width_ratios=[1.15, 1.0], height_ratios=[2, 1])
+        sx = fig.add_subplot(grid[:, 0])
+        impacts_axes(sx, **impacts)
+        sx.set_title("the body at its impacts", fontsize=10)
+        ax = fig.add_subplot(grid[0, 1])
+        bx = fig.add_subplot(grid[1, 1], sharex=ax)
+        ax.tick_params(labelbottom=False)
     t = _as_time(t, "contact_plot")
     for label, y in series.items():
         ax.plot(t, np.asarray(y, float), lw=1.2, label=label)
@@ -733,8 +877,9 @@ def heavy_top_angles(t, tilt, precession, title: Optional[str] = None) -> Figure
 _BOX_EDGES = [(0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4), (0, 4), (1, 5), (2, 6), (3, 7)]
 
 
-def animate_rigid_body(t, rotations, path: str, size, momentum=None, center=None, fps: int = 30,
-                       max_frames: int = 150, title: Optional[str] = None, dpi: int = 80, surface=None) -> str:
+def animate_rigid_body(t, rotations, path: str, size, momentum=None, center=None, fps: int = 20,
+                       max_frames: int = 150, title: Optional[str] = None, dpi: int = ANIMATION_DPI,
+                       surface=None) -> str:
     """Animate a box tumbling in 3-D (matplotlib's mplot3d) and write a GIF or an MP4.
 
     ``rotations`` (K, 3, 3) are the body-to-space rotations at times ``t``; the box has edges
@@ -742,7 +887,8 @@ def animate_rigid_body(t, rotations, path: str, size, momentum=None, center=None
     axes are drawn from the centre (red, green, blue for 1, 2, 3) and ``momentum`` (a fixed
     spatial vector, e.g. the angular momentum) as a black arrow.  ``surface`` ``(X, Y, Z)`` (2-D
     arrays) is drawn as a fixed wireframe, e.g. the ground under the body.  Frames are subsampled
-    evenly in time to at most ``max_frames``.  Returns ``path``.
+    evenly in time to at most ``max_frames``; each is ``ANIMATION_WIDTH_IN * dpi`` pixels square (640
+    by default) with the time stamped in its corner.  Returns ``path``.
     """
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
@@ -764,8 +910,9 @@ def animate_rigid_body(t, rotations, path: str, size, momentum=None, center=None
     if momentum is not None:
         moving = np.vstack([moving, np.zeros(3)])
     lo, hi = view_window(moving, cube=True)
-    fig = Figure(figsize=(4.4, 4.4), dpi=dpi)
-    FigureCanvasAgg(fig)
+    side = 2 * round(ANIMATION_WIDTH_IN * dpi / 2) / dpi  # square, even pixels
+    fig = Figure(figsize=(side, side), dpi=dpi)
+    canvas = FigureCanvasAgg(fig)
     ax = fig.add_subplot(projection="3d")
     if surface is not None:
         X, Y, Z = (np.asarray(a, float) for a in surface)
@@ -778,8 +925,9 @@ def animate_rigid_body(t, rotations, path: str, size, momentum=None, center=None
     ax.tick_params(labelsize=6)
     if title:
         ax.set_title(title, fontsize=9)
-    edge_lines = [ax.plot([], [], [], "-", color="0.25", lw=1.2)[0] for _ in _BOX_EDGES]
-    axis_lines = [ax.plot([], [], [], "-", color=c, lw=2.0)[0] for c in ("C3", "C2", "C0")]
+    # the box, its axes and the time are animated: drawn over the static background each frame (blitting)
+    edge_lines = [ax.plot([], [], [], "-", color="0.25", lw=1.2, animated=True)[0] for _ in _BOX_EDGES]
+    axis_lines = [ax.plot([], [], [], "-", color=c, lw=2.0, animated=True)[0] for c in ("C3", "C2", "C0")]
     if momentum is not None:
         Lv = np.asarray(momentum, float).reshape(3)
         u = Lv / max(float(np.linalg.norm(Lv)), 1e-300)
@@ -788,7 +936,9 @@ def animate_rigid_body(t, rotations, path: str, size, momentum=None, center=None
         Lv = u * 0.9 * float(np.min(room))
         ax.plot([0, Lv[0]], [0, Lv[1]], [0, Lv[2]], "-", color="k", lw=1.5)
         ax.text(Lv[0], Lv[1], Lv[2], "L", fontsize=8)
-    stamp = ax.text2D(0.02, 0.95, "", transform=ax.transAxes, fontsize=8)
+    stamp = ax.text2D(0.02, 0.95, "", transform=ax.transAxes, fontsize=9, animated=True)
+    canvas.draw()
+    background = canvas.copy_from_bbox(fig.bbox)
     with writer.saving(fig, str(path), dpi=dpi):
         for i in frames:
             P = C[i] + corners @ R[i].T
@@ -797,6 +947,9 @@ def animate_rigid_body(t, rotations, path: str, size, momentum=None, center=None
             for k, line in enumerate(axis_lines):
                 tip = C[i] + R[i][:, k] * half[k] * 1.4
                 line.set_data_3d([C[i, 0], tip[0]], [C[i, 1], tip[1]], [C[i, 2], tip[2]])
-            stamp.set_text(f"t = {t[i]:.2f}")
-            writer.grab_frame()
+            stamp.set_text(time_stamp(t[i]))
+            canvas.restore_region(background)
+            for artist in (*edge_lines, *axis_lines, stamp):
+                ax.draw_artist(artist)
+            writer.grab_rgba(np.array(canvas.buffer_rgba()))
     return str(path)
