@@ -130,7 +130,7 @@ def test_console_list_run_and_report(quick_report):
     stab = summary.split("## Stability on stiff and extreme cases")[1].split("\n## ")[0]
     for family in ("droplet", "stiff spring", "pendulum", "contact", "rigid body"):
         assert f"| {family} |" in stab
-    assert "FAILED" not in stab and "cases pass." in stab
+    assert "FAILED" not in stab and "cases pass." in stab and "Contact battery" in stab
     carries = {line.split(" | ")[0].strip("| "): line for line in
                summary.split("## What each scene carries")[1].splitlines() if line.startswith("| ")}
     assert "| 0 (0) |" in carries["double_pendulum"] and "gravity" in carries["double_pendulum"]
