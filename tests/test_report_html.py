@@ -223,3 +223,16 @@ def test_check_exit_2_without_chromium_or_page(tmp_path):
     p = subprocess.run([sys.executable, str(CHECK), str(tmp_path), "--chromium", str(tmp_path / "no-such-chromium")],
                        capture_output=True, text=True)
     assert p.returncode == 2 and "Chromium not found" in p.stderr and p.stderr.count("\n") == 1
+
+
+def test_outputs_get_the_mode_an_ordinary_write_gives(tmp_path):
+    """Written through a private temporary file, an output still gets the umask's mode (not 0600)."""
+    import stat
+
+    from castrajectory.inspect import files
+    old = os.umask(0o022)
+    try:
+        files.write_text(str(tmp_path / "a.md"), "x")
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE(os.stat(tmp_path / "a.md").st_mode) == 0o644
