@@ -134,3 +134,53 @@ def test_bad_system_files_are_refused(tmp_path, text, needle):
     p = cli(str(f))
     assert p.returncode == 2 and p.stdout == ""
     assert len(p.stderr.strip().splitlines()) == 1 and needle in p.stderr, p.stderr
+
+
+# ----------------------------------------------------------------------------- the generated derivation
+@pytest.mark.parametrize("name", EXAMPLES + ["double_pendulum"])
+def test_generated_equations_are_the_model(name):
+    """The printed Euler–Lagrange equations (lambdified from the same sympy expressions the document
+    prints) give the package's own acceleration at random states to 1e-10."""
+    derivation = pytest.importorskip("castrajectory.inspect.derivation")
+    pytest.importorskip("sympy")
+    if name == "double_pendulum":
+        from castrajectory.models.pendulum import double_pendulum
+        system, q0 = double_pendulum(), np.array([2.0, 1.0])
+    else:
+        _, system, q0, _ = example(name)
+    acc = derivation.accelerations(derivation.equations(system))
+    rng = np.random.default_rng(3)
+    for _ in range(10):
+        q, v = q0 + rng.uniform(-0.5, 0.5, system.nq), rng.uniform(-2, 2, system.nq)
+        if system.nc:   # a state on the constraint: the hoop's circle, the velocity tangent to it
+            q = q / np.linalg.norm(q)
+            v = v - (v @ q) * q
+        want = np.asarray(system.acceleration(q, v), float).reshape(-1)
+        assert np.max(np.abs(acc(q, v) - want)) <= 1e-10 * (1 + np.max(np.abs(want)))
+
+
+def test_derive_writes_the_document(tmp_path):
+    pytest.importorskip("sympy")
+    out = tmp_path / "derivation.md"
+    p = subprocess.run([sys.executable, "-m", "castrajectory.cli", "derive", "examples/bead_on_rotating_hoop.py",
+                        "--out", str(out)], capture_output=True, text=True, cwd=ROOT, timeout=300)
+    assert p.returncode == 0, p.stderr
+    text = out.read_text()
+    for heading in ("## Coordinates", "## Energies and the Lagrangian", "## The Euler–Lagrange equations",
+                    "## The discrete problem", "## Conserved quantities"):
+        assert heading in text
+    assert r"\lambda" in text and "= 0$$" in text            # the constraint and its multiplier
+    p = subprocess.run([sys.executable, "-m", "castrajectory.cli", "derive", str(tmp_path / "none.py"),
+                        "--out", str(out)], capture_output=True, text=True, cwd=ROOT, timeout=60)
+    assert p.returncode == 2 and len(p.stderr.strip().splitlines()) == 1 and "no such file" in p.stderr
+
+
+def test_a_cyclic_coordinate_is_found_and_its_momentum_named():
+    derivation = pytest.importorskip("castrajectory.inspect.derivation")
+    pytest.importorskip("sympy")
+    xy = ca.SX.sym("xy", 2)
+    thrown = ct.LagrangianSystem(xy, ct.Atoms([xy], [2.0]), [ct.Gravity(9.81)], names=["x", "y"])
+    eq = derivation.equations(thrown)
+    assert eq.cyclic == [0]                       # x: the horizontal momentum 2 ẋ is conserved
+    text = derivation.markdown(thrown, "throw")
+    assert r"$x$ does not appear in $L$ (cyclic)" in text and r"2 \dot{x}" in text

@@ -35,9 +35,14 @@ def main(argv: Optional[List[str]] = None) -> int:
     rep.add_argument("--quiet", action="store_true", help="no progress lines")
     sub.add_parser("system", help="solve the system described in FILE.py: castrajectory system FILE.py [flags]",
                    add_help=False)
+    sub.add_parser("derive", help="write the derivation of FILE.py: castrajectory derive FILE.py --out PATH",
+                   add_help=False)
     if argv[:1] == ["system"]:
         from . import system
         return system.main(argv[1:])
+    if argv[:1] == ["derive"]:
+        from . import system
+        return system.derive_main(argv[1:])
     if argv[:1] == ["run"]:
         if len(argv) < 2 or argv[1].startswith("-"):
             print("castrajectory: error: run needs a scene name; see `castrajectory list`", file=sys.stderr)

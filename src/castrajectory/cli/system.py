@@ -123,5 +123,34 @@ def main(argv: Optional[List[str]] = None) -> int:
     return run_scene(parser(), run, argv)
 
 
+def derive_parser() -> ArgumentParser:
+    p = ArgumentParser(prog="castrajectory derive",
+                       description="Write the derivation of the system in FILE.py (Markdown with LaTeX math).")
+    p.add_argument("file", metavar="FILE.py", help="a Python file defining system(), q0, qd0")
+    p.add_argument("--out", required=True, metavar="PATH", help="the Markdown file to write (e.g. derivation.md)")
+    from ..discretise.lagrangians import SCHEMES
+    p.add_argument("--scheme", choices=list(SCHEMES), default="midpoint", help="the discrete Lagrangian described")
+    return p
+
+
+def derive_main(argv: Optional[List[str]] = None) -> int:
+    """``castrajectory derive FILE.py --out derivation.md``: exit 0 written, 2 bad input (one line)."""
+    from ..inspect import derivation, files
+    from .scene import check_output_path
+    args = derive_parser().parse_args(argv)
+    try:
+        check_output_path("out", args.out)
+        module = load(args.file)
+        system, _, _ = described(module, args.file)
+        title = str(getattr(module, "title", os.path.splitext(os.path.basename(args.file))[0]))
+        text = derivation.markdown(system, title, args.scheme)
+    except InputError as exc:
+        print(f"castrajectory derive: error: {exc}", file=sys.stderr)
+        return 2
+    files.write_text(args.out, text)
+    print(f"derivation written to {args.out}")
+    return 0
+
+
 if __name__ == "__main__":  # pragma: no cover
     sys.exit(main())

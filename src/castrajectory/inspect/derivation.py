@@ -1,0 +1,235 @@
+"""The derivation of a system, generated from the very CasADi expressions the solver uses.
+
+:func:`to_sympy` walks a CasADi SX function's algorithm (its instructions: inputs, constants, unary
+and binary operations) into sympy expressions, so nothing is written twice: the Lagrangian the
+whole-trajectory NLP discretises is the one printed.  :func:`equations` forms, in sympy, the
+Euler–Lagrange equations ``M(q) q̈ = f(q, q̇) (+ Cᵀλ)`` and the conserved quantities the Lagrangian's
+symmetries give; :func:`markdown` writes them as a document (LaTeX math) together with the scheme's
+discrete Lagrangian, discrete Euler–Lagrange equations and discrete Legendre transforms.
+
+sympy is the optional ``derive`` extra: a computer-algebra system to simplify and print with, which
+the package would otherwise have to write itself.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Dict, List, Optional, Sequence
+
+import casadi as ca
+import numpy as np
+
+
+def _sympy():
+    try:
+        import sympy
+    except ImportError:  # pragma: no cover - the extra is installed in CI
+        from ..validation import InputError
+        raise InputError("the derivation needs sympy: pip install 'castrajectory[derive]'") from None
+    return sympy
+
+
+def _ops(sp):
+    """CasADi operation code -> sympy (unary or binary)."""
+    table = {
+        ca.OP_ADD: lambda a, b: a + b, ca.OP_SUB: lambda a, b: a - b, ca.OP_MUL: lambda a, b: a * b,
+        ca.OP_DIV: lambda a, b: a / b, ca.OP_POW: lambda a, b: a ** b, ca.OP_CONSTPOW: lambda a, b: a ** b,
+        ca.OP_ATAN2: sp.atan2, ca.OP_FMIN: sp.Min, ca.OP_FMAX: sp.Max, ca.OP_HYPOT: lambda a, b: sp.sqrt(a ** 2 + b ** 2),
+        ca.OP_NEG: lambda a: -a, ca.OP_SQ: lambda a: a ** 2, ca.OP_SQRT: sp.sqrt, ca.OP_TWICE: lambda a: 2 * a,
+        ca.OP_INV: lambda a: 1 / a, ca.OP_EXP: sp.exp, ca.OP_LOG: sp.log, ca.OP_SIN: sp.sin, ca.OP_COS: sp.cos,
+        ca.OP_TAN: sp.tan, ca.OP_ASIN: sp.asin, ca.OP_ACOS: sp.acos, ca.OP_ATAN: sp.atan, ca.OP_SINH: sp.sinh,
+        ca.OP_COSH: sp.cosh, ca.OP_TANH: sp.tanh, ca.OP_FABS: sp.Abs, ca.OP_SIGN: sp.sign, ca.OP_ASSIGN: lambda a: a,
+        ca.OP_FLOOR: sp.floor, ca.OP_CEIL: sp.ceiling,
+    }
+    return table
+
+
+def to_sympy(fn: ca.Function, inputs: Sequence) -> List:
+    """The outputs of the SX function ``fn`` as sympy expressions of ``inputs`` (one list of sympy
+    symbols per input, in its nonzero order); each output as a flat list of its nonzeros."""
+    sp = _sympy()
+    if not fn.is_a("SXFunction"):
+        fn = fn.expand()
+    ops = _ops(sp)
+    work: Dict[int, object] = {}
+    outs = [[sp.Integer(0)] * fn.nnz_out(i) for i in range(fn.n_out())]
+    for k in range(fn.n_instructions()):
+        op, ins, outk = fn.instruction_id(k), fn.instruction_input(k), fn.instruction_output(k)
+        if op == ca.OP_INPUT:
+            work[outk[0]] = inputs[ins[0]][ins[1]]
+        elif op == ca.OP_OUTPUT:
+            outs[outk[0]][outk[1]] = work[ins[0]]
+        elif op == ca.OP_CONST:
+            work[outk[0]] = _constant(sp, float(fn.instruction_constant(k)))
+        elif op in ops:
+            args = [work[i] for i in ins[:2 if op in _BINARY else 1]]
+            work[outk[0]] = ops[op](*args)
+        else:
+            raise NotImplementedError(f"CasADi operation {op} has no sympy form here")
+    return outs
+
+
+def _constant(sp, c: float):
+    """An exact rational where the double is one with a small power-of-two denominator (0.5, 0.25: the
+    ½ of a kinetic energy), else the float itself (9.81 stays 9.81)."""
+    if c.is_integer() and abs(c) < 1e15:
+        return sp.Integer(int(c))
+    for d in (2, 4, 8, 16, 32, 64):
+        if (c * d).is_integer() and abs(c * d) < 1e15:
+            return sp.Rational(int(c * d), d)
+    return sp.Float(c)
+
+
+_BINARY = {ca.OP_ADD, ca.OP_SUB, ca.OP_MUL, ca.OP_DIV, ca.OP_POW, ca.OP_CONSTPOW, ca.OP_ATAN2, ca.OP_FMIN,
+           ca.OP_FMAX, ca.OP_HYPOT}
+
+
+@dataclass
+class Equations:
+    """The Lagrangian mechanics of a system in sympy (see :func:`equations`)."""
+
+    q: list
+    qd: list
+    qdd: list
+    lam: list
+    K: object
+    U: object
+    L: object
+    M: object
+    forces: object                  # f(q, q̇) in M q̈ = f + Cᵀλ
+    C: object                       # constraint Jacobian (m × n), or None
+    c: list                         # constraint expressions c(q)
+    positions: list = field(default_factory=list)   # atom positions, if the system has atoms
+    cyclic: List[int] = field(default_factory=list)  # coordinates absent from L (their momenta are conserved)
+    momenta: list = field(default_factory=list)
+
+
+def equations(system, simplify: bool = True) -> Equations:
+    """The Euler–Lagrange equations of ``system`` from its own CasADi expressions:
+    ``M(q) q̈ = f(q, q̇) + C(q)ᵀλ`` with ``f = ∂L/∂q − (∂²L/∂q̇∂q) q̇``, ``c(q) = 0``."""
+    sp = _sympy()
+    n = system.nq
+    names = [_latex_name(s) for s in system.names]
+    q = list(sp.symbols(" ".join(names), real=True)) if n > 1 else [sp.Symbol(names[0], real=True)]
+    qd = [sp.Symbol(r"\dot{" + nm + "}", real=True) for nm in names]
+    qdd = [sp.Symbol(r"\ddot{" + nm + "}", real=True) for nm in names]
+    f_K = ca.Function("K", [system.q, system.qd], [system.kinetic_expr()])
+    f_U = ca.Function("U", [system.q], [system.potential_expr()])
+    K = to_sympy(f_K, [q, qd])[0][0]
+    U = to_sympy(f_U, [q])[0][0]
+    S = (lambda e: sp.simplify(e)) if simplify else (lambda e: e)  # noqa: E731
+    K, U = S(K), S(U)
+    L = K - U
+    p = [sp.diff(L, v) for v in qd]
+    M = sp.Matrix(n, n, lambda i, j: S(sp.diff(p[i], qd[j])))
+    f = sp.Matrix([S(sp.diff(L, q[i]) - sum(sp.diff(p[i], q[j]) * qd[j] for j in range(n))) for i in range(n)])
+    c, C, lam = [], None, []
+    if system.nc:
+        f_c = ca.Function("c", [system.q], [system.constraint_expr()])
+        c = [S(e) for e in to_sympy(f_c, [q])[0]]
+        C = sp.Matrix([[sp.diff(ci, qj) for qj in q] for ci in c])
+        lam = list(sp.symbols(" ".join(fr"\lambda_{i + 1}" for i in range(len(c))))) if len(c) > 1 \
+            else [sp.Symbol(r"\lambda")]
+    positions = []
+    if getattr(system.kinetic, "positions", None) is not None:
+        for x in system.kinetic.positions:
+            fx = ca.Function("x", [system.q], [ca.vec(ca.SX(x))])
+            positions.append([S(e) for e in to_sympy(fx, [q])[0]])
+    cyclic = [i for i in range(n) if sp.diff(L, q[i]) == 0]
+    return Equations(q, qd, qdd, lam, K, U, L, M, f, C, c, positions, cyclic, [S(pi) for pi in p])
+
+
+def accelerations(eq: Equations):
+    """A numpy function ``(q, q̇) -> q̈`` from the printed equations, lambdified, to compare with the
+    package's own acceleration: ``M q̈ = f`` or, with constraints, ``M q̈ − Cᵀλ = f`` and
+    ``C q̈ = −(∂(C q̇)/∂q) q̇`` (the constraints' second derivative)."""
+    sp = _sympy()
+    n = len(eq.q)
+    if eq.C is None:
+        fn = sp.lambdify([eq.q, eq.qd], [eq.M, eq.forces], "numpy")
+    else:
+        qd = sp.Matrix(eq.qd)
+        gamma = -(eq.C * qd).jacobian(eq.q) * qd
+        fn = sp.lambdify([eq.q, eq.qd], [eq.M, eq.forces, eq.C, gamma], "numpy")
+
+    def acc(qv, qdv):
+        out = fn(list(qv), list(qdv))
+        M, f = np.asarray(out[0], float), np.asarray(out[1], float).reshape(-1)
+        if eq.C is None:
+            return np.linalg.solve(M, f)
+        C, g = np.asarray(out[2], float), np.asarray(out[3], float).reshape(-1)
+        m = C.shape[0]
+        K = np.block([[M, -C.T], [C, np.zeros((m, m))]])
+        return np.linalg.solve(K, np.concatenate([f, g]))[:n]
+    return acc
+
+
+def _latex_name(name: str) -> str:
+    greek = {"theta", "phi", "psi", "alpha", "beta", "gamma", "delta", "omega", "lambda", "mu", "nu", "rho",
+             "sigma", "tau", "xi", "eta", "zeta", "chi"}
+    base = name.rstrip("0123456789")
+    idx = name[len(base):]
+    base = "\\" + base if base in greek else base
+    return f"{base}_{{{idx}}}" if idx else base
+
+
+SCHEME_TEXT = {
+    "midpoint": (r"L_d(q_k, q_{k+1}) = h\,L\!\left(\tfrac{q_k + q_{k+1}}{2},\ \tfrac{q_{k+1} - q_k}{h}\right)",
+                 "second order"),
+    "trapezoid": (r"L_d(q_k, q_{k+1}) = \tfrac{h}{2}\left[L\!\left(q_k, \tfrac{q_{k+1} - q_k}{h}\right) + "
+                  r"L\!\left(q_{k+1}, \tfrac{q_{k+1} - q_k}{h}\right)\right]", "second order"),
+    "galerkin4": (r"L_d(q_k, Z_k, q_{k+1}) = \tfrac{h}{6}\left[L(q(0), \dot q(0)) + 4 L(q(\tfrac12), \dot q(\tfrac12)) "
+                  r"+ L(q(1), \dot q(1))\right],\ q(\tau) \text{ quadratic through } q_k, Z_k, q_{k+1}",
+                  "fourth order"),
+}
+
+
+def markdown(system, title: str, scheme: str = "midpoint", simplify: bool = True) -> str:
+    """The derivation of ``system`` as Markdown with LaTeX math (see module docstring)."""
+    sp = _sympy()
+    eq = equations(system, simplify)
+    tex = sp.latex
+    n = len(eq.q)
+    lines = [f"# {title}: the derivation", "",
+             "Generated by castrajectory from the CasADi expressions its solver uses (not written by hand).", "",
+             "## Coordinates", "", "$$q = (" + ", ".join(tex(v) for v in eq.q) + ")$$", ""]
+    if eq.positions:
+        lines += ["The atoms' positions $x_a = f_a(q)$:", ""]
+        rows = " \\\\ "
+        for a, x in enumerate(eq.positions):
+            body = rows.join(tex(e) for e in x)
+            lines.append(f"$$x_{{{a + 1}}} = \\begin{{pmatrix}}{body}\\end{{pmatrix}}$$")
+        lines.append("")
+    lines += ["## Energies and the Lagrangian", "",
+              f"$$K = {tex(eq.K)}$$", "", f"$$U = {tex(eq.U)}$$", "", r"$$L = K - U$$", "",
+              "The mass matrix $M(q) = \\partial^2 L / \\partial\\dot q^2$:", "", f"$$M(q) = {tex(eq.M)}$$", "",
+              "## The Euler–Lagrange equations", "",
+              r"$$\frac{d}{dt}\frac{\partial L}{\partial \dot q} - \frac{\partial L}{\partial q} = "
+              + (r"C(q)^{\mathsf T}\lambda" if eq.C is not None else "0") + "$$", "",
+              "written out as $M(q)\\,\\ddot q = f(q, \\dot q)" + (" + C(q)^{\\mathsf T}\\lambda" if eq.C is not None
+                                                                   else "") + "$:", ""]
+    rhs = eq.forces + (eq.C.T * sp.Matrix(eq.lam) if eq.C is not None else sp.zeros(n, 1))
+    lhs = eq.M * sp.Matrix(eq.qdd)
+    for i in range(n):
+        lines.append(f"$${tex(sp.expand(lhs[i]))} = {tex(rhs[i])}$$")
+    lines.append("")
+    if eq.C is not None:
+        lines += ["with the holonomic constraints and their multipliers $\\lambda$:", ""]
+        lines += [f"$${tex(ci)} = 0$$" for ci in eq.c] + [""]
+    text, order = SCHEME_TEXT.get(scheme, ("", ""))
+    lines += ["## The discrete problem", "",
+              f"The `{scheme}` discrete Lagrangian ({order}), on the grid $t_k = k h$:", "", f"$${text}$$", "",
+              "The discrete action $S_d = \\sum_k L_d$ is stationary when, at every interior node, the discrete "
+              "Euler–Lagrange equations hold:", "",
+              r"$$D_2 L_d(q_{k-1}, q_k) + D_1 L_d(q_k, q_{k+1}) = 0,$$", "",
+              "and the discrete Legendre transforms give the momenta at the nodes, the first of which is set by "
+              "the initial condition:", "",
+              r"$$p_k^- = D_2 L_d(q_{k-1}, q_k), \qquad p_k^+ = -D_1 L_d(q_k, q_{k+1}), \qquad "
+              r"p_0^+ = \frac{\partial L}{\partial \dot q}(q_0, \dot q_0).$$", ""]
+    lines += ["## Conserved quantities", "",
+              "$L$ does not depend on time, so the energy $E = \\dot q^{\\mathsf T} \\partial L/\\partial \\dot q - L "
+              "= K + U$ is conserved; the variational scheme keeps its discrete counterpart bounded.", ""]
+    for i in eq.cyclic:
+        lines.append(f"${tex(eq.q[i])}$ does not appear in $L$ (cyclic): its momentum "
+                     f"$p_{{{tex(eq.q[i])}}} = {tex(eq.momenta[i])}$ is conserved, exactly by the discrete "
+                     "Noether theorem.")
+    return "\n".join(lines) + "\n"
