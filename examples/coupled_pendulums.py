@@ -9,25 +9,19 @@ period 2π/(ω₂ − ω₁).
     castrajectory system examples/coupled_pendulums.py --animate beats.gif
 """
 import casadi as ca
-
 import castrajectory as ct
 
 m, l, d, k, g = 1.0, 1.0, 1.0, 0.5, 9.81
 title = "spring-coupled pendulums"
-T, n = 20.0, 2000
-q0 = [0.05, 0.0]
+T, n = 20.0, 2000          # optional: the horizon and the number of steps
+q0 = [0.05, 0.0]           # angles from the downward vertical (rad)
 qd0 = [0.0, 0.0]
-links = False      # two separate pendulums: draw the bobs, not a chain
-
-
-def bobs(q):
-    left = ca.vertcat(l * ca.sin(q[0]), -l * ca.cos(q[0]))
-    right = ca.vertcat(d + l * ca.sin(q[1]), -l * ca.cos(q[1]))
-    return left, right
+links = False              # pictures: draw the bobs, not a chain from the origin
 
 
 def system():
     q = ca.SX.sym("theta", 2)
-    left, right = bobs(q)
+    left = ca.vertcat(l * ca.sin(q[0]), -l * ca.cos(q[0]))
+    right = ca.vertcat(d + l * ca.sin(q[1]), -l * ca.cos(q[1]))
     return ct.LagrangianSystem(q, ct.Atoms([left, right], [m, m]),
                                [ct.Gravity(g), ct.Spring(k, d, left, right)], names=["theta1", "theta2"])

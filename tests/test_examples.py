@@ -184,3 +184,14 @@ def test_a_cyclic_coordinate_is_found_and_its_momentum_named():
     assert eq.cyclic == [0]                       # x: the horizontal momentum 2 ẋ is conserved
     text = derivation.markdown(thrown, "throw")
     assert r"$x$ does not appear in $L$ (cyclic)" in text and r"2 \dot{x}" in text
+
+
+def test_system_writes_its_derivation_beside_the_solve(tmp_path):
+    pytest.importorskip("sympy")
+    out = tmp_path / "coupled.md"
+    p = cli("examples/coupled_pendulums.py", "--T", "1", "--n", "100", "--derive", str(out), "--json")
+    assert p.returncode == 0, p.stderr
+    assert json.loads(p.stdout)["status"] == "ok"
+    assert "## The Euler–Lagrange equations" in out.read_text()
+    p = cli("examples/coupled_pendulums.py", "--derive", str(tmp_path / "nofolder" / "x.md"))
+    assert p.returncode == 2 and "--derive" in p.stderr

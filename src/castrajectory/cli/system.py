@@ -40,6 +40,7 @@ def parser() -> ArgumentParser:
     p.add_argument("--verbose", action="store_true", help="stream Ipopt's log (to stderr with --json)")
     p.add_argument("--max-iter", type=int, default=None, help="Ipopt iterations of the whole run")
     add_trajectory_flags(p, T=None, n=None)
+    p.add_argument("--derive", metavar="PATH", help="also write the system's derivation (Markdown, LaTeX math)")
     return p
 
 
@@ -107,6 +108,9 @@ def described(module, path: str):
 
 def run(args):
     check_animation_path(args.animate)
+    if args.derive:
+        from .scene import check_output_path
+        check_output_path("derive", args.derive)
     module = load(args.file)
     system, q0, qd0 = described(module, args.file)
     T = args.T if args.T is not None else float(getattr(module, "T", DEFAULT_T))
@@ -116,7 +120,14 @@ def run(args):
     res = simulate.simulate(system, q0, qd0, T, n, args.scheme, args.method, options=ipopt_options(args),
                             verbose=args.verbose, **accuracy(args))
     title = str(getattr(module, "title", os.path.splitext(os.path.basename(args.file))[0]))
-    return trajectory_outcome(title, system, res, links=bool(getattr(module, "links", True)))
+    out = trajectory_outcome(title, system, res, links=bool(getattr(module, "links", True)))
+
+    def derive(path):
+        from ..inspect import derivation
+        with open(path, "w") as fh:
+            fh.write(derivation.markdown(system, title, args.scheme))
+    out.writers["derive"] = derive
+    return out
 
 
 def main(argv: Optional[List[str]] = None) -> int:
