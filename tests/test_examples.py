@@ -195,3 +195,22 @@ def test_system_writes_its_derivation_beside_the_solve(tmp_path):
     assert "## The Euler–Lagrange equations" in out.read_text()
     p = cli("examples/coupled_pendulums.py", "--derive", str(tmp_path / "nofolder" / "x.md"))
     assert p.returncode == 2 and "--derive" in p.stderr
+
+
+@pytest.mark.parametrize("name", EXAMPLES)
+def test_whole_trajectory_agrees_with_dop853_on_the_generated_equations(name):
+    """solve_ivp (DOP853, rtol 1e-12) integrates the *printed* equations (lambdified from the derivation);
+    the whole-trajectory solution converges to it at the scheme's order (error / 4 when N doubles)."""
+    derivation = pytest.importorskip("castrajectory.inspect.derivation")
+    pytest.importorskip("sympy")
+    solve_ivp = pytest.importorskip("scipy.integrate").solve_ivp
+    mod, system, q0, qd0 = example(name)
+    acc = derivation.accelerations(derivation.equations(system))
+    nq, T = system.nq, 2.0
+    ref = solve_ivp(lambda t, y: np.concatenate([y[nq:], acc(y[:nq], y[nq:])]), (0.0, T),
+                    np.concatenate([q0, qd0]), method="DOP853", rtol=1e-12, atol=1e-12, dense_output=True)
+    errs = []
+    for n in (400, 800):
+        run = ct.simulate(system, q0, qd0, T, n)
+        errs.append(float(np.max(np.abs(run.q - ref.sol(run.t)[:nq].T))))
+    assert 3.0 < errs[0] / errs[1] < 5.0 and errs[1] < 1e-3, errs

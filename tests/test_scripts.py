@@ -137,6 +137,9 @@ def test_console_list_run_and_report(quick_report):
     assert "gravity" not in carries["double_pendulum_g0"]
     assert "contact: 1 gap" in carries["bouncing_ball"] and "| 0 (0) | equal" not in carries["bouncing_ball"]
     assert "no NLP" in carries["collision_impulse"]
+    # the built-in scenes' derivations, generated and linked (sympy is in CI's extras)
+    assert "(derivation_double_pendulum.md)" in summary
+    assert "## The Euler–Lagrange equations" in (out / "derivation_double_pendulum.md").read_text()
 
 
 def test_convergence_script_small(tmp_path):

@@ -142,6 +142,30 @@ def _stability(out: str, progress, size: str):
     return solved == len(rows) and good, lines
 
 
+def _derivations(out: str):
+    """The built-in mechanics scenes' derivations, generated from the expressions the solver uses
+    (:mod:`castrajectory.inspect.derivation`; the ``derive`` extra), one Markdown file each, linked here."""
+    from ..models import pendulum, rigidbody
+    from ..validation import InputError
+    scenes = [("double_pendulum", "double pendulum", pendulum.double_pendulum()),
+              ("n_link_pendulum", "4-link pendulum", pendulum.n_link_pendulum([1.0] * 4, [1.0] * 4, 9.81)),
+              ("stiff_spring_pendulum", "spring pendulum (k l/(m g) = 1e4)",
+               pendulum.spring_pendulum(1.0, 1.0, 1e4 * 9.81, 9.81)),
+              ("dzhanibekov", "free rigid body, I = (1, 2, 3)", rigidbody.free_body(rigidbody.Inertia(1.0, 2.0, 3.0)))]
+    lines = ["## Derivations, generated", "",
+             "Each written by `castrajectory.inspect.derivation` from the CasADi expressions the solver uses "
+             "(coordinates, K, U, L, M(q), the Euler–Lagrange equations with the constraints' multipliers, the "
+             "discrete equations, the conserved quantities); the same as `castrajectory derive FILE.py`.", ""]
+    try:
+        from ..inspect import derivation
+        for stem, title, system in scenes:
+            files.write_text(os.path.join(out, f"derivation_{stem}.md"), derivation.markdown(system, title))
+            lines.append(f"- [{title}](derivation_{stem}.md)")
+    except InputError as exc:   # sympy missing: say so, the rest of the report stands
+        lines.append(f"*Not generated: {exc}.*")
+    return True, lines + [""]
+
+
 #: The report's slice of the contact battery (scripts/contact_battery.py): seed and scenes drawn.
 BATTERY_SEED, BATTERY_COUNT = 13, {"quick": 3, "default": 12, "full": 30}
 
@@ -489,20 +513,19 @@ def write_report(out: str, size: str = "default", quiet: bool = False) -> int:
             carried=carried),
         lambda: section("rigid-body work-precision", _rigid_body_work_precision, out, size),
         lambda: _stability(out, progress, size),
+        lambda: section("generated derivations", _derivations, out),
     ]
-    stab: List[str] = []
     for part in parts:
         good, sec = part()
         ok &= good
         lines += sec
-        stab = sec
     lines += _carries(carried)
 
     interrupt.check()
     elapsed = time.perf_counter() - t0
     lines += [f"Report ({size}) written in {elapsed:.1f} s; every solve converged and every stability case "
               f"passed: {ok}."]
-    passed = next((ln for ln in stab if ln.endswith("cases pass.")), "")
+    passed = next((ln for ln in lines if ln.endswith("cases pass.")), "")
     lines[2:2] = ["What was solved, how accurately and at what cost (the scenes' own answers below; "
                   f"{size} report, {elapsed:.0f} s in all):", "", *_headline(out, f"Stability: {passed}")]
     files.write_text(os.path.join(out, "summary.md"), "\n".join(lines) + "\n")
