@@ -15,7 +15,7 @@ title = "pendulum on a spring-tied cart"
 T, n = 10.0, 2000
 q0 = [0.2, 0.6]          # x (m), θ (rad)
 qd0 = [0.0, 0.0]
-links = True             # draw cart -> bob
+links = [(0, 1)]         # pictures: a line from the cart (atom 0) to the bob (atom 1)
 
 
 def system():

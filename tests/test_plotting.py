@@ -485,3 +485,20 @@ def test_contact_plot_draws_the_body_at_its_impacts(tmp_path, name, argv):
     assert fig.axes[-1].get_xlabel() == "t" and fig.axes[-1].get_ylabel() == "impulse"
     out.writers["plot"](str(tmp_path / "c.png"))
     assert (tmp_path / "c.png").stat().st_size > 20_000
+
+
+def test_animation_links_join_the_pairs_asked_for():
+    """links as pairs of point indices (-1: the pivot): the drawn segments are exactly those pairs."""
+    from castrajectory.inspect.plotting import PointsAnimation
+    t = np.linspace(0.0, 1.0, 5)
+    P = np.stack([np.stack([[k, 0.0], [k, -1.0], [k + 1.0, -1.0]]) for k in t])   # cart, bob, second bob
+    anim = PointsAnimation(P, t, links=[(0, 1), (0, 2), (-1, 0)], trail=False)
+    anim.draw(2)
+    x, y = anim.links.get_data()
+    seg = np.column_stack([x, y]).reshape(3, 3, 2)
+    assert np.allclose(seg[:, :2], [[P[2, 0], P[2, 1]], [P[2, 0], P[2, 2]], [[0.0, 0.0], P[2, 0]]])
+    assert np.all(np.isnan(seg[:, 2]))
+    with pytest.raises(ValueError):
+        PointsAnimation(P, t, links=[(0, 3)])
+    with pytest.raises(ValueError):
+        PointsAnimation(P, t, links=[(-1, 0)], pivot=None)

@@ -5,8 +5,9 @@ The file is plain Python and defines:
 
 * ``system()`` returning a :class:`castrajectory.LagrangianSystem` built from the public API;
 * ``q0`` and ``qd0``, the initial coordinates and velocities;
-* optionally ``T`` and ``n`` (the flags override them), ``title``, and for pictures ``links``
-  (``True``: the atoms joined in order from ``pivot``) and ``pivot`` (a point, or ``None``).
+* optionally ``T`` and ``n`` (the flags override them), ``title``, and for pictures ``links``:
+  ``True`` (the atoms joined in order from the origin), ``False``, or pairs ``(i, j)`` of atom indices
+  to join by lines (``-1``: the origin), e.g. ``[(-1, 0), (0, 1)]``.
 
 Bad input is refused before any solve (exit 2, one line): a file that does not exist or does not
 import, no ``system()``, a ``system()`` that does not return a ``LagrangianSystem``, ``q0`` / ``qd0`` of
@@ -120,7 +121,8 @@ def run(args):
     res = simulate.simulate(system, q0, qd0, T, n, args.scheme, args.method, options=ipopt_options(args),
                             verbose=args.verbose, **accuracy(args))
     title = str(getattr(module, "title", os.path.splitext(os.path.basename(args.file))[0]))
-    out = trajectory_outcome(title, system, res, links=bool(getattr(module, "links", True)))
+    links = getattr(module, "links", True)
+    out = trajectory_outcome(title, system, res, links=links if isinstance(links, bool) else list(links))
 
     def derive(path):
         from ..inspect import derivation

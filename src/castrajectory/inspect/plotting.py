@@ -629,7 +629,19 @@ class PointsAnimation:
         self.frames = _frames(t, max_frames)
         self.has_pivot = pivot is not None
         self.pivot = np.asarray(pivot if self.has_pivot else (0.0, 0.0), dtype=float).reshape(2)
-        self.show_links = links
+        # links: True (the pivot and the points joined in order), False, or pairs (i, j) of point indices
+        # to join (-1: the pivot), e.g. [(0, 1), (0, 2)] for two bobs hanging from one cart
+        self.pairs = None
+        if not isinstance(links, (bool, np.bool_)):
+            pairs = [tuple(int(k) for k in pr) for pr in links]
+            n_pts = P.shape[1]
+            if any(len(pr) != 2 or not all(-1 <= k < n_pts for k in pr) for pr in pairs):
+                raise ValueError(f"links: pairs of point indices in [0, {n_pts}) (-1: the pivot), got {links!r}")
+            if any(-1 in pr for pr in pairs) and not self.has_pivot:
+                raise ValueError("links: index -1 joins the pivot, but there is no pivot")
+            self.pairs = pairs
+        self.show_links = bool(links) if self.pairs is None else bool(self.pairs)
+        links = self.show_links
 
         # the window follows the bodies (and the pivot they hang from), never the scenery
         moving = P.reshape(-1, 2)
@@ -686,7 +698,13 @@ class PointsAnimation:
     def draw(self, i: int) -> None:
         """Set the moving artists to sample ``i``."""
         P, t, pts = self.P, self.t, self.P[i]
-        if self.show_links:
+        if self.show_links and self.pairs is not None:
+            ext = np.vstack([pts, self.pivot[None, :]])          # index -1: the pivot
+            seg = np.full((3 * len(self.pairs), 2), np.nan)      # segments separated by NaN rows
+            for k, (a, b) in enumerate(self.pairs):
+                seg[3 * k], seg[3 * k + 1] = ext[a], ext[b]
+            self.links.set_data(seg[:, 0], seg[:, 1])
+        elif self.show_links:
             chain = np.vstack([self.pivot, pts]) if self.has_pivot else pts
             self.links.set_data(chain[:, 0], chain[:, 1])
         self.markers.set_data(pts[:, 0], pts[:, 1])
