@@ -147,28 +147,16 @@ def _pendulum_rhs(t, y, g=9.81):
 
 
 def hand_dop853(reference_rtol: float, rtols=(1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12)):
-    """DOP853 with the hand-written right-hand side (rows as study.peer_sweep's); [] without scipy."""
-    try:
-        from scipy.integrate import solve_ivp
-    except ImportError:
-        return []
-    from castrajectory.baselines.stepping import reference
+    """DOP853 with the hand-written right-hand side (study.peer_sweep's rows, label scipy-DOP853-numpy),
+    checked against the model's acceleration before it is timed; [] without scipy."""
     system = pendulum.double_pendulum()
     rng = np.random.default_rng(0)
     for _ in range(5):  # the hand-written equations are the model's
         y = rng.uniform(-3, 3, 4)
         acc = np.asarray(system.acceleration(y[:2], y[2:]), float).reshape(-1)
         assert np.allclose(_pendulum_rhs(0.0, y)[2:], acc, rtol=1e-12, atol=1e-12), "hand-written RHS is wrong"
-    q_ref = reference(system, Q0, QD0, [T], rtol=reference_rtol, atol=reference_rtol)[0][-1]
-    rows = []
-    for rtol in rtols:
-        t0 = time.perf_counter()
-        sol = solve_ivp(_pendulum_rhs, (0.0, T), list(Q0) + list(QD0), method="DOP853", rtol=rtol, atol=rtol)
-        wall = time.perf_counter() - t0
-        rows.append({"label": "scipy-DOP853-numpy", "n": int(sol.nfev), "rtol": rtol, "status": "ok" if sol.success
-                     else sol.message, "success": bool(sol.success), "time_s": wall,
-                     "error_final": float(np.max(np.abs(sol.y[:2, -1] - q_ref)))})
-    return rows
+    return study.peer_sweep(system, Q0, QD0, T, methods=("DOP853",), rtols=rtols, reference_rtol=reference_rtol,
+                            rhs=_pendulum_rhs, suffix="-numpy")
 
 
 def _public(r: dict) -> dict:

@@ -503,11 +503,13 @@ def reading(rows: List[dict], labels: Sequence[str], targets: Sequence[float] = 
 
 
 def peer_sweep(system, q0, qd0, T: float, methods: Sequence[str] = ("DOP853", "RK45"),
-               rtols: Sequence[float] = (1e-4, 1e-6, 1e-8, 1e-10, 1e-12), reference_rtol: float = 1e-13) -> List[dict]:
+               rtols: Sequence[float] = (1e-4, 1e-6, 1e-8, 1e-10, 1e-12), reference_rtol: float = 1e-13,
+               rhs: Optional[Callable] = None, suffix: str = "") -> List[dict]:
     """scipy's ``solve_ivp`` on the Euler–Lagrange ODE (the peers a user would otherwise reach for), in the
-    rows of :func:`work_precision_sweep`: label ``scipy-<method>``, ``n`` its right-hand-side evaluations,
-    ``time_s`` its wall time (the right-hand side is the system's compiled CasADi acceleration),
-    ``error_final`` against the same CVODES reference.  ``[]`` without scipy (the ``bench`` extra)."""
+    rows of :func:`work_precision_sweep`: label ``scipy-<method><suffix>``, ``n`` its right-hand-side
+    evaluations, ``time_s`` its wall time, ``error_final`` against the same CVODES reference.  The
+    right-hand side is the system's compiled CasADi acceleration, or ``rhs(t, y)`` (``y = (q, q̇)``; e.g.
+    the equations written by hand).  ``[]`` without scipy (the ``bench`` extra)."""
     try:
         from scipy.integrate import solve_ivp
     except ImportError:
@@ -524,8 +526,10 @@ def peer_sweep(system, q0, qd0, T: float, methods: Sequence[str] = ("DOP853", "R
     E0 = float(sys0.energy(q0, qd0))
     acc = sys0.acceleration
 
-    def rhs(t, y):
+    def casadi_rhs(t, y):
         return np.concatenate([y[nq:], np.asarray(acc(y[:nq], y[nq:]), float).reshape(-1)])
+
+    rhs = rhs or casadi_rhs
 
     rows = []
     for method in methods:
@@ -533,7 +537,7 @@ def peer_sweep(system, q0, qd0, T: float, methods: Sequence[str] = ("DOP853", "R
             t0 = time.perf_counter()
             sol = solve_ivp(rhs, (0.0, T), np.concatenate([q0, qd0]), method=method, rtol=rtol, atol=rtol)
             wall = time.perf_counter() - t0
-            row = {"label": f"scipy-{method}", "method": f"scipy-{method}", "scheme": None, "n": int(sol.nfev),
+            row = {"label": f"scipy-{method}{suffix}", "method": f"scipy-{method}", "scheme": None, "n": int(sol.nfev),
                    "h": math.nan, "rtol": rtol, "status": "ok" if sol.success else sol.message,
                    "success": bool(sol.success), "iterations": 0, "levels": 0, "build_time_s": 0.0,
                    "solve_time_s": wall, "time_s": wall, "wall_time_s": wall}

@@ -70,8 +70,8 @@ def solve_contact(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: s
 def _estimate(coarse: Optional[ContactTrajectory], fine: ContactTrajectory, order: int,
               fine_system: LagrangianSystem) -> "estimate.ErrorEstimate":
     """Richardson estimate of a contact trajectory from the same scene on a coarser grid: the
-    configuration at the shared nodes, the energy, and the impact times (paired in order; grids that
-    disagree on the number of impacts report their differences, unscaled)."""
+    configuration at the shared nodes, the energy, and the impact times (paired in order; where the
+    grids resolve different numbers of impacts, the note says so)."""
     if coarse is None:
         return estimate.ErrorEstimate.none(f"N = {fine.n} has no coarser grid")
     if not coarse.success:
