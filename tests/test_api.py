@@ -9,7 +9,8 @@ import castrajectory as ct
 
 def test_the_public_names():
     assert set(ct.__all__) == {"LagrangianSystem", "Atoms", "MassMatrix", "Gravity", "Spring", "Potential",
-                               "Contact", "RigidBody", "Inertia", "simulate"}
+                               "Contact", "RigidBody", "Inertia", "simulate", "Force", "Dissipation", "Damping",
+                               "time", "velocity", "schemes"}
 
 
 @pytest.mark.parametrize("name", sorted(ct.__all__))

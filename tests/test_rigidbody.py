@@ -193,7 +193,7 @@ def test_time_stepper_drifts_where_the_variational_solution_does_not():
     st = euler.euler_rk4(system, I123.moments, Q0, W0, 100.0, 2000)
     q = st.q
     assert np.max(np.abs(np.linalg.norm(q, axis=1) - 1.0)) > 1e-10
-    p = np.asarray(system.momentum.map(q.shape[0])(q.T, st.qd.T)).T
+    p = np.asarray(system.momentum.map(q.shape[0])(q.T, st.qd.T, 0.0)).T
     L = rb.spatial_momentum(q, p)
     assert readings.drift(L) > 1e-9
 

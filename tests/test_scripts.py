@@ -536,3 +536,59 @@ def test_a_step_longer_than_the_motion_warns():
     assert any("longer than the motion's fastest time scale" in x and "0.415 s" in x for x in w)
     p = run([script("double_pendulum"), "--T", "1", "--n", "200", "--json"])
     assert json.loads(p.stdout)["warnings"] == []
+
+
+# ----------------------------------------------------------------------------- forces and time (#22)
+def test_damped_oscillator_json_and_plot(tmp_path):
+    out = tmp_path / "osc.png"
+    p = run([script("damped_oscillator"), "--scheme", "galerkin6", "--n", "100", "--json", "--plot", str(out)])
+    assert p.returncode == 0, p.stderr
+    d = json.loads(p.stdout)
+    for k in ("t", "q", "energy", "work", "error_vs_exact", "error_estimate", "regime"):
+        assert k in d
+    assert d["error_vs_exact"] < 1e-8                  # measured 2.7e-10 (galerkin6, N = 100, T = 10)
+    e, w = d["energy"], d["work"]
+    assert max(abs(e[i] - e[0] - w[i]) for i in range(len(e))) < 1e-8
+    assert out.stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("args", [["--damping", "0", "--drive-frequency", "2"],          # undamped resonance
+                                  ["--damping", "4"], ["--damping", "10", "--drive-amplitude", "0"]])
+def test_damped_oscillator_regimes(args):
+    p = run([script("damped_oscillator"), *args, "--scheme", "galerkin4", "--json"])
+    assert p.returncode == 0, p.stderr
+    d = json.loads(p.stdout)
+    assert d["error_vs_exact"] < 1e-5, d["regime"]      # galerkin4, N = 200: 3e-8 to 4e-7 measured
+
+
+def test_driven_pendulum_poincare_and_plot(tmp_path):
+    out = tmp_path / "attractor.png"
+    p = run([script("driven_pendulum"), "--T", "60", "--n", "1200", "--json", "--plot", str(out)])
+    assert p.returncode == 0, p.stderr
+    d = json.loads(p.stdout)
+    period = 2 * math.pi / (2.0 / 3.0)
+    assert len(d["poincare_t"]) == int(60 // period) + 1 and abs(d["poincare_t"][1] - period) < 1e-12
+    # the first section point is the initial state
+    assert abs(d["poincare_theta"][0]) < 1e-12 and abs(d["poincare_omega"][0]) < 1e-12
+    assert out.stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("frequency,up", [("100", True), ("30", False)])
+def test_kapitza_pendulum_json(frequency, up):
+    p = run([script("kapitza_pendulum"), "--frequency", frequency, "--json"])
+    assert p.returncode == 0, p.stderr
+    d = json.loads(p.stdout)
+    assert d["inverted_stable_predicted"] == up and d["stayed_up"] == up
+
+
+@pytest.mark.parametrize("name,args,needle", [
+    ("damped_oscillator", ["--damping", "-0.5"], "--damping must not be negative"),
+    ("damped_oscillator", ["--mass", "0"], "--mass must be positive"),
+    ("damped_oscillator", ["--scheme", "galerkin5"], "invalid choice"),
+    ("driven_pendulum", ["--gamma", "-1"], "--gamma must not be negative"),
+    ("driven_pendulum", ["--drive-frequency", "0"], "--drive-frequency must be positive"),
+    ("kapitza_pendulum", ["--length", "-1"], "--length must be positive"),
+    ("kapitza_pendulum", ["--frequency", "nan"], "--frequency"),
+])
+def test_forced_scenes_refuse_bad_input(tmp_path, name, args, needle):
+    assert_refused(tmp_path, name, args, needle)

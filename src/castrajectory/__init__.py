@@ -23,7 +23,9 @@ runnable example, run by ``tests/test_api.py``)::
     run = ct.simulate(system, q0, qd0, T, N, scheme="galerkin4", rtol=1e-6)
 
 ``LagrangianSystem``, ``Atoms``, ``MassMatrix``, ``Gravity``, ``Spring``, ``Potential``, ``Contact``,
-``RigidBody`` and ``Inertia`` describe; ``simulate`` solves (one whole-trajectory stationary-action
+``RigidBody`` and ``Inertia`` describe, with the non-conservative ``Force``, ``Dissipation`` and ``Damping``
+terms, the time symbol ``time()`` and the velocity symbol ``velocity(q)``; ``schemes()`` lists the
+discrete Lagrangians with their orders; ``simulate`` solves (one whole-trajectory stationary-action
 problem) and returns the result contract with ``t``, ``q``, ``energy``, ``error_estimate`` and
 ``warnings``.  Everything else is internal.
 
@@ -36,6 +38,7 @@ import importlib
 import importlib.abc
 import importlib.util
 import sys
+import types
 
 #: Old flat module name -> the module that holds its contents now.
 _MOVED = {
@@ -78,12 +81,43 @@ class _Alias(importlib.abc.MetaPathFinder, importlib.abc.Loader):
 if not any(isinstance(f, _Alias) for f in sys.meta_path):
     sys.meta_path.append(_Alias())
 
-from .models.mechanics import Atoms, Contact, Gravity, LagrangianSystem, MassMatrix, Potential, Spring  # noqa: E402
+from .models.mechanics import (  # noqa: E402
+    Atoms, Contact, Damping, Dissipation, Force, Gravity, LagrangianSystem, MassMatrix, Potential, Spring, time,
+    velocity)
 from .models.rigidbody import Inertia, RigidBody  # noqa: E402
 from .solve.simulate import simulate  # noqa: E402
 
 __all__ = ["LagrangianSystem", "Atoms", "MassMatrix", "Gravity", "Spring", "Potential", "Contact", "RigidBody",
-           "Inertia", "simulate"]
+           "Inertia", "Force", "Dissipation", "Damping", "time", "velocity", "schemes", "simulate"]
+
+
+def schemes() -> dict:
+    """Every discrete Lagrangian on offer, name -> order of accuracy (``simulate``'s ``scheme``, every
+    scene's ``--scheme``): ``midpoint`` and the Gauss family ``gauss4 … gauss24``, ``trapezoid``,
+    ``galerkin4`` and the Lobatto family ``galerkin6 … galerkin24`` (Lobatto IIIA–IIIB, order ``2r``).
+
+    >>> import castrajectory as ct
+    >>> ct.schemes()["midpoint"], ct.schemes()["galerkin4"], ct.schemes()["galerkin10"]
+    (2, 4, 10)
+    """
+    from .discretise.schemes import listing
+    return listing()
+
+
+class _Package(types.ModuleType):
+    """The package keeps its public names: importing an old flat module whose name is also a public
+    function (``castrajectory.simulate``) binds the module in ``sys.modules`` but must not replace
+    ``castrajectory.simulate``, the function, as the import system would (``ct.simulate(...)`` then raised
+    "'module' object is not callable" in any process that had imported the old name)."""
+
+    def __setattr__(self, name, value):
+        if isinstance(value, types.ModuleType) and name in __all__ and not isinstance(self.__dict__.get(name),
+                                                                                         types.ModuleType):
+            return
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package
 
 
 def __getattr__(name):

@@ -95,6 +95,8 @@ class Stepped(Result):
     newton_error: float = float("nan")
     p: Optional[np.ndarray] = None
     lam: Optional[np.ndarray] = None
+    #: work of the forces and of the time dependence up to each node (forced or time-dependent systems)
+    work: Optional[np.ndarray] = None
 
     @property
     def h(self) -> float:
@@ -124,11 +126,11 @@ def _check_state(system: LagrangianSystem, q0, qd0) -> Tuple[np.ndarray, np.ndar
     n = system.nq
     q0, qd0 = _vector("q0", q0, n), _vector("qd0", qd0, n)
     if system.nc:
-        c, C = system.constraint(q0)
+        c, C = system.constraint(q0, 0.0)
         c, C = np.asarray(c).reshape(-1), np.asarray(C)
         if np.max(np.abs(c)) > 1e-8 * (1.0 + np.max(np.abs(q0))):
             raise InputError(f"q0 violates the holonomic constraints (|c(q0)| = {np.max(np.abs(c)):.3g})")
-        Cv = C @ qd0
+        Cv = C @ qd0 + np.asarray(system.constraint_rate(q0, 0.0)).reshape(-1)
         if np.max(np.abs(Cv)) > 1e-8 * (1.0 + np.max(np.abs(qd0))):
             raise InputError(f"qd0 is not tangent to the constraints (|C(q0) qd0| = {np.max(np.abs(Cv)):.3g})")
     return q0, qd0
@@ -142,11 +144,20 @@ def _check(system, q0, qd0, T, N):
 
 
 # ----------------------------------------------------------------------------- helpers
-def _first_order(system: LagrangianSystem):
-    """SX state ``x = (q, q̇)`` and the right-hand side expression ``(q̇, q̈)``."""
+def _first_order(system: LagrangianSystem, work: bool = False):
+    """SX state ``x = (q, q̇)``, the time ``t`` and the right-hand side expression ``(q̇, q̈(q, q̇, t))``;
+    ``work``: the state also holds the work of the forces and of the time dependence, whose rates are
+    ``(Q·q̇, −∂L/∂t)`` (:attr:`LagrangianSystem.power`), integrated by the same method."""
     n = system.nq
-    x = ca.SX.sym("x", 2 * n)
-    return x, ca.vertcat(x[n:], system.acceleration(x[:n], x[n:]))
+    x, t = ca.SX.sym("x", 2 * n + (2 if work else 0)), ca.SX.sym("t")
+    f = ca.vertcat(x[n:2 * n], system.acceleration(x[:n], x[n:2 * n], t))
+    if work:
+        f = ca.vertcat(f, *system.power(x[:n], x[n:2 * n], t))
+    return x, t, f
+
+
+def _carries_work(system: LagrangianSystem) -> bool:
+    return bool(system.forced or system.time_dependent)
 
 
 def _implicit_solver(name: str, residual, y, par) -> ca.Function:
@@ -230,17 +241,23 @@ def rk4(system: LagrangianSystem, q0, qd0, T: float, N: int) -> Stepped:
     q0, qd0, T, N = _check(system, q0, qd0, T, N)
     n, h = system.nq, T / N
     t0 = time.perf_counter()
-    x, f = _first_order(system)
-    rhs = ca.Function("rhs", [x], [f])
-    step = ca.Function("rk4_step", [x], [rk4_step(rhs, x, h)])
+    cw = _carries_work(system)
+    x, ts, f = _first_order(system, cw)
+    nx = x.numel()
+    rhs = ca.Function("rhs", [x, ts], [f])
+    # the state carries its time (x, t): a time-dependent system's steps each start at their own time
+    xt = ca.SX.sym("xt", nx + 1)
+    step = ca.Function("rk4_step", [xt], [ca.vertcat(rk4_step(rhs, xt[:nx], h, xt[nx]), xt[nx] + h)])
     march_fn = step.mapaccum("rk4_march", N)
     build = time.perf_counter() - t0
 
-    t, X, solve = _timed_march(march_fn, np.concatenate([q0, qd0]), T, N)
+    t, X, solve = _timed_march(march_fn, np.concatenate([q0, qd0, np.zeros(nx - 2 * n), [0.0]]), T, N)
+    W = X[:, 2 * n] + X[:, 2 * n + 1] if cw else None
+    X = X[:, :2 * n]
     ok, msg, _ = _verdict(t, X, None, "rk4")
     q, qd = X[:, :n], X[:, n:]
-    return Stepped(t=t, q=q, qd=qd, energy=system.energies(q, qd), method="rk4", scheme=None, build_time_s=build,
-                   solve_time_s=solve, success=ok, message=msg)
+    return Stepped(t=t, q=q, qd=qd, energy=system.energies(q, qd, t), method="rk4", scheme=None, build_time_s=build,
+                   solve_time_s=solve, success=ok, message=msg, work=W)
 
 
 # ----------------------------------------------------------------------------- implicit Euler
@@ -249,22 +266,27 @@ def implicit_euler(system: LagrangianSystem, q0, qd0, T: float, N: int) -> Stepp
     q0, qd0, T, N = _check(system, q0, qd0, T, N)
     n, h = system.nq, T / N
     t0 = time.perf_counter()
-    x, f = _first_order(system)
-    rhs = ca.Function("rhs", [x], [f])
-    xo = ca.SX.sym("x_old", 2 * n)
-    r = x - xo - h * f
+    cw = _carries_work(system)
+    x, ts, f = _first_order(system, cw)
+    nx = x.numel()
+    rhs = ca.Function("rhs", [x, ts], [f])
+    xo = ca.SX.sym("x_old", nx + 1)  # the old state and its time
+    r = x - xo[:nx] - h * ca.substitute(f, ts, xo[nx] + h)
     newton = _implicit_solver("ie", r, x, xo)
-    X = ca.MX.sym("x", 2 * n)
-    step = ca.Function("ie_step", [X], [newton(X + h * rhs(X), X)])
+    X = ca.MX.sym("x", nx + 1)
+    Xn = newton(X[:nx] + h * rhs(X[:nx], X[nx]), X)
+    step = ca.Function("ie_step", [X], [ca.vertcat(Xn, X[nx] + h)])
     march_fn = step.mapaccum("ie_march", N)
     build = time.perf_counter() - t0
 
-    t, X, solve = _timed_march(march_fn, np.concatenate([q0, qd0]), T, N)
-    corr = _corrections(_correction(r, x, xo), X[1:], X[:-1]) if _first_bad(X) < 0 else None
+    t, Xt, solve = _timed_march(march_fn, np.concatenate([q0, qd0, np.zeros(nx - 2 * n), [0.0]]), T, N)
+    W = Xt[:, 2 * n] + Xt[:, 2 * n + 1] if cw else None
+    X = Xt[:, :nx]
+    corr = _corrections(_correction(r, x, xo), X[1:], Xt[:-1]) if _first_bad(X) < 0 else None
     ok, msg, worst = _verdict(t, X, corr, "implicit_euler")
-    q, qd = X[:, :n], X[:, n:]
-    return Stepped(t=t, q=q, qd=qd, energy=system.energies(q, qd), method="implicit_euler", scheme=None,
-                   build_time_s=build, solve_time_s=solve, success=ok, message=msg, newton_error=worst)
+    q, qd = X[:, :n], X[:, n:2 * n]
+    return Stepped(t=t, q=q, qd=qd, energy=system.energies(q, qd, t), method="implicit_euler", scheme=None,
+                   build_time_s=build, solve_time_s=solve, success=ok, message=msg, newton_error=worst, work=W)
 
 
 # ----------------------------------------------------------------------------- variational integrator
@@ -292,44 +314,47 @@ def march(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str = "mi
     ny = s + n + nmult
     y = ca.SX.sym("y", ny)
     Zy, qy, lamy, nuy = y[:s], y[s:s + n], y[s + n:s + n + m], y[s + n + m:]
+    ta = dm.time_args
 
-    def closing_rows(a):
-        """Stage equations and constraint rows of the step that starts at node ``a``."""
-        rows = [dm.stage_residual(a, Zy, qy, nuy, h)] if s else []
+    def closing_rows(a, tk):
+        """Stage equations and constraint rows of the step that starts at node ``a`` at the time ``tk``."""
+        rows = [dm.stage_residual(a, Zy, qy, nuy, h, *ta(tk))] if s else []
         if m:
-            rows += [dm.constraint_rows(qy)] + [dm.constraint_rows(Zy[j * n:(j + 1) * n]) for j in range(ns)]
+            rows += [dm.constraint_rows(qy, *ta(tk + h))]
+            rows += [dm.stage_constraint_rows[j](Zy[j * n:(j + 1) * n], *([tk, h] if dm.timed else []))
+                     for j in range(ns)]
         return rows
 
     # step 0: parameters (q0, p0) -> y0 = (Z0, q1, lam0, nu0)
     q0s, p0s = ca.SX.sym("q0", n), ca.SX.sym("p0", n)
     par0 = ca.vertcat(q0s, p0s)
-    r0 = ca.vertcat(dm.initial_residual(q0s, Zy, qy, p0s, lamy, h), *closing_rows(q0s))
+    r0 = ca.vertcat(dm.initial_residual(q0s, Zy, qy, p0s, lamy, h, *ta(0.0)), *closing_rows(q0s, 0.0))
     first = _implicit_solver("vi_first", r0, y, par0)
 
-    # step k >= 1: state S = (q_{k-1}, y_{k-1}) = (q_{k-1}, Z_{k-1}, q_k, lam_{k-1}, nu_{k-1}) -> (q_k, y_k)
-    S = ca.SX.sym("S", n + ny)
-    qm, Zm, qk = S[:n], S[n:n + s], S[n + s:2 * n + s]
-    r = ca.vertcat(dm.del_residual(qm, Zm, qk, Zy, qy, lamy, h), *closing_rows(qk))
+    # step k >= 1: state S = (q_{k-1}, y_{k-1}, t_k) = (q_{k-1}, Z_{k-1}, q_k, lam_{k-1}, nu_{k-1}, t_k) -> (q_k, y_k, t_{k+1})
+    S = ca.SX.sym("S", n + ny + 1)
+    qm, Zm, qk, tk = S[:n], S[n:n + s], S[n + s:2 * n + s], S[n + ny]
+    r = ca.vertcat(dm.del_residual(qm, Zm, qk, Zy, qy, lamy, h, *ta(tk)), *closing_rows(qk, tk))
     newton = _implicit_solver("vi", r, y, S)
-    Sx = ca.MX.sym("S", n + ny)
-    qm_, Zm_, qk_, mult_ = Sx[:n], Sx[n:n + s], Sx[n + s:2 * n + s], Sx[2 * n + s:]
+    Sx = ca.MX.sym("S", n + ny + 1)
+    qm_, Zm_, qk_, mult_ = Sx[:n], Sx[n:n + s], Sx[n + s:2 * n + s], Sx[2 * n + s:n + ny]
     Zg = Zm_ + ca.repmat(qk_ - qm_, ns, 1) if s else Zm_  # Z_k ≈ Z_{k-1} + (q_k - q_{k-1})
     guess = ca.vertcat(Zg, 2 * qk_ - qm_, mult_)
-    step = ca.Function("vi_step", [Sx], [ca.vertcat(qk_, newton(guess, Sx))])
+    step = ca.Function("vi_step", [Sx], [ca.vertcat(qk_, newton(guess, Sx), Sx[n + ny] + h)])
     march_fn = step.mapaccum("vi_march", N - 1)
     build = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    p0 = np.asarray(system.momentum(q0, qd0)).reshape(-1)
-    q1g = dm.first_step_guess(q0, qd0, h)
+    p0 = np.asarray(system.momentum(q0, qd0, 0.0)).reshape(-1)
+    q1g = dm.first_step_guess(q0, qd0, h, 0.0)
     y0g = np.concatenate([dm.stage_guess(q0[None, :], q1g[None, :]).reshape(-1), q1g, np.zeros(nmult)])
     y0 = np.asarray(first(y0g, np.concatenate([q0, p0]))).reshape(-1)
-    S1 = np.concatenate([q0, y0])
+    S1 = np.concatenate([q0, y0, [h]])
     Ss = march_fn(S1)
     solve = time.perf_counter() - t0
 
-    Sall = np.vstack([S1, np.asarray(Ss).T])  # row k = (q_k, y_k), k = 0..N-1
-    Y = Sall[:, n:]                           # row k = (Z_k, q_{k+1}, lam_k, nu_k)
+    Sall = np.vstack([S1, np.asarray(Ss).T])[:, :-1]  # row k = (q_k, y_k), k = 0..N-1
+    Y = Sall[:, n:]                                    # row k = (Z_k, q_{k+1}, lam_k, nu_k)
     Z, lam = Y[:, :s], Y[:, s + n:s + n + m]
     q = np.vstack([q0, Y[:, s:s + n]])
     t = np.linspace(0.0, T, N + 1)
@@ -342,14 +367,16 @@ def march(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str = "mi
         return Stepped(t=t, q=q, qd=nan_nodes, energy=np.full(N + 1, np.nan), method="variational", scheme=scheme,
                        build_time_s=build, solve_time_s=solve, success=False, message=msg, p=nan_nodes,
                        lam=lam if m else None)
+    Sk = np.hstack([Sall[:-1], t[1:N, None]])  # the state of step k >= 1 with its node time t_k
     corr = np.vstack([_corrections(_correction(r0, y, par0), y0[None, :], np.concatenate([q0, p0])[None, :]),
-                      _corrections(_correction(r, y, S), Y[1:], Sall[:-1])])
+                      _corrections(_correction(r, y, S), Y[1:], Sk)])
     p = dm.momenta(q, Z, h)
-    qd = dm.velocities(q, p)
+    qd = dm.velocities(q, p, t)
     ok, msg, worst = _verdict(t, np.hstack([q, qd]), corr, what)
-    return Stepped(t=t, q=q, qd=qd, energy=system.energies(q, qd), method="variational", scheme=scheme,
+    wk = dm.work(q, Z, h) if _carries_work(system) else None
+    return Stepped(t=t, q=q, qd=qd, energy=system.energies(q, qd, t), method="variational", scheme=scheme,
                    build_time_s=build, solve_time_s=solve, success=ok, message=msg, newton_error=worst, p=p,
-                   lam=lam if m else None)
+                   lam=lam if m else None, work=None if wk is None else wk.sum(axis=1))
 
 
 # ----------------------------------------------------------------------------- reference
@@ -380,10 +407,11 @@ def reference(system: LagrangianSystem, q0, qd0, t_eval, rtol: float = 1e-12,
     if te[0] < 0 or np.any(np.diff(te) <= 0):
         raise InputError("t_eval must be strictly increasing and start at t >= 0")
     n = system.nq
-    x, f = _first_order(system)
+    x, ts, f = _first_order(system)
     opts = {"abstol": atol, "reltol": rtol, "max_num_steps": 10 ** 7,
             "linear_multistep_method": "bdf" if stiff else "adams"}
-    F = ca.integrator("ref", "cvodes", {"x": x, "ode": f}, 0.0, te, opts)
+    dae = {"x": x, "ode": f, **({"t": ts} if ca.depends_on(f, ts) else {})}
+    F = ca.integrator("ref", "cvodes", dae, 0.0, te, opts)
     try:
         X = np.asarray(F(x0=np.concatenate([q0, qd0]))["xf"]).reshape(2 * n, te.size).T
     except RuntimeError as err:

@@ -45,6 +45,11 @@ MECHANICS_SCENES = [
     ("thrown_ball", "thrown_ball", [], "thrown ball (two-point boundary, least action)", False),
     ("double_pendulum_g0", "double_pendulum", ["--g", "0", "--omega1", "1", "--T", "5", "--n", "1000"],
      "double pendulum without gravity (g = 0: the system has no gravity term)", False),
+    ("damped_oscillator", "damped_oscillator", ["--scheme", "galerkin6"],
+     "damped, driven oscillator (Lagrange–d'Alembert), galerkin6, against the closed form", False),
+    ("driven_pendulum", "driven_pendulum", [], "damped, driven pendulum, chaotic regime, T = 20 s", False),
+    ("kapitza_pendulum", "kapitza_pendulum", [], "Kapitza pendulum: a²ω²/2gl = 5.1, started 0.2 rad off upright",
+     True),
 ]
 
 

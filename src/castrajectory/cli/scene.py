@@ -50,6 +50,9 @@ SCENES = {
     "bowl3d": "castrajectory.problems.bowl3d",
     "dzhanibekov": "castrajectory.problems.dzhanibekov",
     "heavy_top": "castrajectory.problems.heavy_top",
+    "damped_oscillator": "castrajectory.problems.damped_oscillator",
+    "driven_pendulum": "castrajectory.problems.driven_pendulum",
+    "kapitza_pendulum": "castrajectory.problems.kapitza_pendulum",
 }
 
 
@@ -101,6 +104,21 @@ def accuracy(args) -> dict:
     return {"rtol": rtol, "n_max": n_max}
 
 
+def finite_flags(args, *names: str) -> None:
+    """Refuse a non-finite value of any of the flags ``names`` (attribute names; exit 2, one line)."""
+    from ..validation import finite
+    for name in names:
+        finite("--" + name.replace("_", "-"), getattr(args, name))
+
+
+def solve_trajectory(system, q0, qd0, args):
+    """The scene's trajectory by the shared flags (``--T --n --scheme --method --rtol --n-max --max-iter
+    --verbose``): :func:`castrajectory.solve.simulate.simulate`."""
+    from ..solve import simulate
+    return simulate.simulate(system, q0, qd0, args.T, args.n, args.scheme, args.method, options=ipopt_options(args),
+                             verbose=args.verbose, **accuracy(args))
+
+
 def add_plot(p: argparse.ArgumentParser) -> None:
     p.add_argument("--plot", metavar="PATH", help="write a picture (format from the extension, e.g. .png, .pdf)")
 
@@ -145,20 +163,34 @@ def trajectory_outcome(title: str, system, run, extra: Optional[dict] = None,
     names = list(system.names)
     final = ", ".join(f"{nm} = {v:.6g}" for nm, v in zip(names, run.q[-1]))
     how = f"method {run.method}" + (f", scheme {run.scheme}" if run.scheme else "")
+    work = run.as_dict().get("work")
+    balance = work is not None and (system.forced or system.time_dependent)
+    if balance:
+        # forces or time dependence: the energy is not conserved, its balance is
+        w = np.asarray(work, float)
+        bal = float(np.max(np.abs(e - e[0] - w))) if np.all(np.isfinite(e)) else float("nan")
+        energy_line = (f"energy: E(0) = {e[0]:.10g}, E(T) = {e[-1]:.10g}, work of forces and time dependence "
+                       f"W(T) = {w[-1]:.10g}; balance max |E - E(0) - W| = {bal:.3e}")
+    else:
+        energy_line = f"energy: E(0) = {e[0]:.10g}, max |E - E(0)| = {drift:.3e} ({rel:.3e} relative)"
     lines = [f"{title}: {how}, N = {len(run.t) - 1}, T = {run.t[-1]:g} s",
              f"final state: {final}",
-             f"energy: E(0) = {e[0]:.10g}, max |E - E(0)| = {drift:.3e} ({rel:.3e} relative)",
+             energy_line,
              *(extra_lines or []),
              status_line(run.status, run)]
 
     def plot(path):
-        fig = plotting.energy_plot(run.t, {how: e}, title=f"{title}: energy error")
+        if balance:  # forces or time dependence: the balance E − W, whose change is the error
+            fig = plotting.energy_plot(run.t, {how: e - np.asarray(work, float)},
+                                       title=f"{title}: energy balance error |E − E₀ − W| / |E₀|")
+        else:
+            fig = plotting.energy_plot(run.t, {how: e}, title=f"{title}: energy error")
         fig.savefig(path)
 
     def animate(path):
         if system.points is None:
             raise InputError("this scene has no points to animate")
-        plotting.animate_points(system.positions(run.q), run.t, path, links=links, title=title)
+        plotting.animate_points(system.positions(run.q, run.t), run.t, path, links=links, title=title)
 
     return Outcome.of(run, extra, lines, writers={"plot": plot, "animate": animate})
 

@@ -93,17 +93,18 @@ def described(module, path: str):
             raise InputError(f"{path}: {name} must be finite (got {v.tolist()})")
         vectors.append(v)
     q0, qd0 = vectors
-    M = np.asarray(system.mass_matrix(q0), float)
+    M = np.asarray(system.mass_matrix(q0, 0.0), float)
     lam, vec = np.linalg.eigh(0.5 * (M + M.T))
     if not np.all(np.isfinite(lam)) or lam[0] <= PD_TOL * max(abs(lam[-1]), 1e-300):
         j = int(np.argmax(np.abs(vec[:, 0])))
         raise InputError(f"{path}: the mass matrix is not positive definite at q0 (smallest eigenvalue "
                          f"{lam[0]:.3g}): coordinate {system.names[j]!r} has no inertia")
     if system.nc:
-        c, C = (np.asarray(x, float) for x in system.constraint(q0))
-        if np.max(np.abs(c), initial=0.0) > 1e-9 or np.max(np.abs(C @ qd0), initial=0.0) > 1e-9:
+        c, C = (np.asarray(x, float) for x in system.constraint(q0, 0.0))
+        cv = C @ qd0 + np.asarray(system.constraint_rate(q0, 0.0), float).reshape(-1)
+        if np.max(np.abs(c), initial=0.0) > 1e-9 or np.max(np.abs(cv), initial=0.0) > 1e-9:
             raise InputError(f"{path}: q0, qd0 violate the holonomic constraints (|c(q0)| = "
-                             f"{np.max(np.abs(c)):.3g}, |C(q0) qd0| = {np.max(np.abs(C @ qd0)):.3g})")
+                             f"{np.max(np.abs(c)):.3g}, |C(q0) qd0 + dc/dt| = {np.max(np.abs(cv)):.3g})")
     return system, q0, qd0
 
 

@@ -1,198 +1,214 @@
-"""Discrete Lagrangians, discrete Euler–Lagrange residuals and discrete Legendre transforms.
+"""Discrete mechanics of a system under a scheme: DEL (Lagrange–d'Alembert) residuals, Legendre transforms.
 
 A discrete Lagrangian approximates the action over one step,
-``L_d(q_k, q_{k+1}; Z_k, h) ≈ ∫_{t_k}^{t_k+h} L(q, q̇) dt``, where ``Z_k`` are
-optional internal stage values of the step (empty for the two-point schemes).
-The discrete action ``S_d = Σ_k L_d`` is stationary when
+``L_d(q_k, q_{k+1}; Z_k, h) ≈ ∫_{t_k}^{t_k+h} L(q, q̇, t) dt``, where ``Z_k`` are
+optional internal stage values of the step (empty for the two-point schemes); the scheme
+(:mod:`castrajectory.discretise.schemes`) owns its formula, its quadrature and its stage times.
+With non-conservative forces ``Q(q, q̇, t)`` the scheme's quadrature of the virtual work gives
+the discrete forces ``f⁻_k`` (on ``q_k``), ``f⁺_k`` (on ``q_{k+1}``) and ``f^Z_k`` (on the stages),
+and the discrete Lagrange–d'Alembert principle ``δΣL_d + Σ f·δq = 0`` holds when
 
-* every stage satisfies ``∂L_d/∂Z_k = 0``, and
-* every interior node satisfies the discrete Euler–Lagrange (DEL) equation
-  ``D₂L_d(q_{k−1}, q_k) + D₁L_d(q_k, q_{k+1}) = 0``.
+* every stage satisfies ``∂L_d/∂Z_k + f^Z_k = 0``, and
+* every interior node satisfies the forced discrete Euler–Lagrange (DEL) equation
+  ``D₂L_d(q_{k−1}, q_k) + f⁺_{k−1} + D₁L_d(q_k, q_{k+1}) + f⁻_k = 0``.
 
-Discrete Legendre transforms give the momenta at the ends of a step,
-``p_k⁺ = −D₁L_d(q_k, q_{k+1})`` and ``p_{k+1}⁻ = D₂L_d(q_k, q_{k+1})``; the DEL
-equation says ``p_k⁻ = p_k⁺``.  The initial-value problem fixes ``q_0`` and
-``p_0 = ∂L/∂q̇(q_0, q̇_0)`` and imposes ``p_0 = −D₁L_d(q_0, q_1)``.
+Without forces these are the DEL equations, with the very expressions of an unforced scheme:
+a scene carries only the terms it needs.  Discrete Legendre transforms give the momenta at the
+ends of a step, ``p_k⁺ = −D₁L_d(q_k, q_{k+1}) − f⁻_k`` and ``p_{k+1}⁻ = D₂L_d(q_k, q_{k+1}) + f⁺_k``;
+the DEL equation says ``p_k⁻ = p_k⁺``.  The initial-value problem fixes ``q_0`` and
+``p_0 = ∂L/∂q̇(q_0, q̇_0, 0)`` and imposes ``p_0 = p_0⁺``.
 
-Holonomic constraints ``c(q) = 0`` are added to the action by the scheme's
-quadrature, ``−h Σ_k W_k λ_k·c(q_k)`` with ``W_k`` the node's total weight
+Time enters as an input of every element of a time-dependent system (the node's time ``t_k``; the
+quadrature's times are ``t_k + τ_i h``) and of no element of a time-independent one.
+
+Holonomic constraints ``c(q, t) = 0`` are added to the action by the scheme's
+constraint quadrature, ``−h Σ_k W_k λ_k·c(q_k)`` with ``W_k`` the node's total weight
 (``1`` for midpoint/trapezoid, ``1/3`` for Simpson), and ``−h w_s ν_k·c(Z_k)``
-at interior quadrature nodes, so the DEL residual gains ``−∇c(q_k)ᵀ λ_k`` and ``λ_k`` is the
+at interior control points, so the DEL residual gains ``−∇c(q_k)ᵀ λ_k`` and ``λ_k`` is the
 physical multiplier (force per unit ``∇c``).
 
 Every residual is divided by ``h`` so it stays O(1) as ``h → 0``
 (mass × acceleration + force).  All derivatives come from CasADi's AD.
-
-Schemes (each states its order of accuracy for q):
-
-========== ===== ======================================================
-name       order L_d
-========== ===== ======================================================
-midpoint   2     ``h L((a+b)/2, (b−a)/h)``
-trapezoid  2     ``h/2 [L(a, (b−a)/h) + L(b, (b−a)/h)]``
-galerkin4  4     quadratic Galerkin: ``q(τ)`` through ``a, Z, b`` at
-                 ``τ = 0, ½, 1``, Lobatto (Simpson) quadrature
-                 ``h [L₀ + 4 L_½ + L₁]/6``; equivalent to the Lobatto
-                 IIIA–IIIB partitioned Runge–Kutta pair
-========== ===== ======================================================
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Dict, Tuple
+from typing import Dict
 
 import casadi as ca
 import numpy as np
 
 from ..models.mechanics import LagrangianSystem
+from .schemes import SCHEMES, Scheme, scheme  # noqa: F401  (the registry lives with the schemes)
 
 
-@dataclass(frozen=True)
-class Scheme:
-    """A discrete Lagrangian family.
-
-    ``stages`` internal configurations per step, quadrature ``weights`` for
-    (start node, stages..., end node) used to weight holonomic constraints.
-    """
-
-    name: str
-    order: int
-    stages: int
-    node_weight: float  # weight of each end node in the constraint quadrature (per step)
-    stage_weights: Tuple[float, ...] = ()
-
-    def discrete_lagrangian(self, L: ca.Function, a, b, Z, h):
-        if self.name == "midpoint":
-            return h * L((a + b) / 2, (b - a) / h)
-        if self.name == "trapezoid":
-            v = (b - a) / h
-            return h / 2 * (L(a, v) + L(b, v))
-        if self.name == "galerkin4":
-            m = Z
-            v0 = (-3 * a + 4 * m - b) / h
-            vm = (b - a) / h
-            v1 = (a - 4 * m + 3 * b) / h
-            return h * (L(a, v0) + 4 * L(m, vm) + L(b, v1)) / 6
-        raise ValueError(self.name)
-
-
-def rk4_step(f, x, dt):
-    """One classical Runge–Kutta step ``x ↦ x + dt/6 (k₁ + 2k₂ + 2k₃ + k₄)`` of ``ẋ = f(x)`` (CasADi
-    expressions): the integrator of the time-stepping baselines and of the guesses."""
-    k1 = f(x)
-    k2 = f(x + dt / 2 * k1)
-    k3 = f(x + dt / 2 * k2)
-    k4 = f(x + dt * k3)
+def rk4_step(f, x, dt, t=None):
+    """One classical Runge–Kutta step ``x ↦ x + dt/6 (k₁ + 2k₂ + 2k₃ + k₄)`` of ``ẋ = f(x)``, or of
+    ``ẋ = f(x, t)`` from the time ``t`` when one is given (CasADi expressions): the integrator of the
+    time-stepping baselines and of the guesses."""
+    if t is None:
+        k1 = f(x)
+        k2 = f(x + dt / 2 * k1)
+        k3 = f(x + dt / 2 * k2)
+        k4 = f(x + dt * k3)
+    else:
+        k1 = f(x, t)
+        k2 = f(x + dt / 2 * k1, t + dt / 2)
+        k3 = f(x + dt / 2 * k2, t + dt / 2)
+        k4 = f(x + dt * k3, t + dt)
     return x + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
 
 
-SCHEMES: Dict[str, Scheme] = {
-    "midpoint": Scheme("midpoint", 2, 0, 0.5),
-    "trapezoid": Scheme("trapezoid", 2, 0, 0.5),
-    "galerkin4": Scheme("galerkin4", 4, 1, 1.0 / 6.0, (4.0 / 6.0,)),
-}
-
-
-def scheme(name: str) -> Scheme:
-    try:
-        return SCHEMES[name]
-    except KeyError:
-        raise ValueError(f"unknown scheme {name!r}; choose from {', '.join(SCHEMES)}") from None
-
 
 class DiscreteMechanics:
-    """CasADi functions of the discrete mechanics of ``system`` under ``scheme``.
+    """CasADi functions of the discrete mechanics of ``system`` under ``scheme`` (a name or a
+    :class:`~castrajectory.discretise.schemes.Scheme`).
 
-    Functions (``n = nq``, ``s = stages * n``, ``m = nc``):
+    Functions (``n = nq``, ``s = stages * n``, ``m = nc``; ``[t]`` an input only for a time-dependent
+    system: the step's start time, or the node's time for the node rows):
 
-    * ``Ld(a, Z, b, h)`` — discrete Lagrangian;
-    * ``del_residual(qm, Zm, q, Zp, qp, lam, h)`` — ``[D₂L_d(qm,q) + D₁L_d(q,qp)]/h − 2w ∇c(q)ᵀλ``
+    * ``Ld(a, Z, b, h[, t])`` — discrete Lagrangian;
+    * ``del_residual(qm, Zm, q, Zp, qp, lam, h[, t])`` — ``[p⁻(qm, q) − p⁺(q, qp)]/h − 2w ∇c(q)ᵀλ``
       (``w`` the end-node quadrature weight, so ``2w = 1`` for the two-point schemes);
-    * ``stage_residual(a, Z, b, nu, h)`` — ``∂L_d/∂Z / h − w ∇c(Z)ᵀν`` (only if ``s > 0``);
-    * ``initial_residual(q0, Z0, q1, p0, lam0, h)`` — ``[p0 + D₁L_d(q0,q1)]/h − w∇c(q0)ᵀλ0``;
-    * ``p_plus(a, Z, b, h) = −D₁L_d``, ``p_minus(a, Z, b, h) = D₂L_d``.
+    * ``stage_residual(a, Z, b, nu, h[, t])`` — ``(∂L_d/∂Z + f^Z) / h − w ∇c(Z)ᵀν`` (only if ``s > 0``);
+    * ``initial_residual(q0, Z0, q1, p0, lam0, h[, t])`` — ``[p0 − p⁺(q0, q1)]/h − w∇c(q0)ᵀλ0``;
+    * ``p_plus(a, Z, b, h[, t]) = −D₁L_d − f⁻``, ``p_minus(a, Z, b, h[, t]) = D₂L_d + f⁺``;
+    * ``work(a, Z, b, h, t)`` — the scheme's quadrature over the step of the forces' power ``Q·q̇`` and of
+      the time dependence's ``−∂L/∂t`` (post-processing: the energy balance).
     """
 
-    def __init__(self, system: LagrangianSystem, scheme_name: str):
+    def __init__(self, system: LagrangianSystem, scheme_name):
         self.system = system
-        self.scheme = scheme(scheme_name)
-        n, S = system.nq, self.scheme
+        self.scheme = S = scheme(scheme_name)
+        n = system.nq
         self.n, self.s, self.m = n, S.stages * n, system.nc
+        self.timed, self.forced = bool(system.time_dependent), bool(system.forced)
         a, b = ca.SX.sym("a", n), ca.SX.sym("b", n)
         Z = ca.SX.sym("Z", self.s)
         h = ca.SX.sym("h")
-        L = system.L
-        Ld = S.discrete_lagrangian(L, a, b, Z, h)
-        self.Ld = ca.Function("Ld", [a, Z, b, h], [Ld])
+        t0 = ca.SX.sym("t")
+        tin = [t0] if self.timed else []
+        Lf = system.L
+        Lq = (lambda q, v, t: Lf(q, v, t)) if self.timed else (lambda q, v, t: Lf(q, v))  # noqa: E731
+        X = [a] + [Z[j * n:(j + 1) * n] for j in range(S.stages)] + [b]
+        Ld = S.discrete_lagrangian(Lq, X, h, t0 if self.timed else None)
+        self.Ld = ca.Function("Ld", [a, Z, b, h] + tin, [Ld])
         D1, D2 = ca.gradient(Ld, a), ca.gradient(Ld, b)
         DZ = ca.gradient(Ld, Z) if self.s else ca.SX(0, 1)
-        self.D1 = ca.Function("D1", [a, Z, b, h], [D1])
-        self.D2 = ca.Function("D2", [a, Z, b, h], [D2])
-        self.p_plus = ca.Function("p_plus", [a, Z, b, h], [-D1])
-        self.p_minus = ca.Function("p_minus", [a, Z, b, h], [D2])
+        if self.forced:
+            Qf = system.force
+            f = S.discrete_forces(lambda q, v, t: Qf(q, v, 0 if t is None else t), X, h, t0 if self.timed else None)
+            fm, fp = f[0], f[-1]
+            fZ = ca.vertcat(*f[1:-1]) if self.s else ca.SX(0, 1)
+        else:
+            fm = fp = fZ = None
+        self.D1 = ca.Function("D1", [a, Z, b, h] + tin, [D1])
+        self.D2 = ca.Function("D2", [a, Z, b, h] + tin, [D2])
+        self.p_plus = ca.Function("p_plus", [a, Z, b, h] + tin, [-D1 if fm is None else -D1 - fm])
+        self.p_minus = ca.Function("p_minus", [a, Z, b, h] + tin, [D2 if fp is None else D2 + fp])
+        # the discrete forces on the step's start and end (zero without force terms), for inspection
+        self.f_minus = ca.Function("f_minus", [a, Z, b, h] + tin, [ca.SX.zeros(n) if fm is None else fm])
+        self.f_plus = ca.Function("f_plus", [a, Z, b, h] + tin, [ca.SX.zeros(n) if fp is None else fp])
+        pw = system.power
+        work = S.step_integral(lambda q, v, t: ca.vertcat(*pw(q, v, 0 if t is None else t)), X, h, t0)
+        self._work = ca.Function("work", [a, Z, b, h, t0], [work])
 
         cfun = system.constraint if self.m else None
 
-        def grad_c(q, lam):
+        def grad_c(q, lam, t=None):
             if not self.m:
                 return ca.SX.zeros(n)
-            c, C = cfun(q)
+            c, C = cfun(q, t) if self.timed else cfun(q)
             return ca.mtimes(C.T, lam)
 
         qm, q, qp = ca.SX.sym("qm", n), ca.SX.sym("q", n), ca.SX.sym("qp", n)
         Zm, Zp = ca.SX.sym("Zm", self.s), ca.SX.sym("Zp", self.s)
         lam = ca.SX.sym("lam", self.m)
+        targ = (lambda t: [t]) if self.timed else (lambda t: [])  # noqa: E731
+        self.time_args = targ
+        tk = t0  # the node's time in the node rows, the step's start in the step rows
         # An interior node closes two steps, so its constraint weight is twice the end weight
         # (1 for midpoint/trapezoid, 1/3 for Simpson): lam_k is then the physical multiplier.
-        r = (self.D2(qm, Zm, q, h) + self.D1(q, Zp, qp, h)) / h - 2 * S.node_weight * grad_c(q, lam)
-        self.del_residual = ca.Function("del", [qm, Zm, q, Zp, qp, lam, h], [r])
+        if fm is None:
+            r = (self.D2(qm, Zm, q, h, *targ(tk - h)) + self.D1(q, Zp, qp, h, *targ(tk))) / h
+        else:
+            r = (self.p_minus(qm, Zm, q, h, *targ(tk - h)) - self.p_plus(q, Zp, qp, h, *targ(tk))) / h
+        r = r - 2 * S.node_weight * grad_c(q, lam, tk)
+        self.del_residual = ca.Function("del", [qm, Zm, q, Zp, qp, lam, h] + tin, [r])
         p0 = ca.SX.sym("p0", n)
-        r0 = (p0 + self.D1(q, Zp, qp, h)) / h - S.node_weight * grad_c(q, lam)
-        self.initial_residual = ca.Function("del0", [q, Zp, qp, p0, lam, h], [r0])
+        if fm is None:
+            r0 = (p0 + self.D1(q, Zp, qp, h, *targ(tk))) / h
+        else:
+            r0 = (p0 - self.p_plus(q, Zp, qp, h, *targ(tk))) / h
+        r0 = r0 - S.node_weight * grad_c(q, lam, tk)
+        self.initial_residual = ca.Function("del0", [q, Zp, qp, p0, lam, h] + tin, [r0])
         if self.s:
             nu = ca.SX.sym("nu", self.m * S.stages)
-            rz = DZ / h
+            rz = DZ / h if fZ is None else (DZ + fZ) / h
             if self.m:
                 for j in range(S.stages):
+                    tj = t0 + float(S.stage_times[j]) * h
                     rz[j * n:(j + 1) * n] -= S.stage_weights[j] * grad_c(Z[j * n:(j + 1) * n],
-                                                                         nu[j * self.m:(j + 1) * self.m])
-            self.stage_residual = ca.Function("stage", [a, Z, b, nu, h], [rz])
+                                                                         nu[j * self.m:(j + 1) * self.m], tj)
+            self.stage_residual = ca.Function("stage", [a, Z, b, nu, h] + tin, [rz])
         else:
             self.stage_residual = None
-        # Constraint rows, for the NLP
+        # Constraint rows, for the NLP: at a node (its time), and at stage j of a step (the step's start and h)
         if self.m:
-            self.constraint_rows = ca.Function("c", [q], [cfun(q)[0]])
+            self.constraint_rows = ca.Function("c", [q] + tin, [cfun(q, *tin)[0] if self.timed else cfun(q)[0]])
+            zj = ca.SX.sym("zj", n)
+            self.stage_constraint_rows = [
+                ca.Function(f"c_stage{j}", [zj, t0, h], [cfun(zj, t0 + float(S.stage_times[j]) * h)[0]])
+                if self.timed else self.constraint_rows for j in range(S.stages)]
 
     # --------------------------------------------------------------- helpers
-    def stage_guess(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        """A stage guess for each step from its end nodes (linear interpolation)."""
-        if not self.s:
-            return np.zeros((a.shape[0], 0))
-        k = self.scheme.stages
-        return np.hstack([a + (j + 1) / (k + 1) * (b - a) for j in range(k)])
+    def node_times(self, N: int, h: float, t0: float = 0.0) -> np.ndarray:
+        """``t_k = t0 + k h`` for ``k = 0..N``."""
+        return t0 + h * np.arange(N + 1)
 
-    def first_step_guess(self, q0, qd0, h):
+    def stage_guess(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """A stage guess for each step from its end nodes (the straight line, at the scheme's stage times)."""
+        return self.scheme.stage_guess(a, b)
+
+    def first_step_guess(self, q0, qd0, h, t0: float = 0.0):
         """``q_1 ≈ q_0 + h q̇_0 + ½h² q̈_0`` (the Legendre equation then makes it exact)."""
-        qdd = np.asarray(self.system.acceleration(q0, qd0)).reshape(-1)
+        qdd = np.asarray(self.system.acceleration(q0, qd0, t0)).reshape(-1)
         return np.asarray(q0) + h * np.asarray(qd0) + 0.5 * h * h * qdd
 
-    def momenta(self, q: np.ndarray, Z: np.ndarray, h: float) -> np.ndarray:
-        """Nodal momenta: ``p_k⁺ = −D₁L_d(q_k, q_{k+1})`` for k < N and ``p_N⁻ = D₂L_d(q_{N−1}, q_N)``.
+    def momenta(self, q: np.ndarray, Z: np.ndarray, h: float, t0: float = 0.0) -> np.ndarray:
+        """Nodal momenta: ``p_k⁺ = −D₁L_d(q_k, q_{k+1}) − f⁻_k`` for k < N and ``p_N⁻ = D₂L_d(q_{N−1}, q_N) + f⁺``.
 
         (At a DEL solution ``p_k⁺ = p_k⁻`` for interior nodes.)
         """
         N = q.shape[0] - 1
-        pp = np.asarray(self.p_plus.map(N)(q[:-1].T, Z.T, q[1:].T, h)).T
-        pN = np.asarray(self.p_minus(q[-2], Z[-1], q[-1], h)).reshape(1, -1)
+        tk = self.node_times(N, h, t0)
+        ts = [tk[None, :-1]] if self.timed else []
+        pp = np.asarray(self.p_plus.map(N)(q[:-1].T, Z.T, q[1:].T, h, *ts)).T
+        pN = np.asarray(self.p_minus(q[-2], Z[-1], q[-1], h, *self.time_args(tk[-2]))).reshape(1, -1)
         return np.vstack([pp, pN])
 
-    def velocities(self, q: np.ndarray, p: np.ndarray) -> np.ndarray:
-        """Inverse Legendre transform ``q̇ = M(q)⁻¹ p``, projected onto ``C(q) q̇ = 0`` when constrained."""
+    def velocities(self, q: np.ndarray, p: np.ndarray, t=0.0) -> np.ndarray:
+        """Inverse Legendre transform ``q̇ = M(q, t)⁻¹ (p − ∂L/∂q̇(q, 0, t))``, projected onto
+        ``C(q) q̇ + ∂c/∂t = 0`` when constrained (``t``: a number or one per row)."""
         sysm, K, n = self.system, q.shape[0], self.n
-        M = np.asarray(sysm.mass_matrix.map(K)(q.T)).reshape(n, K, n).transpose(1, 0, 2)
+        tt = np.broadcast_to(np.asarray(t, float), (K,)).reshape(1, -1)
+        M = np.asarray(sysm.mass_matrix.map(K)(q.T, tt)).reshape(n, K, n).transpose(1, 0, 2)
+        if self.timed:  # a moving frame's part of the momentum, p(q, 0, t)
+            p = p - np.asarray(sysm.momentum.map(K)(q.T, np.zeros((n, K)), tt)).T
         v = np.linalg.solve(M, p[..., None])
         if self.m:
-            C = np.asarray(sysm.constraint.map(K)(q.T)[1]).reshape(self.m, K, n).transpose(1, 0, 2)
+            C = np.asarray(sysm.constraint.map(K)(q.T, tt)[1]).reshape(self.m, K, n).transpose(1, 0, 2)
             MiCt = np.linalg.solve(M, C.transpose(0, 2, 1))
-            v = v - MiCt @ np.linalg.solve(C @ MiCt, C @ v)
+            Cv = C @ v
+            if self.timed:
+                Cv = Cv + np.asarray(sysm.constraint_rate.map(K)(q.T, tt)).T[..., None]
+            v = v - MiCt @ np.linalg.solve(C @ MiCt, Cv)
         return v[..., 0]
+
+    def work(self, q: np.ndarray, Z: np.ndarray, h: float, t0: float = 0.0) -> np.ndarray:
+        """Cumulative work at the nodes, ``(N+1, 2)``: of the forces (``∫Q·q̇ dt``) and of the time
+        dependence (``−∫∂L/∂t dt``), each by the scheme's quadrature on the solved steps; their sum is
+        the change of the energy function."""
+        N = q.shape[0] - 1
+        tk = self.node_times(N, h, t0)
+        w = np.asarray(self._work.map(N)(q[:-1].T, Z.T, q[1:].T, h, tk[None, :-1])).T
+        return np.vstack([np.zeros((1, 2)), np.cumsum(w, axis=0)])

@@ -41,7 +41,7 @@ class TrajectoryTranscription:
 
     program = Program
 
-    def __init__(self, dm: DiscreteMechanics, N: int, T: float, mode: str, q0, end):
+    def __init__(self, dm: DiscreteMechanics, N: int, T: float, mode: str, q0, end, t0: float = 0.0):
         self.dm, self.N, self.T, self.mode = dm, N, T, mode
         self.h = h = T / N
         n, s, m = dm.n, dm.s, dm.m
@@ -66,43 +66,61 @@ class TrajectoryTranscription:
         hh = np.array([h])
         zarg = (lambda rows: X(Zi[rows])) if s else (lambda rows: none)
         self.Q, self.Zi, self.Li, self.Ni = Q, Zi, Li, Ni
+        if dm.timed:
+            # the node times are parameters, so that one NLP serves windows that start at other times
+            nlp.parameter("t", N + 1, value=dm.node_times(N, h, t0))
+            Ti = nlp.parameter_index("t")
+            targ = lambda rows: [P(Ti[rows][:, None] if np.ndim(rows) else Ti[[rows]])]  # noqa: E731
+        else:
+            targ = lambda rows: []  # noqa: E731
+        self._targ = targ
 
         if mode == "initial_value":
             # p0 is a parameter so that one NLP serves many initial momenta (horizon windows)
             nlp.parameter("p0", n, value=end)
             lam0 = X(Li[0]) if m else none
             nlp.equal_elements("initial", dm.initial_residual,
-                               [X(Q[0]), zarg(0), X(Q[1]), P(nlp.parameter_index("p0")), lam0, hh])
+                               [X(Q[0]), zarg(0), X(Q[1]), P(nlp.parameter_index("p0")), lam0, hh] + targ(0))
             if N > 1:
                 k = np.arange(1, N)
                 lam = X(Li[k]) if m else none
                 nlp.equal_elements("del", dm.del_residual,
-                                   [X(Q[k - 1]), zarg(k - 1), X(Q[k]), zarg(k), X(Q[k + 1]), lam, hh])
+                                   [X(Q[k - 1]), zarg(k - 1), X(Q[k]), zarg(k), X(Q[k + 1]), lam, hh] + targ(k))
             nlp.minimize(ca.SX(0))
         else:
             a, b, Zs = ca.SX.sym("a", n), ca.SX.sym("b", n), ca.SX.sym("Z", s)
-            act = ca.Function("action", [a, Zs, b], [dm.Ld(a, Zs, b, h) / h])
+            ts = [ca.SX.sym("t")] if dm.timed else []
+            act = ca.Function("action", [a, Zs, b] + ts, [dm.Ld(a, Zs, b, h, *ts) / h])
             k = np.arange(N)
-            nlp.minimize_elements("action", act, [X(Q[k]), zarg(k), X(Q[k + 1])])
+            nlp.minimize_elements("action", act, [X(Q[k]), zarg(k), X(Q[k + 1])] + targ(k))
         if s and mode == "initial_value":
             k = np.arange(N)
             nu = X(Ni[k]) if (m and s) else np.zeros(0)
-            nlp.equal_elements("stage", dm.stage_residual, [X(Q[k]), X(Zi[k]), X(Q[k + 1]), nu, hh])
+            nlp.equal_elements("stage", dm.stage_residual, [X(Q[k]), X(Zi[k]), X(Q[k + 1]), nu, hh] + targ(k))
         if m:
             nodes = np.arange(1, N + 1) if mode == "initial_value" else np.arange(1, N)
-            nlp.equal_elements("constraint", dm.constraint_rows, [X(Q[nodes])])
+            nlp.equal_elements("constraint", dm.constraint_rows, [X(Q[nodes])] + targ(nodes))
             if s:
+                k = np.arange(N)
                 for j in range(st):
-                    nlp.equal_elements(f"stage_constraint{j}", dm.constraint_rows,
-                                       [X(Zi[:, j * n:(j + 1) * n])])
-        self.set_start(q0, end)
+                    nlp.equal_elements(f"stage_constraint{j}", dm.stage_constraint_rows[j],
+                                       [X(Zi[:, j * n:(j + 1) * n])] + (targ(k) + [hh] if dm.timed else []))
+        self.set_start(q0, end, t0)
 
-    def set_start(self, q0, end) -> None:
-        """New ``q0`` and ``p0`` (initial value) or ``q_N`` (boundary) without rebuilding."""
+    def set_start(self, q0, end, t0: float = 0.0) -> None:
+        """New ``q0`` and ``p0`` (initial value) or ``q_N`` (boundary), and start time, without rebuilding."""
         self.q0 = np.asarray(q0, float)
         self.end = np.asarray(end, float)
+        self.t0 = float(t0)
         if self.mode == "initial_value":
             self.nlp.set_parameter("p0", self.end)
+        if self.dm.timed:
+            self.nlp.set_parameter("t", self.dm.node_times(self.N, self.h, self.t0))
+
+    @property
+    def times(self) -> np.ndarray:
+        """The node times ``t0 + k h``."""
+        return self.dm.node_times(self.N, self.h, getattr(self, "t0", 0.0))
 
     def fixed_bounds(self) -> Dict[str, tuple]:
         """Bounds fixing ``q_0`` (and ``q_N`` in boundary mode); Ipopt removes fixed unknowns."""

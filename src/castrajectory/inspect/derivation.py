@@ -95,64 +95,78 @@ class Equations:
     U: object
     L: object
     M: object
-    forces: object                  # f(q, q̇) in M q̈ = f + Cᵀλ
+    forces: object                  # f(q, q̇, t) in M q̈ = f + Cᵀλ (the non-conservative Q included)
     C: object                       # constraint Jacobian (m × n), or None
-    c: list                         # constraint expressions c(q)
+    c: list                         # constraint expressions c(q, t)
     positions: list = field(default_factory=list)   # atom positions, if the system has atoms
     cyclic: List[int] = field(default_factory=list)  # coordinates absent from L (their momenta are conserved)
     momenta: list = field(default_factory=list)
+    t: object = None                # the time symbol
+    Q: object = None                # the non-conservative generalised force Q(q, q̇, t), or None
+    time_dependent: bool = False
 
 
 def equations(system, simplify: bool = True) -> Equations:
     """The Euler–Lagrange equations of ``system`` from its own CasADi expressions:
-    ``M(q) q̈ = f(q, q̇) + C(q)ᵀλ`` with ``f = ∂L/∂q − (∂²L/∂q̇∂q) q̇``, ``c(q) = 0``."""
+    ``M q̈ = f(q, q̇, t) + C(q, t)ᵀλ`` with ``f = ∂L/∂q − (∂²L/∂q̇∂q) q̇ − ∂²L/∂q̇∂t + Q``, ``c(q, t) = 0``
+    (``d/dt ∂L/∂q̇ − ∂L/∂q = Q + Cᵀλ``: the Lagrange–d'Alembert equations with the forces ``Q``)."""
     sp = _sympy()
     n = system.nq
     names = [_latex_name(s) for s in system.names]
     q = list(sp.symbols(" ".join(names), real=True)) if n > 1 else [sp.Symbol(names[0], real=True)]
     qd = [sp.Symbol(r"\dot{" + nm + "}", real=True) for nm in names]
     qdd = [sp.Symbol(r"\ddot{" + nm + "}", real=True) for nm in names]
-    f_K = ca.Function("K", [system.q, system.qd], [system.kinetic_expr()])
-    f_U = ca.Function("U", [system.q], [system.potential_expr()])
-    K = to_sympy(f_K, [q, qd])[0][0]
-    U = to_sympy(f_U, [q])[0][0]
+    t = sp.Symbol("t", real=True)
+    f_K = ca.Function("K", [system.q, system.qd, system.t], [system.kinetic_expr()])
+    f_U = ca.Function("U", [system.q, system.t], [system.potential_expr()])
+    K = to_sympy(f_K, [q, qd, [t]])[0][0]
+    U = to_sympy(f_U, [q, [t]])[0][0]
     S = (lambda e: sp.simplify(e)) if simplify else (lambda e: e)  # noqa: E731
     K, U = S(K), S(U)
     L = K - U
     p = [sp.diff(L, v) for v in qd]
     M = sp.Matrix(n, n, lambda i, j: S(sp.diff(p[i], qd[j])))
-    f = sp.Matrix([S(sp.diff(L, q[i]) - sum(sp.diff(p[i], q[j]) * qd[j] for j in range(n))) for i in range(n)])
+    Q = None
+    if system.forced:
+        f_Q = ca.Function("Q", [system.q, system.qd, system.t], [system.force_expr()])
+        Q = sp.Matrix([S(e) for e in to_sympy(f_Q, [q, qd, [t]])[0]])
+    f = sp.Matrix([S(sp.diff(L, q[i]) - sum(sp.diff(p[i], q[j]) * qd[j] for j in range(n)) - sp.diff(p[i], t)
+                     + (Q[i] if Q is not None else 0)) for i in range(n)])
     c, C, lam = [], None, []
     if system.nc:
-        f_c = ca.Function("c", [system.q], [system.constraint_expr()])
-        c = [S(e) for e in to_sympy(f_c, [q])[0]]
+        f_c = ca.Function("c", [system.q, system.t], [system.constraint_expr()])
+        c = [S(e) for e in to_sympy(f_c, [q, [t]])[0]]
         C = sp.Matrix([[sp.diff(ci, qj) for qj in q] for ci in c])
         lam = list(sp.symbols(" ".join(fr"\lambda_{i + 1}" for i in range(len(c))))) if len(c) > 1 \
             else [sp.Symbol(r"\lambda")]
     positions = []
     if getattr(system.kinetic, "positions", None) is not None:
         for x in system.kinetic.positions:
-            fx = ca.Function("x", [system.q], [ca.vec(ca.SX(x))])
-            positions.append([S(e) for e in to_sympy(fx, [q])[0]])
-    cyclic = [i for i in range(n) if sp.diff(L, q[i]) == 0]
-    return Equations(q, qd, qdd, lam, K, U, L, M, f, C, c, positions, cyclic, [S(pi) for pi in p])
+            fx = ca.Function("x", [system.q, system.t], [ca.vec(ca.SX(x))])
+            positions.append([S(e) for e in to_sympy(fx, [q, [t]])[0]])
+    # a cyclic coordinate's momentum is conserved only if no force acts along it
+    cyclic = [i for i in range(n) if sp.diff(L, q[i]) == 0 and (Q is None or Q[i] == 0)]
+    return Equations(q, qd, qdd, lam, K, U, L, M, f, C, c, positions, cyclic, [S(pi) for pi in p], t, Q,
+                     bool(system.time_dependent))
 
 
 def accelerations(eq: Equations):
-    """A numpy function ``(q, q̇) -> q̈`` from the printed equations, lambdified, to compare with the
+    """A numpy function ``(q, q̇[, t]) -> q̈`` from the printed equations, lambdified, to compare with the
     package's own acceleration: ``M q̈ = f`` or, with constraints, ``M q̈ − Cᵀλ = f`` and
-    ``C q̈ = −(∂(C q̇)/∂q) q̇`` (the constraints' second derivative)."""
+    ``C q̈ = −d/dt(C q̇ + ∂c/∂t)`` without its ``q̈`` (the constraints' second derivative)."""
     sp = _sympy()
     n = len(eq.q)
+    t = eq.t if eq.t is not None else sp.Symbol("t", real=True)
     if eq.C is None:
-        fn = sp.lambdify([eq.q, eq.qd], [eq.M, eq.forces], "numpy")
+        fn = sp.lambdify([eq.q, eq.qd, t], [eq.M, eq.forces], "numpy")
     else:
         qd = sp.Matrix(eq.qd)
-        gamma = -(eq.C * qd).jacobian(eq.q) * qd
-        fn = sp.lambdify([eq.q, eq.qd], [eq.M, eq.forces, eq.C, gamma], "numpy")
+        cdot = eq.C * qd + sp.Matrix([sp.diff(ci, t) for ci in eq.c])
+        gamma = -cdot.jacobian(eq.q) * qd - sp.diff(cdot, t)
+        fn = sp.lambdify([eq.q, eq.qd, t], [eq.M, eq.forces, eq.C, gamma], "numpy")
 
-    def acc(qv, qdv):
-        out = fn(list(qv), list(qdv))
+    def acc(qv, qdv, tv=0.0):
+        out = fn(list(qv), list(qdv), tv)
         M, f = np.asarray(out[0], float), np.asarray(out[1], float).reshape(-1)
         if eq.C is None:
             return np.linalg.solve(M, f)
@@ -170,17 +184,6 @@ def _latex_name(name: str) -> str:
     idx = name[len(base):]
     base = "\\" + base if base in greek else base
     return f"{base}_{{{idx}}}" if idx else base
-
-
-SCHEME_TEXT = {
-    "midpoint": (r"L_d(q_k, q_{k+1}) = h\,L\!\left(\tfrac{q_k + q_{k+1}}{2},\ \tfrac{q_{k+1} - q_k}{h}\right)",
-                 "second order"),
-    "trapezoid": (r"L_d(q_k, q_{k+1}) = \tfrac{h}{2}\left[L\!\left(q_k, \tfrac{q_{k+1} - q_k}{h}\right) + "
-                  r"L\!\left(q_{k+1}, \tfrac{q_{k+1} - q_k}{h}\right)\right]", "second order"),
-    "galerkin4": (r"L_d(q_k, Z_k, q_{k+1}) = \tfrac{h}{6}\left[L(q(0), \dot q(0)) + 4 L(q(\tfrac12), \dot q(\tfrac12)) "
-                  r"+ L(q(1), \dot q(1))\right],\ q(\tau) \text{ quadratic through } q_k, Z_k, q_{k+1}",
-                  "fourth order"),
-}
 
 
 def markdown(system, title: str, scheme: str = "midpoint", simplify: bool = True) -> str:
@@ -202,11 +205,16 @@ def markdown(system, title: str, scheme: str = "midpoint", simplify: bool = True
     lines += ["## Energies and the Lagrangian", "",
               f"$$K = {tex(eq.K)}$$", "", f"$$U = {tex(eq.U)}$$", "", r"$$L = K - U$$", "",
               "The mass matrix $M(q) = \\partial^2 L / \\partial\\dot q^2$:", "", f"$$M(q) = {tex(eq.M)}$$", "",
+              *(["The non-conservative generalised force (Lagrange–d'Alembert: "
+                 r"$\delta\!\int L\,dt + \int Q\cdot\delta q\,dt = 0$):", "",
+                 "$$Q = " + tex(eq.Q.T) + "^{\\mathsf T}$$", ""] if eq.Q is not None else []),
               "## The Euler–Lagrange equations", "",
               r"$$\frac{d}{dt}\frac{\partial L}{\partial \dot q} - \frac{\partial L}{\partial q} = "
-              + (r"C(q)^{\mathsf T}\lambda" if eq.C is not None else "0") + "$$", "",
-              "written out as $M(q)\\,\\ddot q = f(q, \\dot q)" + (" + C(q)^{\\mathsf T}\\lambda" if eq.C is not None
-                                                                   else "") + "$:", ""]
+              + " + ".join(([] if eq.Q is None else ["Q"]) + ([r"C^{\mathsf T}\lambda"] if eq.C is not None else [])
+                           or ["0"]) + "$$", "",
+              "written out as $M\\,\\ddot q = f(q, \\dot q" + (", t" if eq.time_dependent else "") + ")"
+              + (" + C^{\\mathsf T}\\lambda" if eq.C is not None else "") + "$"
+              + (" (the force $Q$ included in $f$)" if eq.Q is not None else "") + ":", ""]
     rhs = eq.forces + (eq.C.T * sp.Matrix(eq.lam) if eq.C is not None else sp.zeros(n, 1))
     lhs = eq.M * sp.Matrix(eq.qdd)
     for i in range(n):
@@ -215,19 +223,45 @@ def markdown(system, title: str, scheme: str = "midpoint", simplify: bool = True
     if eq.C is not None:
         lines += ["with the holonomic constraints and their multipliers $\\lambda$:", ""]
         lines += [f"$${tex(ci)} = 0$$" for ci in eq.c] + [""]
-    text, order = SCHEME_TEXT.get(scheme, ("", ""))
+    from ..discretise.schemes import scheme as scheme_of
+    sch = scheme_of(scheme)
     lines += ["## The discrete problem", "",
-              f"The `{scheme}` discrete Lagrangian ({order}), on the grid $t_k = k h$:", "", f"$${text}$$", "",
-              "The discrete action $S_d = \\sum_k L_d$ is stationary when, at every interior node, the discrete "
-              "Euler–Lagrange equations hold:", "",
-              r"$$D_2 L_d(q_{k-1}, q_k) + D_1 L_d(q_k, q_{k+1}) = 0,$$", "",
-              "and the discrete Legendre transforms give the momenta at the nodes, the first of which is set by "
-              "the initial condition:", "",
-              r"$$p_k^- = D_2 L_d(q_{k-1}, q_k), \qquad p_k^+ = -D_1 L_d(q_k, q_{k+1}), \qquad "
-              r"p_0^+ = \frac{\partial L}{\partial \dot q}(q_0, \dot q_0).$$", ""]
-    lines += ["## Conserved quantities", "",
-              "$L$ does not depend on time, so the energy $E = \\dot q^{\\mathsf T} \\partial L/\\partial \\dot q - L "
-              "= K + U$ is conserved; the variational scheme keeps its discrete counterpart bounded.", ""]
+              f"The `{sch.name}` discrete Lagrangian (order {sch.order}: {sch.family}), on the grid $t_k = k h$:", "",
+              f"$${sch.latex()}$$", ""]
+    if eq.Q is None:
+        lines += ["The discrete action $S_d = \\sum_k L_d$ is stationary when, at every interior node, the discrete "
+                  "Euler–Lagrange equations hold:", "",
+                  r"$$D_2 L_d(q_{k-1}, q_k) + D_1 L_d(q_k, q_{k+1}) = 0,$$", "",
+                  "and the discrete Legendre transforms give the momenta at the nodes, the first of which is set by "
+                  "the initial condition:", "",
+                  r"$$p_k^- = D_2 L_d(q_{k-1}, q_k), \qquad p_k^+ = -D_1 L_d(q_k, q_{k+1}), \qquad "
+                  r"p_0^+ = \frac{\partial L}{\partial \dot q}(q_0, \dot q_0, 0).$$", ""]
+    else:
+        lines += ["The discrete forces are the scheme's quadrature of the virtual work, differentiated with respect "
+                  "to the end points' variations (the same quadrature as $L_d$, nodes $\\tau_i$ and weights $w_i$; "
+                  "$\\ell_0, \\ell_1$ the polynomial's basis functions of $q_k$ and $q_{k+1}$):", "",
+                  r"$$f_k^- = h \sum_i w_i\, \ell_0(\tau_i)\, Q\big(q(\tau_i), \dot q(\tau_i), t_k + \tau_i h\big), "
+                  r"\qquad f_k^+ = h \sum_i w_i\, \ell_1(\tau_i)\, Q\big(q(\tau_i), \dot q(\tau_i), "
+                  r"t_k + \tau_i h\big),$$", "",
+                  "and the discrete Lagrange–d'Alembert principle "
+                  "$\\delta \\sum_k L_d + \\sum_k (f_k^- \\cdot \\delta q_k + f_k^+ \\cdot \\delta q_{k+1}) = 0$ "
+                  "gives, at every interior node, the forced discrete Euler–Lagrange equations", "",
+                  r"$$D_2 L_d(q_{k-1}, q_k) + f_{k-1}^+ + D_1 L_d(q_k, q_{k+1}) + f_k^- = 0,$$", "",
+                  "with the forced discrete Legendre transforms", "",
+                  r"$$p_k^- = D_2 L_d(q_{k-1}, q_k) + f_{k-1}^+, \qquad p_k^+ = -D_1 L_d(q_k, q_{k+1}) - f_k^-, "
+                  r"\qquad p_0^+ = \frac{\partial L}{\partial \dot q}(q_0, \dot q_0, 0).$$", ""]
+    if eq.Q is None and not eq.time_dependent:
+        lines += ["## Conserved quantities", "",
+                  "$L$ does not depend on time, so the energy $E = \\dot q^{\\mathsf T} \\partial L/\\partial \\dot q - L "
+                  "= K + U$ is conserved; the variational scheme keeps its discrete counterpart bounded.", ""]
+    else:
+        lines += ["## The energy balance", "",
+                  "The energy function $E = \\dot q^{\\mathsf T} \\partial L/\\partial \\dot q - L$ changes as",
+                  "", r"$$\frac{dE}{dt} = Q \cdot \dot q - \frac{\partial L}{\partial t},$$", "",
+                  "so $E(t) - E(0) - W(t) = 0$ with $W$ the integral of that power; the solver reports $W$ by the "
+                  "scheme's quadrature, and the balance's error converges at the scheme's order.", ""]
+        if eq.cyclic:
+            lines += ["## Conserved quantities", ""]
     for i in eq.cyclic:
         lines.append(f"${tex(eq.q[i])}$ does not appear in $L$ (cyclic): its momentum "
                      f"$p_{{{tex(eq.q[i])}}} = {tex(eq.momenta[i])}$ is conserved, exactly by the discrete "

@@ -20,7 +20,7 @@ def momenta(system, run) -> np.ndarray:
     if p is not None and np.shape(p) == np.shape(run.q):
         return np.asarray(p, float)
     K = run.q.shape[0]
-    return np.asarray(system.momentum.map(K)(run.q.T, run.v.T)).T
+    return np.asarray(system.momentum.map(K)(run.q.T, run.v.T, np.asarray(run.t, float)[None, :])).T
 
 
 def drift(x: np.ndarray) -> float:

@@ -41,6 +41,48 @@ import numpy as np
 
 from ..validation import InputError, finite
 
+# ----------------------------------------------------------------------------- time and velocity symbols
+_TIME = ca.SX.sym("t")
+_VELOCITIES: dict = {}
+
+
+def time() -> ca.SX:
+    """The time symbol: an atom, potential, constraint or force that holds it depends on time.
+
+    A pendulum whose pivot moves up and down as ``a cos(ωt)`` is an atom position holding ``t``:
+
+    >>> import casadi as ca, castrajectory as ct
+    >>> th, t = ca.SX.sym("theta", 1), ct.time()
+    >>> bob = ca.vertcat(ca.sin(th), 0.1 * ca.cos(30 * t) - ca.cos(th))
+    >>> kapitza = ct.LagrangianSystem(th, ct.Atoms([bob], [1.0]), [ct.Gravity(9.81)])
+    >>> kapitza.time_dependent
+    True
+    """
+    return _TIME
+
+
+def _key(q) -> tuple:
+    return tuple(q[i].element_hash() for i in range(q.numel()))
+
+
+def velocity(q) -> ca.SX:
+    """The velocity symbol ``q̇`` of the coordinates ``q`` (one per coordinate column): the symbol a
+    :class:`Force` or :class:`Dissipation` is written in, and the one the system built on ``q`` uses.
+
+    >>> import casadi as ca, castrajectory as ct
+    >>> x = ca.SX.sym("x", 1)
+    >>> v = ct.velocity(x)
+    >>> drag = ct.LagrangianSystem(x, ct.MassMatrix(2.0), [ct.Force(-0.5 * v * ca.fabs(v), "quadratic drag")])
+    >>> float(drag.acceleration([0.0], [2.0], 0.0))      # -0.5·2·|2| / 2
+    -1.0
+    """
+    if not isinstance(q, ca.SX) or not q.is_column() or not q.is_valid_input():
+        raise InputError("velocity(q) needs the column of SX symbols of the coordinates")
+    key = _key(q)
+    if key not in _VELOCITIES:
+        _VELOCITIES[key] = ca.SX.sym("qd", q.numel())
+    return _VELOCITIES[key]
+
 
 # ----------------------------------------------------------------------------- kinetic energy
 @dataclass
@@ -91,6 +133,8 @@ class Atoms:
         K = ca.SX(0)
         for x, m in zip(self.positions, self.masses):
             v = ca.mtimes(ca.jacobian(x, q), qd)
+            if ca.depends_on(ca.SX(x), _TIME):  # a moving atom: its velocity has the part ∂x/∂t
+                v = v + ca.jacobian(x, _TIME)
             K += 0.5 * m * ca.dot(v, v)
         return K
 
@@ -166,6 +210,96 @@ class Potential:
         return self.expr
 
 
+# ----------------------------------------------------------------------------- forces
+@dataclass
+class Force:
+    """A generalised force ``Q(q, q̇, t)`` (a column of one entry per coordinate) that does not come
+    from a potential: it enters the motion by the Lagrange–d'Alembert principle,
+    ``δ∫L dt + ∫Q·δq dt = 0``, so ``d/dt ∂L/∂q̇ − ∂L/∂q = Q``.  It is an expression in the coordinates,
+    their velocity :func:`velocity` and the time :func:`time`.
+
+    A mass on a spring driven at its resonance:
+
+    >>> import casadi as ca, castrajectory as ct
+    >>> x = ca.SX.sym("x", 1)
+    >>> osc = ct.LagrangianSystem(x, ct.MassMatrix(1.0), [ct.Potential(0.5 * x[0] ** 2, "spring"),
+    ...                                                  ct.Force(ca.cos(ct.time()), "drive")])
+    >>> float(osc.acceleration([0.5], [0.0], 0.0))        # -x + cos(0)
+    0.5
+    """
+
+    expr: object
+    name: str = "force"
+
+    def force(self, system: "LagrangianSystem"):
+        return ca.vec(ca.SX(self.expr))
+
+
+@dataclass
+class Dissipation:
+    """A Rayleigh dissipation function ``R(q, q̇, t)``: the force ``Q = −∂R/∂q̇`` (written in the
+    velocity symbol :func:`velocity`); ``R ≥ 0`` and convex in ``q̇`` dissipates energy at the rate
+    ``q̇·∂R/∂q̇`` (``2R`` when ``R`` is quadratic in ``q̇``).
+
+    Air drag ``R = c|v|³/3`` (the force ``−c|v|v``) on a falling ball:
+
+    >>> import casadi as ca, castrajectory as ct
+    >>> y = ca.SX.sym("y", 1)
+    >>> v = ct.velocity(y)
+    >>> ball = ct.LagrangianSystem(y, ct.MassMatrix(1.0), [ct.Potential(9.81 * y[0], "gravity"),
+    ...                                                   ct.Dissipation(0.1 * ca.fabs(v[0]) ** 3 / 3)])
+    >>> round(float(ball.acceleration([0.0], [-10.0], 0.0)), 12)     # -9.81 + 0.1·10²
+    0.19
+    """
+
+    R: object
+    name: str = "dissipation"
+
+    def force(self, system: "LagrangianSystem"):
+        return -ca.gradient(ca.SX(self.R), system.qd)
+
+
+@dataclass
+class Damping:
+    """Linear damping, the Rayleigh function ``R = ½ q̇ᵀ C q̇`` (``c`` a number, a number per coordinate
+    or a symmetric positive semi-definite matrix): the force ``Q = −C q̇``.
+
+    >>> import casadi as ca, castrajectory as ct
+    >>> x = ca.SX.sym("x", 1)
+    >>> damped = ct.LagrangianSystem(x, ct.MassMatrix(1.0), [ct.Potential(0.5 * x[0] ** 2), ct.Damping(0.2)])
+    >>> float(damped.acceleration([0.0], [1.0], 0.0))      # -0.2·1
+    -0.2
+    """
+
+    c: object
+    name: str = "damping"
+
+    def __post_init__(self):
+        C = np.atleast_1d(np.asarray(self.c, dtype=float))
+        if not np.all(np.isfinite(C)):
+            raise InputError(f"damping must be finite (got {self.c!r})")
+        if C.ndim == 1:
+            if np.any(C < 0):
+                raise InputError(f"damping must not be negative (got {self.c!r}): a negative damping feeds energy in")
+        else:
+            if C.ndim != 2 or C.shape[0] != C.shape[1] or not np.allclose(C, C.T):
+                raise InputError("a damping matrix must be square and symmetric")
+            if np.min(np.linalg.eigvalsh(C)) < -1e-12 * max(1.0, np.max(np.abs(C))):
+                raise InputError("a damping matrix must be positive semi-definite (a negative eigenvalue feeds "
+                                 "energy in)")
+        self.matrix = C
+
+    def force(self, system: "LagrangianSystem"):
+        n, C = system.nq, self.matrix
+        if C.ndim == 1:
+            if C.size not in (1, n):
+                raise InputError(f"damping needs 1 or {n} coefficients or an {n}x{n} matrix (got {C.size})")
+            return -ca.DM(np.broadcast_to(C, (n,)).copy()) * system.qd
+        if C.shape != (n, n):
+            raise InputError(f"a damping matrix for {n} coordinates must be {n}x{n} (got {C.shape[0]}x{C.shape[1]})")
+        return -ca.mtimes(ca.DM(C), system.qd)
+
+
 # ----------------------------------------------------------------------------- contact
 @dataclass
 class Contact:
@@ -205,6 +339,23 @@ class Contact:
 
 
 # ----------------------------------------------------------------------------- the system
+class _Timed(ca.Function):
+    """A CasADi function whose last input is the time.  ``optional``: a call may leave the time out
+    (a time-independent system's functions, which do not depend on it); otherwise it must be given,
+    so no caller evaluates a moving system at a silent ``t = 0``."""
+
+    def __init__(self, fn: ca.Function, optional: bool):
+        super().__init__(fn)
+        self._optional = optional
+
+    def __call__(self, *args, **kw):
+        if not kw and len(args) == self.n_in() - 1:
+            if not self._optional:
+                raise TypeError(f"{self.name()} depends on the time: pass t as its last argument")
+            args = args + (0.0,)
+        return super().__call__(*args, **kw)
+
+
 @dataclass
 class LagrangianSystem:
     """``L(q, q̇) = K(q, q̇) − U(q)`` with optional holonomic constraints ``c(q) = 0``.
@@ -243,10 +394,70 @@ class LagrangianSystem:
     def __post_init__(self):
         if not isinstance(self.q, ca.SX) or not self.q.is_column() or not self.q.is_valid_input():
             raise ValueError("q must be a column of SX symbols")
-        self.qd = ca.SX.sym("qd", self.nq)
+        self.qd = velocity(self.q)
+        self.t = _TIME
         self.names = list(self.names) if self.names else [f"q{i}" for i in range(self.nq)]
         if self.points_expr is None and isinstance(self.kinetic, Atoms):
             self.points_expr = list(self.kinetic.positions)
+        self.potentials = list(self.potentials)
+        #: the non-conservative force terms (those with a ``force`` method), and the potential terms
+        self.force_terms = [term for term in self.potentials if hasattr(term, "force")]
+        self.potential_terms = [term for term in self.potentials if not hasattr(term, "force")]
+        self._check_symbols()
+
+    def _check_symbols(self) -> None:
+        """Every expression may hold the coordinates and the time; the kinetic energy and the forces also
+        the velocities.  Anything else is refused here, by name (it made a CasADi traceback in the solve)."""
+        allowed = {e.element_hash() for e in ca.symvar(ca.vertcat(self.q, self.qd, self.t))}
+        qd = {e.element_hash() for e in ca.symvar(self.qd)}
+
+        def check(expr, what, rates=False):
+            for v in ca.symvar(ca.SX(expr)):
+                hsh = v.element_hash()
+                if hsh in qd and not rates:
+                    raise InputError(f"{what} depends on the velocity {v}: a velocity-dependent force is a "
+                                     "ct.Force or ct.Dissipation term")
+                if hsh not in allowed:
+                    raise InputError(f"{what} depends on the symbol {v}, which is neither a coordinate, its "
+                                     "velocity (ct.velocity(q)) nor the time (ct.time())")
+
+        check(self.kinetic_expr(), "the kinetic energy", rates=True)
+        for term in self.potential_terms:
+            check(term.energy(self), f"the potential term {self._term_name(term)!r}")
+        for term in self.force_terms:
+            Q = term.force(self)
+            if Q.numel() != self.nq:
+                raise InputError(f"the force {self._term_name(term)!r} has {Q.numel()} entries; it needs one per "
+                                 f"coordinate ({self.nq})")
+            check(Q, f"the force {self._term_name(term)!r}", rates=True)
+        for k, c in enumerate(self.constraints):
+            check(c, f"constraint {k}")
+        if self.contact is not None:
+            for k, g in enumerate(self.contact.gaps):
+                check(g, f"the gap of {self.contact.names[k]!r}")
+                if ca.depends_on(g, self.t):
+                    raise InputError(f"the gap of {self.contact.names[k]!r} depends on time: moving obstacles are "
+                                     "not supported yet")
+        if self.points_expr:
+            for k, pnt in enumerate(self.points_expr):
+                check(pnt, f"plotted point {k}")
+
+    @staticmethod
+    def _term_name(term) -> str:
+        return getattr(term, "name", type(term).__name__)
+
+    @property
+    def time_dependent(self) -> bool:
+        """Does the Lagrangian, a constraint or a force hold the time?"""
+        def key():
+            exprs = [self.lagrangian_expr(), self.constraint_expr()] + [term.force(self) for term in self.force_terms]
+            return any(ca.depends_on(ca.SX(e), self.t) for e in exprs if ca.SX(e).numel())
+        return self._get("time_dependent", key)
+
+    @property
+    def forced(self) -> bool:
+        """Does the system hold non-conservative forces?"""
+        return bool(self.force_terms)
 
     # -- sizes
     @property
@@ -270,8 +481,12 @@ class LagrangianSystem:
         out = [{"Atoms": f"kinetic: {na} atom{'s' if na != 1 else ''}",
                 "MassMatrix": "kinetic: mass matrix",
                 "RigidBody": "kinetic: rigid body (rotation, inertia)"}.get(kin, f"kinetic: {kin}")]
-        for t in self.potentials:
+        for t in self.potential_terms:
             out.append({"Gravity": "gravity", "Spring": "spring"}.get(type(t).__name__, getattr(t, "name", "potential")))
+        for t in self.force_terms:
+            out.append(f"force: {self._term_name(t)}")
+        if self.time_dependent:
+            out.append("time-dependent")
         if self.nc:
             out.append(f"{self.nc} holonomic constraint{'s' if self.nc > 1 else ''}")
         if self.contact is not None:
@@ -284,9 +499,16 @@ class LagrangianSystem:
 
     def potential_expr(self):
         U = ca.SX(0)
-        for term in self.potentials:
+        for term in self.potential_terms:
             U += term.energy(self)
         return U
+
+    def force_expr(self):
+        """The sum of the non-conservative forces ``Q(q, q̇, t)`` (zeros without force terms)."""
+        Q = ca.SX.zeros(self.nq)
+        for term in self.force_terms:
+            Q += term.force(self)
+        return Q
 
     def lagrangian_expr(self):
         return self.kinetic_expr() - self.potential_expr()
@@ -300,38 +522,75 @@ class LagrangianSystem:
             self._fn[key] = build()
         return self._fn[key]
 
+    # Every function below takes the time as its last input; a time-independent system's may be called
+    # without it (see _Timed), a time-dependent system's may not.
+    def _timed(self, fn: ca.Function) -> ca.Function:
+        return _Timed(fn, optional=not self.time_dependent)
+
     @property
     def L(self) -> ca.Function:
-        """``L(q, q̇)``."""
-        return self._get("L", lambda: ca.Function("L", [self.q, self.qd], [self.lagrangian_expr()]))
+        """``L(q, q̇, t)``."""
+        return self._get("L", lambda: self._timed(ca.Function("L", [self.q, self.qd, self.t], [self.lagrangian_expr()])))
+
+    def energy_expr(self):
+        """The energy function ``E = q̇·∂L/∂q̇ − L`` (Jacobi's integral: ``K + U`` for a kinetic energy that is
+        a quadratic form in the rates, which every time-independent system here has).  It is conserved
+        when ``L`` does not hold the time and no force acts; otherwise ``dE/dt = Q·q̇ − ∂L/∂t``."""
+        if not self.time_dependent:
+            return self.kinetic_expr() + self.potential_expr()
+        L = self.lagrangian_expr()
+        return ca.dot(self.qd, ca.gradient(L, self.qd)) - L
 
     @property
     def energy(self) -> ca.Function:
-        """Total energy ``K + U`` as a function of ``(q, q̇)``."""
-        return self._get("E", lambda: ca.Function(
-            "E", [self.q, self.qd], [self.kinetic_expr() + self.potential_expr()]))
+        """The energy function ``E(q, q̇, t)`` (:meth:`energy_expr`)."""
+        return self._get("E", lambda: self._timed(ca.Function("E", [self.q, self.qd, self.t], [self.energy_expr()])))
+
+    @property
+    def power(self) -> ca.Function:
+        """``(q, q̇, t) ↦ (Q·q̇, −∂L/∂t)``: the power of the forces and of the time dependence, whose
+        integral is the change of the energy function (:meth:`energy_expr`)."""
+        def build():
+            L = self.lagrangian_expr()
+            return self._timed(ca.Function("power", [self.q, self.qd, self.t],
+                                           [ca.dot(self.force_expr(), self.qd), -ca.jacobian(L, self.t)]))
+        return self._get("power", build)
 
     @property
     def potential(self) -> ca.Function:
-        return self._get("U", lambda: ca.Function("U", [self.q], [self.potential_expr()]))
+        return self._get("U", lambda: self._timed(ca.Function("U", [self.q, self.t], [self.potential_expr()])))
+
+    @property
+    def force(self) -> ca.Function:
+        """The non-conservative force ``Q(q, q̇, t)``."""
+        return self._get("Q", lambda: self._timed(ca.Function("Q", [self.q, self.qd, self.t], [self.force_expr()])))
 
     @property
     def mass_matrix(self) -> ca.Function:
-        """``M(q) = ∂²K/∂q̇²``."""
-        return self._get("M", lambda: ca.Function(
-            "M", [self.q], [ca.densify(ca.hessian(self.kinetic_expr(), self.qd)[0])]))
+        """``M(q, t) = ∂²K/∂q̇²``."""
+        return self._get("M", lambda: self._timed(ca.Function(
+            "M", [self.q, self.t], [ca.densify(ca.hessian(self.kinetic_expr(), self.qd)[0])])))
 
     @property
     def momentum(self) -> ca.Function:
-        """Continuous Legendre transform ``p = ∂L/∂q̇``."""
-        return self._get("p", lambda: ca.Function(
-            "p", [self.q, self.qd], [ca.gradient(self.lagrangian_expr(), self.qd)]))
+        """Continuous Legendre transform ``p = ∂L/∂q̇ (q, q̇, t)``."""
+        return self._get("p", lambda: self._timed(ca.Function(
+            "p", [self.q, self.qd, self.t], [ca.gradient(self.lagrangian_expr(), self.qd)])))
 
     @property
     def constraint(self) -> ca.Function:
-        """``c(q)`` and its Jacobian ``C(q) = ∂c/∂q``."""
+        """``c(q, t)`` and its Jacobian ``C(q, t) = ∂c/∂q``."""
         c = self.constraint_expr()
-        return self._get("c", lambda: ca.Function("c", [self.q], [c, ca.densify(ca.jacobian(c, self.q))]))
+        return self._get("c", lambda: self._timed(ca.Function("c", [self.q, self.t],
+                                                              [c, ca.densify(ca.jacobian(c, self.q))])))
+
+    @property
+    def constraint_rate(self) -> ca.Function:
+        """``∂c/∂t (q, t)``: the constraint's own motion (zeros for a fixed constraint), so that an admissible
+        velocity has ``C q̇ + ∂c/∂t = 0``."""
+        c = self.constraint_expr()
+        return self._get("ct", lambda: self._timed(ca.Function("c_t", [self.q, self.t],
+                                                                [ca.densify(ca.jacobian(c, self.t))])))
 
     @property
     def gap(self) -> ca.Function:
@@ -345,17 +604,17 @@ class LagrangianSystem:
 
     @property
     def acceleration(self) -> ca.Function:
-        """Euler–Lagrange right-hand side ``q̈(q, q̇)``.
+        """Euler–Lagrange right-hand side ``q̈(q, q̇, t)``.
 
-        Unconstrained: ``M q̈ = ∂L/∂q − (∂²L/∂q̇∂q) q̇``.  With holonomic
-        constraints the index-1 system ``[M Cᵀ; C 0] [q̈; λ] = [f; −(∂(C q̇)/∂q) q̇]``
-        is solved (used by the time-stepping baselines and the integrated guesses).
+        Unconstrained: ``M q̈ = ∂L/∂q − (∂²L/∂q̇∂q) q̇ − ∂²L/∂q̇∂t + Q``.  With holonomic
+        constraints the index-1 system ``[M Cᵀ; C 0] [q̈; λ] = [f; γ]`` is solved, ``γ`` the part of
+        ``c̈`` without ``q̈`` (used by the time-stepping baselines and the integrated guesses).
         """
         return self._get("index1", self._index1)[0]
 
     @property
     def multiplier(self) -> ca.Function:
-        """The constraint multipliers ``λ(q, q̇)`` of the index-1 system (``M q̈ + Cᵀλ = f``): the
+        """The constraint multipliers ``λ(q, q̇, t)`` of the index-1 system (``M q̈ + Cᵀλ = f``): the
         same sign and scale as the discrete multipliers of the trajectory NLP.  Empty without constraints."""
         return self._get("index1", self._index1)[1]
 
@@ -364,38 +623,49 @@ class LagrangianSystem:
         dLdqd = ca.gradient(L, self.qd)
         M = ca.hessian(L, self.qd)[0]
         f = ca.gradient(L, self.q) - ca.mtimes(ca.jacobian(dLdqd, self.q), self.qd)
+        if self.time_dependent:
+            f = f - ca.jacobian(dLdqd, self.t)
+        if self.force_terms:
+            f = f + self.force_expr()
         if self.nc:
             c = self.constraint_expr()
             C = ca.jacobian(c, self.q)
-            gamma = -ca.mtimes(ca.jacobian(ca.mtimes(C, self.qd), self.q), self.qd)
+            cdot = ca.mtimes(C, self.qd)
+            if ca.depends_on(c, self.t):
+                cdot = cdot + ca.jacobian(c, self.t)
+            gamma = -ca.mtimes(ca.jacobian(cdot, self.q), self.qd)
+            if ca.depends_on(cdot, self.t):
+                gamma = gamma - ca.jacobian(cdot, self.t)
             K = ca.blockcat([[M, C.T], [C, ca.SX(self.nc, self.nc)]])
             sol = ca.solve(K, ca.vertcat(f, gamma))
             qdd, lam = sol[:self.nq], sol[self.nq:]
         else:
             qdd, lam = ca.solve(M, f), ca.SX(0, 1)
-        return (ca.Function("qdd", [self.q, self.qd], [qdd]),
-                ca.Function("lam", [self.q, self.qd], [lam]))
+        return (self._timed(ca.Function("qdd", [self.q, self.qd, self.t], [qdd])),
+                self._timed(ca.Function("lam", [self.q, self.qd, self.t], [lam])))
 
     @property
     def points(self) -> Optional[ca.Function]:
         """Positions of the plotted points (atoms by default) as a function of q, stacked as rows."""
         if not self.points_expr:
             return None
-        return self._get("pts", lambda: ca.Function(
-            "pts", [self.q], [ca.horzcat(*[ca.vec(p) for p in self.points_expr]).T]))
+        return self._get("pts", lambda: self._timed(ca.Function(
+            "pts", [self.q, self.t], [ca.horzcat(*[ca.vec(p) for p in self.points_expr]).T])))
 
-    def positions(self, q: np.ndarray) -> np.ndarray:
-        """Point positions for each row of ``q``: array of shape (len(q), n_points, dim)."""
+    def positions(self, q: np.ndarray, t=0.0) -> np.ndarray:
+        """Point positions for each row of ``q`` (at the times ``t``: a number or one per row): array of
+        shape (len(q), n_points, dim)."""
         fn = self.points
         if fn is None:
             raise ValueError("this system has no points to show")
         q = np.atleast_2d(q)
         F = fn.map(q.shape[0])
-        out = np.asarray(F(q.T))  # (n_points, len(q) * dim), one dim-block per row of q
+        out = np.asarray(F(q.T, np.broadcast_to(np.asarray(t, float), (q.shape[0],)).reshape(1, -1)))  # (n_points, len(q) * dim), one dim-block per row of q
         npts = len(self.points_expr)
         return out.reshape(npts, q.shape[0], -1).transpose(1, 0, 2)
 
-    def energies(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
-        """Total energy for each row of ``(q, q̇)``."""
+    def energies(self, q: np.ndarray, qd: np.ndarray, t=0.0) -> np.ndarray:
+        """The energy function for each row of ``(q, q̇)`` at the times ``t`` (a number or one per row)."""
         q, qd = np.atleast_2d(q), np.atleast_2d(qd)
-        return np.asarray(self.energy.map(q.shape[0])(q.T, qd.T)).reshape(-1)
+        t = np.broadcast_to(np.asarray(t, float), (q.shape[0],)).reshape(1, -1)
+        return np.asarray(self.energy.map(q.shape[0])(q.T, qd.T, t)).reshape(-1)

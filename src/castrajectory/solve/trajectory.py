@@ -97,6 +97,12 @@ class Trajectory(Result):
     method: str = "whole"
     levels: List[Level] = field(default_factory=list)
     action: float = float("nan")  # discrete action S_d = Σ L_d
+    #: the work done on the motion up to each node (N+1,): of the non-conservative forces (``∫Q·q̇ dt``)
+    #: plus that of the time dependence (``−∫∂L/∂t dt``), each by the scheme's quadrature, so that
+    #: ``energy − energy[0] − work`` is the energy balance's error (zeros for a conservative system)
+    work: Optional[np.ndarray] = None
+    work_forces: Optional[np.ndarray] = None
+    work_time: Optional[np.ndarray] = None
     #: what the answer's NLP carries: the system's terms and the program's anatomy
     #: (:meth:`~castrajectory.discretise.program.Program.anatomy`), with its number of steps
     program: dict = field(default_factory=dict)
@@ -110,6 +116,11 @@ def trajectory_keys(run) -> dict:
     """The keys every mechanics scene's JSON holds besides the contract: scheme, method, t, q, energy, and
     ``program`` (what the whole-trajectory NLP carries; ``null`` for a time-stepping baseline)."""
     out = {k: getattr(run, k) for k in ("scheme", "method", "t", "q", "energy")}
+    work = getattr(run, "work", None)
+    if work is None:
+        work = getattr(getattr(run, "detail", None), "work", None)
+    if work is not None:  # the energy balance: energy - energy[0] - work
+        out["work"] = work
     out["program"] = getattr(run, "program", None) or getattr(getattr(run, "detail", None), "program", None) or None
     return out
 
@@ -118,8 +129,8 @@ def _check_finite_state(system: LagrangianSystem, q0, qd0) -> None:
     """Refuse an initial state whose energy or acceleration overflows (finite inputs such as 1e300 whose
     squares do not exist in floating point), before any solve."""
     with np.errstate(all="ignore"):
-        E = float(np.asarray(system.energy(q0, qd0)).reshape(-1)[0])
-        a = np.asarray(system.acceleration(q0, qd0), float).reshape(-1)
+        E = float(np.asarray(system.energy(q0, qd0, 0.0)).reshape(-1)[0])
+        a = np.asarray(system.acceleration(q0, qd0, 0.0), float).reshape(-1)
     if not (np.isfinite(E) and np.all(np.isfinite(a)) and abs(E) < 1e150 and np.max(np.abs(a), initial=0.0) < 1e150):
         raise InputError(f"the initial state's energy ({E:.3g}) or acceleration ({np.max(np.abs(a), initial=0.0):.3g}) "
                          "overflows: the inputs are too large for double precision")
@@ -147,9 +158,9 @@ class TrajectoryNLP(TrajectoryTranscription):
 
     program = NLP
 
-    def __init__(self, dm: DiscreteMechanics, N: int, T: float, mode: str, q0, end):
+    def __init__(self, dm: DiscreteMechanics, N: int, T: float, mode: str, q0, end, t0: float = 0.0):
         self.function_time_s = 0.0  # of the last solve (see Level.function_time_s)
-        super().__init__(dm, N, T, mode, q0, end)
+        super().__init__(dm, N, T, mode, q0, end, t0)
 
 
     def solve(self, guess: Dict[str, np.ndarray], options: Optional[dict] = None,
@@ -161,7 +172,7 @@ class TrajectoryNLP(TrajectoryTranscription):
             # does for the initial-value rows), relative to the size of the configurations, so that
             # tol stays reachable at large N and far from the origin (a ball thrown 100 m on 2000
             # steps stopped at Search_Direction_Becomes_Too_Small with its gradient at 2e-12).
-            m_ref = float(np.max(np.diag(np.asarray(self.dm.system.mass_matrix(self.q0)))))
+            m_ref = float(np.max(np.diag(np.asarray(self.dm.system.mass_matrix(self.q0, self.t0)))))
             size = max(1.0, float(np.max(np.abs(self.q0))), float(np.max(np.abs(self.end))))
             opts["obj_scaling_factor"] = min(1.0, 100.0 * self.h ** 2 / (m_ref * size))
         opts.update(options or {})
@@ -214,19 +225,19 @@ def _refine(prev: TrajectoryNLP, values: Dict[str, np.ndarray], nxt: TrajectoryN
     q_new[0] = nxt.q0
     out = {"q": q_new.reshape(-1)}
     st = dm.scheme.stages
+    c = dm.scheme.stage_times  # stage j of step k sits at t_k + c_j h
     if s:
-        # stage j of step k sits at t_k + (j+1)/(st+1) h for the quadratic Galerkin scheme
-        ts = np.concatenate([t_new[:-1, None] + (j + 1) / (st + 1) * nxt.h for j in range(st)], axis=1)
+        ts = np.concatenate([t_new[:-1, None] + c[j] * nxt.h for j in range(st)], axis=1)
         Zn = np.hstack([_resample(t_old, q_old, ts[:, j], points) for j in range(st)])
         out["Z"] = Zn.reshape(-1)
     if m and prev.mode == "initial_value":
         lam_old = values["lam"].reshape(-1, m)
         out["lam"] = _resample(t_old[:-1], lam_old, t_new[:-1], points).reshape(-1)
         if s:
-            nu_old = values["nu"].reshape(prev.N, st * m)
-            tc_old = t_old[:-1] + prev.h / 2
-            tc_new = t_new[:-1] + nxt.h / 2
-            out["nu"] = _resample(tc_old, nu_old, tc_new, points).reshape(-1)
+            # each stage's multipliers, interpolated at its own times
+            nu_old = values["nu"].reshape(prev.N, st, m)
+            out["nu"] = np.stack([_resample(t_old[:-1] + c[j] * prev.h, nu_old[:, j], t_new[:-1] + c[j] * nxt.h,
+                                            points) for j in range(st)], axis=1).reshape(-1)
     return out
 
 
@@ -265,29 +276,41 @@ _FLOWS: Dict[tuple, tuple] = {}  # (id(dm), "step") -> (dm, step, compiled?); (i
 
 
 def _flow_step(dm: DiscreteMechanics, compile_: bool) -> ca.Function:
-    """One step ``(x₀ = (q, q̇), h) ↦`` (state at its end node, configurations at the scheme's stage
-    times, multipliers at its start node and at the stage times): RK4 with ``GUESS_SUBSTEPS``
-    substeps of the Euler–Lagrange equations.  ``compile_``: compiled (:mod:`~castrajectory.solve.jit`),
-    once per system and scheme (``h`` is an input, so every level and window shares it); otherwise
-    a compiled version is used only if one is cached (as for the NLP's element families)."""
+    """One step ``(x₀ = (q, q̇), h, t₀) ↦`` (state at its end node, configurations at the scheme's stage
+    times, multipliers at its start node and at the stage times): RK4 of the Euler–Lagrange equations,
+    piece by piece between the scheme's control times (``GUESS_SUBSTEPS`` substeps per step, shared
+    among the pieces by their lengths, at least one each).  ``compile_``: compiled
+    (:mod:`~castrajectory.solve.jit`), once per system and scheme (``h`` and ``t₀`` are inputs, so every
+    level and window shares it); otherwise a compiled version is used only if one is cached (as for
+    the NLP's element families)."""
     key = (id(dm), "step")
     hit = _FLOWS.get(key)
     if hit is not None and hit[0] is dm and (hit[2] or not compile_):  # the same object, not a reused id
         return hit[1]
     n, st = dm.n, dm.scheme.stages
     acc, lamf = dm.system.acceleration, dm.system.multiplier
-    x, hs = ca.SX.sym("x", 2 * n), ca.SX.sym("h")
-    f = lambda y: ca.vertcat(y[n:], acc(y[:n], y[n:]))  # noqa: E731
-    dt, y, stage, stage_lam = hs / GUESS_SUBSTEPS, x, [], []
-    marks = {round((j + 1) * GUESS_SUBSTEPS / (st + 1)) - 1 for j in range(st)}
-    for j in range(GUESS_SUBSTEPS):
-        y = rk4_step(f, y, dt)
-        if j in marks:
+    x, hs, ts = ca.SX.sym("x", 2 * n), ca.SX.sym("h"), ca.SX.sym("t0")
+    if dm.timed:
+        f = lambda y, t: ca.vertcat(y[n:], acc(y[:n], y[n:], t))  # noqa: E731
+        lam_at = lambda y, t: lamf(y[:n], y[n:], t)  # noqa: E731
+    else:
+        f = lambda y: ca.vertcat(y[n:], acc(y[:n], y[n:]))  # noqa: E731
+        lam_at = lambda y, t: lamf(y[:n], y[n:])  # noqa: E731
+    c = dm.scheme.control
+    y, t, stage, stage_lam = x, ts, [], []
+    for j in range(c.size - 1):
+        length = float(c[j + 1] - c[j])
+        sub = max(1, int(round(GUESS_SUBSTEPS * length)))
+        dt = hs / sub if length == 1.0 else hs * length / sub
+        for _ in range(sub):
+            y = rk4_step(f, y, dt, t if dm.timed else None)
+            t = t + dt
+        if j < c.size - 2:
             stage.append(y[:n])
-            stage_lam.append(lamf(y[:n], y[n:]))
+            stage_lam.append(lam_at(y, t))
     empty = ca.SX(0, 1)
-    step = ca.Function("guess_step", [x, hs], [y, ca.vertcat(*stage) if stage else empty, lamf(x[:n], x[n:]),
-                                               ca.vertcat(*stage_lam) if stage_lam else empty])
+    step = ca.Function("guess_step", [x, hs, ts], [y, ca.vertcat(*stage) if stage else empty, lam_at(x, ts),
+                                                   ca.vertcat(*stage_lam) if stage_lam else empty])
     fast = jit.compiled(step, compile_) if _nlp.JIT else step
     if len(_FLOWS) > 64:
         _FLOWS.clear()
@@ -295,28 +318,33 @@ def _flow_step(dm: DiscreteMechanics, compile_: bool) -> ca.Function:
     return fast
 
 
-def _flow(dm: DiscreteMechanics, h: float, steps: int) -> ca.Function:
-    """:func:`_flow_step` over ``steps`` steps of length ``h``: ``x₀ ↦`` one column per step."""
+def _flow(dm: DiscreteMechanics, h: float, steps: int, t0: float = 0.0):
+    """:func:`_flow_step` over ``steps`` steps of length ``h`` from ``t0``: ``x₀ ↦`` one column per step."""
     step = _flow_step(dm, steps >= _nlp.JIT_MIN_ELEMENTS)
     key = (id(step), int(steps))
     hit = _FLOWS.get(key)
     if hit is not None and hit[0] is step:
         fn = hit[1]
     else:
-        fn = step.mapaccum("guess_flow", int(steps))
+        # the step's start time is accumulated: the time is the step function's third input and output
+        xs, hs, ts = ca.MX.sym("x", 2 * dm.n), ca.MX.sym("h"), ca.MX.sym("t")
+        out = step(xs, hs, ts)
+        timed = ca.Function("guess_step_t", [xs, hs, ts], [out[0], ts + hs, out[1], out[2], out[3]])
+        acc = timed.mapaccum("guess_flow", int(steps), [0, 2], [0, 1])
+        fn = acc
         if len(_FLOWS) > 64:
             _FLOWS.clear()
         _FLOWS[key] = (step, fn)
-    return lambda x0: fn(x0, float(h))
+    return lambda x0: (lambda o: [o[0], o[2], o[3], o[4]])(fn(x0, float(h), float(t0)))
 
 
-def _flow_guess(dm: DiscreteMechanics, q0, qd0, h: float, steps: int) -> Optional[Dict[str, np.ndarray]]:
-    """Guess of ``steps`` steps from ``(q₀, q̇₀)`` by integrating the motion (RK4, substeps): the
+def _flow_guess(dm: DiscreteMechanics, q0, qd0, h: float, steps: int, t0: float = 0.0) -> Optional[Dict[str, np.ndarray]]:
+    """Guess of ``steps`` steps from ``(q₀, q̇₀)`` at ``t₀`` by integrating the motion (RK4, substeps): the
     configuration at the nodes and stage times and the constraint multipliers of the motion
     (``λ`` of the index-1 equations, the discrete multipliers' sign and scale).  ``None`` if the
     integration leaves the finite numbers (then the caller keeps its own guess)."""
     n, s, m = dm.n, dm.s, dm.m
-    out_f = _flow(dm, h, steps)(np.concatenate([q0, qd0]))
+    out_f = _flow(dm, h, steps, t0)(np.concatenate([q0, qd0]))
     X, S, Lam, Nu = (np.asarray(v) for v in out_f)
     if not all(np.all(np.isfinite(v)) for v in (X, S, Lam, Nu)):
         return None
@@ -355,12 +383,20 @@ COARSE_H_OMEGA = 0.5
 
 
 def _fastest_frequency(system: LagrangianSystem, q0: np.ndarray, qd0: np.ndarray) -> float:
-    """Largest linearised angular frequency at the initial state: √|eig(M⁻¹ ∇²U)|, or |q̇0|-based if larger."""
-    q = system.q
-    H = ca.Function("hessU", [q], [ca.hessian(system.potential_expr(), q)[0]])(q0)
-    M = np.asarray(system.mass_matrix(q0))
+    """Largest linearised angular frequency at the initial state: √|eig(M⁻¹ ∇²U)|, or |q̇0|-based if larger;
+    with forces also the rates of their linearisation, |eig(M⁻¹ ∂Q/∂q̇)| (a damping's 1/time) and
+    √|eig(M⁻¹ ∂Q/∂q)|."""
+    q, t = system.q, system.t
+    H = ca.Function("hessU", [q, t], [ca.hessian(system.potential_expr(), q)[0]])(q0, 0.0)
+    M = np.asarray(system.mass_matrix(q0, 0.0))
     w2 = np.abs(np.linalg.eigvals(np.linalg.solve(M, np.asarray(H)))).max() if system.nq else 0.0
-    return float(max(np.sqrt(w2), np.abs(qd0).max()))
+    rates = [np.sqrt(w2), np.abs(qd0).max()]
+    if system.forced:
+        Q = system.force_expr()
+        J = ca.Function("dQ", [q, system.qd, t], [ca.jacobian(Q, system.qd), ca.jacobian(Q, q)])(q0, qd0, 0.0)
+        rates.append(np.abs(np.linalg.eigvals(np.linalg.solve(M, np.asarray(J[0])))).max())
+        rates.append(np.sqrt(np.abs(np.linalg.eigvals(np.linalg.solve(M, np.asarray(J[1])))).max()))
+    return float(max(rates))
 
 
 def _levels(N: int, coarsest: int) -> List[int]:
@@ -426,17 +462,18 @@ def _solve_level(tn: TrajectoryNLP, guess, options, verbose, log: List[Level], a
     pK = tn.end.copy()
     while K < N:
         L = min(L, N - K)
+        tK = tn.t0 + K * h  # a window starts at its own time
         if L not in cache:
-            cache[L] = TrajectoryNLP(dm, L, L * h, "initial_value", Qc[K], pK)
+            cache[L] = TrajectoryNLP(dm, L, L * h, "initial_value", Qc[K], pK, tK)
             new_build = True
         else:
             new_build = False
         w = cache[L]
-        w.set_start(Qc[K], pK)
+        w.set_start(Qc[K], pK, tK)
         wg = None
         if h * omega <= GUESS_SUBSTEPS * GUESS_H_OMEGA:  # the motion from the window's start state
-            vK = dm.velocities(Qc[K][None, :], pK[None, :])[0]
-            wg = _flow_guess(dm, Qc[K], vK, h, L)
+            vK = dm.velocities(Qc[K][None, :], pK[None, :], tK)[0]
+            wg = _flow_guess(dm, Qc[K], vK, h, L, tK)
         if wg is None:  # the level's guess, shifted to the window's start
             shift = Qc[K] - np.asarray(guess["q"]).reshape(N + 1, n)[K]
             wg = {"q": (np.asarray(guess["q"]).reshape(N + 1, n)[K:K + L + 1] + shift).reshape(-1)}
@@ -465,7 +502,8 @@ def _solve_level(tn: TrajectoryNLP, guess, options, verbose, log: List[Level], a
                 if s:
                     Nc[K:K + L] = r.values["nu"].reshape(L, st * m)
             Zlast = Zc[K + L - 1] if s else np.zeros(0)
-            pK = np.asarray(dm.p_minus(Qc[K + L - 1], Zlast, Qc[K + L], h)).reshape(-1)
+            pK = np.asarray(dm.p_minus(Qc[K + L - 1], Zlast, Qc[K + L], h,
+                                       *dm.time_args(tn.t0 + (K + L - 1) * h))).reshape(-1)
             K, L = K + L, min(2 * L, cap)
         else:
             L //= 2
@@ -495,9 +533,11 @@ def _finish(tn: TrajectoryNLP, res: NLPResult, log: List[Level], mode: str) -> T
     dm, N = tn.dm, tn.N
     q = res.values["q"].reshape(N + 1, dm.n)
     Z = res.values["Z"].reshape(N, dm.s) if dm.s else np.zeros((N, 0))
-    p = dm.momenta(q, Z, tn.h)
-    v = dm.velocities(q, p)
-    energy = tn.dm.system.energies(q, v)
+    t = tn.times
+    p = dm.momenta(q, Z, tn.h, tn.t0)
+    v = dm.velocities(q, p, t)
+    energy = tn.dm.system.energies(q, v, t)
+    work = dm.work(q, Z, tn.h, tn.t0) if (dm.forced or dm.timed) else np.zeros((N + 1, 2))
     lam = None
     if dm.m:
         if mode == "initial_value":
@@ -506,13 +546,15 @@ def _finish(tn: TrajectoryNLP, res: NLPResult, log: List[Level], mode: str) -> T
             # Ipopt's multiplier of c(q_k) = 0 in min S_d/h is the quadrature weight 2w times λ_k
             lam = res.multipliers["constraint"].reshape(-1, dm.m) / (2 * dm.scheme.node_weight)
     return Trajectory(
-        t=np.linspace(0.0, tn.T, N + 1), q=q, stages=Z, p=p, v=v, energy=energy, multipliers=lam,
+        t=t, q=q, stages=Z, p=p, v=v, energy=energy, multipliers=lam, work=work[:, 0] + work[:, 1],
+        work_forces=work[:, 0], work_time=work[:, 1],
         **{**res.contract(), "iterations": int(sum(lv.iterations for lv in log)),
            "build_time_s": float(sum(lv.build_time_s for lv in log)),
            "solve_time_s": float(sum(lv.solve_time_s for lv in log))},
         scheme=dm.scheme.name, mode=mode, levels=log,
         program={"terms": dm.system.terms(), "steps": int(N), **tn.nlp.anatomy()},
-        action=float(np.sum(np.asarray(dm.Ld.map(N)(q[:-1].T, Z.T, q[1:].T, tn.h)))))
+        action=float(np.sum(np.asarray(dm.Ld.map(N)(q[:-1].T, Z.T, q[1:].T, tn.h,
+                                                    *([t[None, :-1]] if dm.timed else []))))))
 
 
 #: Memory of a whole-trajectory solve per step and unknown per step (bytes): 2.8 kB per step for the
@@ -580,11 +622,12 @@ def solve_initial_value(system: LagrangianSystem, q0, qd0, T: float, N: int, sch
         return solve_contact(system, q0, qd0, T, N, scheme, options=options, verbose=verbose, contact=contact,
                              rtol=rtol, n_limit=n_limit)
     if system.nc:
-        c, C = system.constraint(q0)
-        if np.max(np.abs(np.asarray(c))) > 1e-9 or np.max(np.abs(np.asarray(C) @ qd0)) > 1e-9:
+        c, C = system.constraint(q0, 0.0)
+        ct = np.asarray(system.constraint_rate(q0, 0.0)).reshape(-1)
+        if np.max(np.abs(np.asarray(c))) > 1e-9 or np.max(np.abs(np.asarray(C) @ qd0 + ct)) > 1e-9:
             raise InputError("the initial state violates the holonomic constraints (position or velocity level)")
     dm = DiscreteMechanics(system, scheme)
-    p0 = np.asarray(system.momentum(q0, qd0)).reshape(-1)
+    p0 = np.asarray(system.momentum(q0, qd0, 0.0)).reshape(-1)
     log: List[Level] = []
     solved: List[tuple] = []  # (TrajectoryNLP, values) of the converged levels, finest last
     omega = _fastest_frequency(system, q0, qd0)
@@ -680,8 +723,9 @@ def _path(tn: TrajectoryNLP, values: Dict[str, np.ndarray]):
     dm, N = tn.dm, tn.N
     q = values["q"].reshape(N + 1, dm.n)
     Z = values["Z"].reshape(N, dm.s) if dm.s else np.zeros((N, 0))
-    v = dm.velocities(q, dm.momenta(q, Z, tn.h))
-    return SimpleNamespace(t=np.linspace(0.0, tn.T, N + 1), q=q, energy=dm.system.energies(q, v))
+    t = tn.times
+    v = dm.velocities(q, dm.momenta(q, Z, tn.h, tn.t0), t)
+    return SimpleNamespace(t=t, q=q, energy=dm.system.energies(q, v, t))
 
 
 def _polish(tn: TrajectoryNLP, res: NLPResult, solved: List[tuple]) -> None:

@@ -29,6 +29,9 @@ class ContactMechanics:
     def __init__(self, system: LagrangianSystem, scheme: str):
         if system.contact is None:
             raise ValueError("the system has no contact term")
+        if system.forced or system.time_dependent:
+            raise InputError("contact with non-conservative forces or a time-dependent system is not supported yet; "
+                             "remove the Force/Damping terms and the time from the contact scene")
         dm = DiscreteMechanics(system, scheme)
         if dm.s:
             raise InputError(f"contact trajectories need a two-point scheme (midpoint or trapezoid), not {scheme}")
