@@ -33,6 +33,15 @@ Scene: double pendulum (unit masses and lengths, g = 9.81) from rest at
 
 (d) scipy's DOP853 and RK45 (the ``bench`` extra) to the same error: goal whole-galerkin4 within 5x of
     DOP853; the anatomy of the galerkin4 run and the ceiling (the level at N alone) are printed.
+(e) How far a high order takes the whole-trajectory solve (issue #22): for every scheme of ``--schemes``
+    and for DOP853 (the double pendulum's equations written by hand in numpy), the cheapest run reaching
+    each maximum angle error of ``--targets`` (1e-6, 1e-8, 1e-10, 1e-12), the median of ``--median``
+    wall times in one process, and the ratio of the best whole-trajectory scheme to DOP853.  The error of
+    a run is the largest angle error at its own output times (the nodes; DOP853's steps) against an
+    extended-precision reference (RK4 in ``longdouble``, Richardson-extrapolated; its own error is
+    printed).  Goals: <= 2x DOP853 at 1e-10, faster than DOP853 at 1e-12; the ceiling (the fixed cost of
+    one whole-trajectory solve at the cheapest N: kernel derivation, builds, Ipopt's setup) is printed.
+    ``--parts e`` runs this part alone.
 
 One untimed warm-up solve runs first (loading the Ipopt plugin).  BLAS
 threads are pinned to 1 unless the caller set them (see bench_droplet.py).
@@ -159,6 +168,157 @@ def hand_dop853(reference_rtol: float, rtols=(1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-
                             rhs=_pendulum_rhs, suffix="-numpy")
 
 
+#: Part (e): the schemes compared (every family member up to order 12 and the Gauss ones) and the targets.
+E_SCHEMES = ("midpoint", "galerkin4", "galerkin6", "galerkin8", "galerkin10", "galerkin12", "gauss6", "gauss8",
+             "gauss10")
+E_TARGETS = (1e-6, 1e-8, 1e-10, 1e-12)
+#: Part (e): grids swept per scheme, each about 1.25x the last (every one divides 96 000, so a
+#: scheme's error is read at its own nodes); a scheme stops at the first N below the smallest target.
+E_GRIDS = (40, 48, 60, 75, 96, 120, 150, 192, 240, 300, 375, 480, 600, 750, 960, 1200, 1500, 1920, 2400, 3000,
+           3840, 4800, 6000, 7680, 9600, 12000, 16000, 19200, 24000, 32000, 48000)
+#: Part (e): no sweep beyond this wall time per run (a scheme then reports "not reached")
+E_MAX_RUN_S = 4.0
+
+
+def _pendulum_rhs_ld(y):
+    """``_pendulum_rhs`` in extended precision (numpy longdouble), for the reference of part (e)."""
+    from _extended_reference import LD
+    g = LD("9.81")
+    t1, t2, w1, w2 = y
+    d = t1 - t2
+    den = 3 - np.cos(2 * d)
+    a1 = (-3 * g * np.sin(t1) - g * np.sin(t1 - 2 * t2) - 2 * np.sin(d) * (w2 * w2 + w1 * w1 * np.cos(d))) / den
+    a2 = 2 * np.sin(d) * (2 * w1 * w1 + 2 * g * np.cos(t1) + w2 * w2 * np.cos(d)) / den
+    return np.array([w1, w2, a1, a2], dtype=LD)
+
+
+def part_e(args, goals, ratios) -> dict:
+    """Time to each maximum angle error for every scheme and DOP853 (see the module docstring, (e))."""
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    from _extended_reference import Reference
+    targets = sorted(args.targets, reverse=True)
+    print()
+    print("(e) the cheapest run reaching each maximum angle error (median of "
+          f"{args.median} wall times in this process), every scheme and DOP853")
+    t0 = time.perf_counter()
+    y0 = np.concatenate([Q0, QD0])
+    ref = Reference(_pendulum_rhs_ld, y0, T, 24000)
+    check = Reference(_pendulum_rhs_ld, y0, T, 12000)
+    probe = np.linspace(0.0, T, 2001)
+    ref_err = float(np.max(np.abs(ref.q(probe) - check.q(probe))))
+    print(f"  reference: RK4 in extended precision (longdouble), Richardson from 24000 and 48000 steps; "
+          f"its error <= {ref_err:.1e} (against the same from 12000 and 24000 steps); {time.perf_counter() - t0:.1f} s")
+
+    def error_of(t, q):
+        return float(np.max(np.abs(np.asarray(q, float) - ref.q(t))))
+
+    def timed(fn, repeats):
+        walls, out = [], None
+        for _ in range(repeats):
+            t = time.perf_counter()
+            out = fn()
+            walls.append(time.perf_counter() - t)
+        return float(np.median(walls)), out
+
+    def whole(scheme, n):
+        return simulate(pendulum.double_pendulum(), Q0, QD0, T, n, scheme, "whole")
+
+    table = {}
+    for scheme in args.schemes:
+        whole(scheme, 1200)  # untimed: the scheme's kernels are compiled (or loaded) before the timings
+        sweep = []
+        for n in E_GRIDS:
+            wall, run = timed(lambda: whole(scheme, n), 1)
+            err = error_of(run.t, run.q) if run.success else math.inf
+            sweep.append((n, wall, err, run.success))
+            if err < 0.5 * targets[-1] or wall > E_MAX_RUN_S:
+                break
+        row = {}
+        for tgt in targets:
+            ok = [(w, n, e) for n, w, e, s in sweep if s and e <= tgt]
+            if not ok:
+                row[tgt] = None
+                continue
+            w, n, e = min(ok)
+            med, run = timed(lambda: whole(scheme, n), args.median)
+            row[tgt] = {"n": n, "time_s": med, "error": e, "iterations": int(run.iterations)}
+        table[scheme] = row
+        print(f"  {scheme:11s} swept N = {sweep[0][0]} .. {sweep[-1][0]}: smallest error {min(x[2] for x in sweep):.1e}",
+              flush=True)
+    # DOP853 with the equations written by hand (checked against the model in hand_dop853)
+    dop = {}
+    try:
+        from scipy.integrate import solve_ivp
+    except ImportError:
+        solve_ivp = None
+        print("  scipy is not installed (pip install '.[bench]'): DOP853 skipped")
+    if solve_ivp is not None:
+        hand_dop853(REFERENCE_RTOL, rtols=(1e-6,))  # checks the hand-written equations against the model
+        runs = []
+        for k in range(6, 28):
+            rtol = 10.0 ** (-k / 2)
+            def go():
+                return solve_ivp(_pendulum_rhs, (0.0, T), y0, method="DOP853", rtol=rtol, atol=rtol * 1e-2)
+            wall, sol = timed(go, 1)
+            err = error_of(sol.t, sol.y[:2].T) if sol.success else math.inf
+            runs.append((rtol, wall, err))
+        for tgt in targets:
+            ok = [(w, r, e) for r, w, e in runs if e <= tgt]
+            if not ok:
+                dop[tgt] = None
+                continue
+            w, r, e = min(ok)
+            med, sol = timed(lambda: solve_ivp(_pendulum_rhs, (0.0, T), y0, method="DOP853", rtol=r, atol=r * 1e-2),
+                             args.median)
+            dop[tgt] = {"rtol": r, "time_s": med, "error": e, "nfev": int(sol.nfev)}
+        print(f"  DOP853      rtol 1e-3 .. 1e-13.5: smallest error {min(x[2] for x in runs):.1e}")
+    # the table
+    head = f"  {'target':>7} " + " ".join(f"{s:>17s}" for s in args.schemes) + f" {'DOP853 (numpy)':>17s} {'best/DOP853':>12s}"
+    print(head)
+    print("  " + "-" * (len(head) - 2))
+    best_of = {}
+    for tgt in targets:
+        cells = []
+        for scheme in args.schemes:
+            c = table[scheme][tgt]
+            cells.append(f"{c['time_s']:8.4f} s N={c['n']:<5d}" if c else f"{'not reached':>17s}")
+        d = dop.get(tgt)
+        cand = [(table[s][tgt]["time_s"], s) for s in args.schemes if table[s][tgt]]
+        best_of[tgt] = min(cand) if cand else None
+        ratio = (best_of[tgt][0] / d["time_s"]) if (best_of[tgt] and d) else math.nan
+        dcell = f"{d['time_s']:8.4f} s" if d else "not reached"
+        print(f"  {tgt:7.0e} " + " ".join(cells) + f" {dcell:>17s} {ratio:11.1f}x"
+              + (f"  ({best_of[tgt][1]})" if best_of[tgt] else ""))
+        if best_of[tgt] and d:
+            ratios[f"time to max angle error {tgt:g}: best scheme ({best_of[tgt][1]}) / DOP853"] = ratio
+    for tgt, bound, text in ((1e-10, 2.0, "<= 2x DOP853"), (1e-12, 1.0, "faster than DOP853")):
+        if tgt not in targets:
+            continue
+        b, d = best_of.get(tgt), dop.get(tgt)
+        if not (b and d):
+            ok, detail = None, f"not comparable (best scheme {'reached' if b else 'not reached'}, DOP853 " \
+                               f"{'reached' if d else 'not reached'})"
+        else:
+            ok, detail = b[0] / d["time_s"] <= bound, (f"{b[1]} {b[0]:.4f} s, DOP853 {d['time_s']:.4f} s, "
+                                                      f"ratio {b[0] / d['time_s']:.1f}")
+        goals.append((f"(e) the best whole-trajectory scheme {text} at max angle error {tgt:g}", ok, detail))
+        print(goal_line(*goals[-1]))
+        if b:  # the ceiling: what one solve at that N costs however good its guess
+            run = whole(b[1], table[b[1]][tgt]["n"])
+            lv = run.detail.levels
+            fixed = sum(x.build_time_s for x in lv)
+            final = [x for x in lv if x.purpose == "solve"][-1]
+            print(f"        anatomy of {b[1]} at N = {table[b[1]][tgt]['n']}: {len(lv)} solves ({', '.join(str(x.n) for x in lv)}), "
+                  f"{sum(x.iterations for x in lv)} Newton iterations; builds {fixed:.4f} s, functions "
+                  f"{sum(x.function_time_s for x in lv):.4f} s, Ipopt/MUMPS "
+                  f"{sum(x.solve_time_s - x.function_time_s for x in lv):.4f} s")
+            if d:
+                floor = final.build_time_s + final.solve_time_s / max(final.iterations, 1)
+                print(f"        ceiling: the level at N alone with one Newton iteration (its build and one "
+                      f"iteration) costs {floor:.4f} s = {floor / d['time_s']:.1f}x DOP853 ({d['time_s']:.4f} s)")
+    return {"schemes": table, "dop853": dop, "reference_error": ref_err}
+
+
 def _public(r: dict) -> dict:
     return {k: v for k, v in r.items() if not k.startswith("_")}
 
@@ -206,7 +366,17 @@ def main(argv=None) -> int:
     p.add_argument("--jit", choices=("on", "off"), default="on",
                    help="compiled element functions (default on; off: CasADi's virtual machine)")
     p.add_argument("--json", metavar="PATH", help="also write all numbers as JSON to PATH")
+    p.add_argument("--parts", default="abcde", help="which parts to run (letters of a-e; default all)")
+    p.add_argument("--schemes", nargs="+", default=list(E_SCHEMES), help="schemes of part (e)")
+    p.add_argument("--targets", type=float, nargs="+", default=list(E_TARGETS), help="angle errors of part (e)")
+    p.add_argument("--median", type=int, default=3, help="timed runs per cheapest point of part (e) (median)")
     args = p.parse_args(argv)
+    from castrajectory.discretise.schemes import SCHEMES as _ALL
+    bad = [s for s in args.schemes if s not in _ALL]
+    if bad:
+        p.error(f"unknown scheme(s) {', '.join(bad)}; choose from {', '.join(_ALL)}")
+    if set(args.parts) - set("abcde"):
+        p.error("--parts takes letters of a-e")
     if args.repeats < 1:
         p.error("--repeats must be at least 1")
 
@@ -233,142 +403,146 @@ def main(argv=None) -> int:
 
     goals, ratios = [], {}
 
-    # ------------------------------------------------------------------ (a)
-    print()
-    print("(a) whole-trajectory midpoint solve, fresh build every run; times in seconds")
-    head = (f"  {'N':>6} {'status':>6} {'iter':>5} {'build':>8} {'solve':>8} {'b+s':>8} {'wall':>8} "
-            f"{'subsolves':>9} {'windows':>7}  grids")
-    print(head)
-    print("  " + "-" * (len(head) - 2))
-    conv = []
-    for n in args.sizes:
-        r = best_run("whole", "midpoint", n, 1)
-        conv.append(r)
-        print(f"  {n:>6} {r['status']:>6} {r['iterations']:>5} {r['build_s']:8.3f} {r['solve_s']:8.3f} "
-              f"{r['build_plus_solve_s']:8.3f} {r['wall_s']:8.3f} {r['sub_solves']:>9} {r['windows']:>7}  "
-              f"{len(r['grids'])} ({r['grids'][0]}..{r['grids'][-1]})", flush=True)
-    if len(conv) > 1:
-        slope = study.loglog_slope([r["n"] for r in conv], [r["build_plus_solve_s"] for r in conv])
-        print(f"  growth exponent of build+solve vs N: {slope:.3f}")
-    ok = all(r["success"] for r in conv)
-    goals.append(("(a) whole midpoint converges at every N", ok,
-                  "all ok" if ok else "failed: " + ", ".join(f"N={r['n']} {r['status']}" for r in conv
-                                                             if not r["success"])))
-    print(goal_line(*goals[-1]))
-
-    # ------------------------------------------------------------------ (b)
-    print()
-    print(f"(b) whole trajectory vs stepping.march at N = {args.n_compare}, best of {args.repeats}; seconds")
-    head = (f"  {'scheme':10s} {'method':6s} {'status':>6} {'build':>8} {'solve':>8} {'b+s':>8} {'wall':>8}")
-    print(head)
-    print("  " + "-" * (len(head) - 2))
-    compare = {}
-    for scheme in ("midpoint", "galerkin4"):
-        for method in ("whole", "march"):
-            r = best_run(method, scheme, args.n_compare, args.repeats)
-            compare[(scheme, method)] = r
-            print(f"  {scheme:10s} {method:6s} {r['status']:>6} {r['build_s']:8.3f} {r['solve_s']:8.3f} "
-                  f"{r['build_plus_solve_s']:8.3f} {r['wall_s']:8.3f}"
-                  + (f"   ({r['sub_solves']} sub-solves, {r['iterations']} iterations)" if method == "whole" else ""),
-                  flush=True)
-    for scheme in ("midpoint", "galerkin4"):
-        w, m = compare[(scheme, "whole")], compare[(scheme, "march")]
-        ratio = w["build_plus_solve_s"] / m["build_plus_solve_s"]
-        ratios[f"whole/march {scheme} N={args.n_compare} (build+solve)"] = ratio
-        ratios[f"whole/march {scheme} N={args.n_compare} (solve only)"] = w["solve_s"] / m["solve_s"]
-        if not (w["success"] and m["success"]):
-            ok, detail = None, f"ratio {ratio:.2f}, not comparable: whole {w['status']}, march {m['status']}"
-        else:
-            ok, detail = ratio <= 1.0, (f"whole {w['build_plus_solve_s']:.3f} s, march {m['build_plus_solve_s']:.3f} s, "
-                                        f"ratio whole/march {ratio:.2f}")
-        goals.append((f"(b) whole {scheme} build+solve <= march {scheme} at N = {args.n_compare}", ok, detail))
+    conv, compare, rows, reach = [], {}, [], {}
+    if "e" in args.parts:
+        part_e(args, goals, ratios)
+    if set("abcd") & set(args.parts):  # parts (a) to (d) run together
+        # ------------------------------------------------------------------ (a)
+        print()
+        print("(a) whole-trajectory midpoint solve, fresh build every run; times in seconds")
+        head = (f"  {'N':>6} {'status':>6} {'iter':>5} {'build':>8} {'solve':>8} {'b+s':>8} {'wall':>8} "
+                f"{'subsolves':>9} {'windows':>7}  grids")
+        print(head)
+        print("  " + "-" * (len(head) - 2))
+        conv = []
+        for n in args.sizes:
+            r = best_run("whole", "midpoint", n, 1)
+            conv.append(r)
+            print(f"  {n:>6} {r['status']:>6} {r['iterations']:>5} {r['build_s']:8.3f} {r['solve_s']:8.3f} "
+                  f"{r['build_plus_solve_s']:8.3f} {r['wall_s']:8.3f} {r['sub_solves']:>9} {r['windows']:>7}  "
+                  f"{len(r['grids'])} ({r['grids'][0]}..{r['grids'][-1]})", flush=True)
+        if len(conv) > 1:
+            slope = study.loglog_slope([r["n"] for r in conv], [r["build_plus_solve_s"] for r in conv])
+            print(f"  growth exponent of build+solve vs N: {slope:.3f}")
+        ok = all(r["success"] for r in conv)
+        goals.append(("(a) whole midpoint converges at every N", ok,
+                      "all ok" if ok else "failed: " + ", ".join(f"N={r['n']} {r['status']}" for r in conv
+                                                                 if not r["success"])))
         print(goal_line(*goals[-1]))
-        if "final_level" in w:
-            print(anatomy(scheme, w, m, args.repeats))
 
-    # ------------------------------------------------------------------ (c)
-    print()
-    print(f"(c) time to final error {TARGET:g}: whole-galerkin4 vs rk4 (reference CVODES rtol {REFERENCE_RTOL:g})")
-    pairs = [("whole", "galerkin4"), ("rk4", None)]
-    sweeps = [study.work_precision_sweep(pendulum.double_pendulum, Q0, QD0, T, pairs, args.accuracy_sizes,
-                                         reference_rtol=REFERENCE_RTOL, warmup=(k == 0))
-              for k in range(args.repeats)]
-    rows = []
-    for group in zip(*sweeps):  # same task order in every sweep: keep each run's best time
-        best = dict(min(group, key=lambda r: r["time_s"] if np.isfinite(r["time_s"]) else math.inf))
-        rows.append(best)
-    print(f"  {'method':16s} {'N':>6} {'status':>6} {'build':>8} {'solve':>8} {'b+s':>8} {'error':>9}")
-    for r in rows:
-        print(f"  {r['label']:16s} {r['n']:>6} {r['status']:>6} {r['build_time_s']:8.4f} {r['solve_time_s']:8.4f} "
-              f"{r['time_s']:8.4f} {r['error_final']:9.2e}")
-    reach = {lab: study.time_to_error(rows, lab, TARGET) for lab in ("whole-galerkin4", "rk4")}
-    for lab, tt in reach.items():
-        o = study.trajectory_order(rows, lab)
-        print(f"  {lab:16s} time to {TARGET:g}: "
-              + (f"{tt['cost']:.4f} s at N ~ {tt['n']:.0f} ({tt['note']})" if tt["note"] != "not reached"
-                 else "not reached") + f"; observed order {o['order']:.2f}")
-    g, r = reach["whole-galerkin4"], reach["rk4"]
-    if g["note"] == "not reached" or r["note"] == "not reached":
-        ok, detail = None, f"not comparable (whole-galerkin4 {g['note']}, rk4 {r['note']}); extend --accuracy-sizes"
-    else:
-        ratio = g["cost"] / r["cost"]
-        ratios[f"time to {TARGET:g}: whole-galerkin4 / rk4"] = ratio
-        ok, detail = ratio < 1.0, f"whole-galerkin4 {g['cost']:.4f} s, rk4 {r['cost']:.4f} s, ratio {ratio:.1f}"
-    goals.append((f"(c) whole-galerkin4 reaches final error {TARGET:g} faster than rk4", ok, detail))
-    print(goal_line(*goals[-1]))
-    first = [row for row in rows if row["label"] == "whole-galerkin4" and row["error_final"] <= TARGET]
-    if first and r["note"] != "not reached":
-        f0 = min(first, key=lambda row: row["n"])
-        print(f"  evidence: at N = {f0['n']} (the first swept N where whole-galerkin4 reaches {TARGET:g}) building "
-              f"its NLP alone takes {f0['build_time_s']:.4f} s = {f0['build_time_s'] / r['cost']:.1f}x rk4's whole run "
-              f"to {TARGET:g}; rk4 is a compiled CasADi mapaccum at "
-              f"{r['cost'] / max(r['n'], 1) * 1e6:.2f} us per step, so one Ipopt solve over the same steps cannot match it")
+        # ------------------------------------------------------------------ (b)
+        print()
+        print(f"(b) whole trajectory vs stepping.march at N = {args.n_compare}, best of {args.repeats}; seconds")
+        head = (f"  {'scheme':10s} {'method':6s} {'status':>6} {'build':>8} {'solve':>8} {'b+s':>8} {'wall':>8}")
+        print(head)
+        print("  " + "-" * (len(head) - 2))
+        compare = {}
+        for scheme in ("midpoint", "galerkin4"):
+            for method in ("whole", "march"):
+                r = best_run(method, scheme, args.n_compare, args.repeats)
+                compare[(scheme, method)] = r
+                print(f"  {scheme:10s} {method:6s} {r['status']:>6} {r['build_s']:8.3f} {r['solve_s']:8.3f} "
+                      f"{r['build_plus_solve_s']:8.3f} {r['wall_s']:8.3f}"
+                      + (f"   ({r['sub_solves']} sub-solves, {r['iterations']} iterations)" if method == "whole" else ""),
+                      flush=True)
+        for scheme in ("midpoint", "galerkin4"):
+            w, m = compare[(scheme, "whole")], compare[(scheme, "march")]
+            ratio = w["build_plus_solve_s"] / m["build_plus_solve_s"]
+            ratios[f"whole/march {scheme} N={args.n_compare} (build+solve)"] = ratio
+            ratios[f"whole/march {scheme} N={args.n_compare} (solve only)"] = w["solve_s"] / m["solve_s"]
+            if not (w["success"] and m["success"]):
+                ok, detail = None, f"ratio {ratio:.2f}, not comparable: whole {w['status']}, march {m['status']}"
+            else:
+                ok, detail = ratio <= 1.0, (f"whole {w['build_plus_solve_s']:.3f} s, march {m['build_plus_solve_s']:.3f} s, "
+                                            f"ratio whole/march {ratio:.2f}")
+            goals.append((f"(b) whole {scheme} build+solve <= march {scheme} at N = {args.n_compare}", ok, detail))
+            print(goal_line(*goals[-1]))
+            if "final_level" in w:
+                print(anatomy(scheme, w, m, args.repeats))
 
-    # (d) the peers a user would otherwise reach for: scipy's DOP853 and RK45 (the `bench` extra)
-    peers = study.peer_sweep(pendulum.double_pendulum, Q0, QD0, T, reference_rtol=REFERENCE_RTOL,
-                             rtols=(1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12))
-    print()
-    if not peers:
-        print("(d) scipy is not installed (pip install '.[bench]'): DOP853 and RK45 skipped")
-    else:
-        print(f"(d) time to final error {TARGET:g}: whole-galerkin4 vs scipy DOP853 and RK45 (right-hand side: the "
-              "system's compiled CasADi acceleration called from Python; DOP853-numpy: the equations written by hand)")
-        for row in peers:
-            print(f"  {row['label']:16s} rtol {row['rtol']:.0e} nfev {row['n']:>7} {row['time_s']:8.4f} s "
-                  f"error {row['error_final']:9.2e}")
-        # the right-hand side a user writes by hand for this system (numpy/math, ~5x cheaper per call than a
-        # CasADi call from Python), checked against the system's own acceleration before it is timed
-        hand = hand_dop853(REFERENCE_RTOL)
-        for row in hand:
-            print(f"  {row['label']:16s} rtol {row['rtol']:.0e} nfev {row['n']:>7} {row['time_s']:8.4f} s "
-                  f"error {row['error_final']:9.2e}")
-        peers += hand
-        dop = min((study.time_to_error(peers, lab, TARGET) for lab in ("scipy-DOP853", "scipy-DOP853-numpy")),
-                  key=lambda d: d["cost"] if d["note"] != "not reached" else math.inf)
-        g = reach["whole-galerkin4"]
-        if dop["note"] == "not reached" or g["note"] == "not reached":
-            ok, detail = None, f"not comparable (DOP853 {dop['note']}, whole-galerkin4 {g['note']})"
+        # ------------------------------------------------------------------ (c)
+        print()
+        print(f"(c) time to final error {TARGET:g}: whole-galerkin4 vs rk4 (reference CVODES rtol {REFERENCE_RTOL:g})")
+        pairs = [("whole", "galerkin4"), ("rk4", None)]
+        sweeps = [study.work_precision_sweep(pendulum.double_pendulum, Q0, QD0, T, pairs, args.accuracy_sizes,
+                                             reference_rtol=REFERENCE_RTOL, warmup=(k == 0))
+                  for k in range(args.repeats)]
+        rows = []
+        for group in zip(*sweeps):  # same task order in every sweep: keep each run's best time
+            best = dict(min(group, key=lambda r: r["time_s"] if np.isfinite(r["time_s"]) else math.inf))
+            rows.append(best)
+        print(f"  {'method':16s} {'N':>6} {'status':>6} {'build':>8} {'solve':>8} {'b+s':>8} {'error':>9}")
+        for r in rows:
+            print(f"  {r['label']:16s} {r['n']:>6} {r['status']:>6} {r['build_time_s']:8.4f} {r['solve_time_s']:8.4f} "
+                  f"{r['time_s']:8.4f} {r['error_final']:9.2e}")
+        reach = {lab: study.time_to_error(rows, lab, TARGET) for lab in ("whole-galerkin4", "rk4")}
+        for lab, tt in reach.items():
+            o = study.trajectory_order(rows, lab)
+            print(f"  {lab:16s} time to {TARGET:g}: "
+                  + (f"{tt['cost']:.4f} s at N ~ {tt['n']:.0f} ({tt['note']})" if tt["note"] != "not reached"
+                     else "not reached") + f"; observed order {o['order']:.2f}")
+        g, r = reach["whole-galerkin4"], reach["rk4"]
+        if g["note"] == "not reached" or r["note"] == "not reached":
+            ok, detail = None, f"not comparable (whole-galerkin4 {g['note']}, rk4 {r['note']}); extend --accuracy-sizes"
         else:
-            ratio = g["cost"] / dop["cost"]
-            ratios[f"time to {TARGET:g}: whole-galerkin4 / DOP853"] = ratio
-            ok, detail = ratio <= 5.0, f"whole-galerkin4 {g['cost']:.4f} s, DOP853 {dop['cost']:.4f} s, ratio {ratio:.1f}"
-        goals.append((f"(d) whole-galerkin4 within 5x of DOP853 at final error {TARGET:g}", ok, detail))
+            ratio = g["cost"] / r["cost"]
+            ratios[f"time to {TARGET:g}: whole-galerkin4 / rk4"] = ratio
+            ok, detail = ratio < 1.0, f"whole-galerkin4 {g['cost']:.4f} s, rk4 {r['cost']:.4f} s, ratio {ratio:.1f}"
+        goals.append((f"(c) whole-galerkin4 reaches final error {TARGET:g} faster than rk4", ok, detail))
         print(goal_line(*goals[-1]))
         first = [row for row in rows if row["label"] == "whole-galerkin4" and row["error_final"] <= TARGET]
-        if first and dop["note"] != "not reached":
+        if first and r["note"] != "not reached":
             f0 = min(first, key=lambda row: row["n"])
-            run = simulate(pendulum.double_pendulum(), Q0, QD0, T, f0["n"], "galerkin4", "whole")
-            lv = run.detail.levels
-            i = max(j for j, x in enumerate(lv) if x.purpose == "solve")
-            at_n = lv[i].build_time_s + lv[i].solve_time_s
-            before = sum(x.build_time_s + x.solve_time_s for x in lv[:i])
-            print(f"  where the time goes at N = {f0['n']}: {len(lv[:i])} coarser levels {before:.4f} s; the level at N: "
-                  f"build {lv[i].build_time_s:.4f} s + {lv[i].iterations} Newton iteration(s) {lv[i].solve_time_s:.4f} s "
-                  f"(CasADi functions {lv[i].function_time_s:.4f} s, the rest Ipopt/MUMPS)")
-            print(f"  ceiling: the level at N alone (one build and at least one Newton iteration over all "
-                  f"{f0['n']} steps) costs {at_n:.4f} s = {at_n / dop['cost']:.1f}x DOP853's whole run to {TARGET:g}; "
-                  f"5x DOP853 = {5 * dop['cost']:.4f} s; its one Newton iteration alone (Ipopt's KKT factorisation, "
-                  f"{lv[i].solve_time_s:.4f} s) is {lv[i].solve_time_s / dop['cost']:.1f}x DOP853")
+            print(f"  evidence: at N = {f0['n']} (the first swept N where whole-galerkin4 reaches {TARGET:g}) building "
+                  f"its NLP alone takes {f0['build_time_s']:.4f} s = {f0['build_time_s'] / r['cost']:.1f}x rk4's whole run "
+                  f"to {TARGET:g}; rk4 is a compiled CasADi mapaccum at "
+                  f"{r['cost'] / max(r['n'], 1) * 1e6:.2f} us per step, so one Ipopt solve over the same steps cannot match it")
+
+        # (d) the peers a user would otherwise reach for: scipy's DOP853 and RK45 (the `bench` extra)
+        peers = study.peer_sweep(pendulum.double_pendulum, Q0, QD0, T, reference_rtol=REFERENCE_RTOL,
+                                 rtols=(1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12))
+        print()
+        if not peers:
+            print("(d) scipy is not installed (pip install '.[bench]'): DOP853 and RK45 skipped")
+        else:
+            print(f"(d) time to final error {TARGET:g}: whole-galerkin4 vs scipy DOP853 and RK45 (right-hand side: the "
+                  "system's compiled CasADi acceleration called from Python; DOP853-numpy: the equations written by hand)")
+            for row in peers:
+                print(f"  {row['label']:16s} rtol {row['rtol']:.0e} nfev {row['n']:>7} {row['time_s']:8.4f} s "
+                      f"error {row['error_final']:9.2e}")
+            # the right-hand side a user writes by hand for this system (numpy/math, ~5x cheaper per call than a
+            # CasADi call from Python), checked against the system's own acceleration before it is timed
+            hand = hand_dop853(REFERENCE_RTOL)
+            for row in hand:
+                print(f"  {row['label']:16s} rtol {row['rtol']:.0e} nfev {row['n']:>7} {row['time_s']:8.4f} s "
+                      f"error {row['error_final']:9.2e}")
+            peers += hand
+            dop = min((study.time_to_error(peers, lab, TARGET) for lab in ("scipy-DOP853", "scipy-DOP853-numpy")),
+                      key=lambda d: d["cost"] if d["note"] != "not reached" else math.inf)
+            g = reach["whole-galerkin4"]
+            if dop["note"] == "not reached" or g["note"] == "not reached":
+                ok, detail = None, f"not comparable (DOP853 {dop['note']}, whole-galerkin4 {g['note']})"
+            else:
+                ratio = g["cost"] / dop["cost"]
+                ratios[f"time to {TARGET:g}: whole-galerkin4 / DOP853"] = ratio
+                ok, detail = ratio <= 5.0, f"whole-galerkin4 {g['cost']:.4f} s, DOP853 {dop['cost']:.4f} s, ratio {ratio:.1f}"
+            goals.append((f"(d) whole-galerkin4 within 5x of DOP853 at final error {TARGET:g}", ok, detail))
+            print(goal_line(*goals[-1]))
+            first = [row for row in rows if row["label"] == "whole-galerkin4" and row["error_final"] <= TARGET]
+            if first and dop["note"] != "not reached":
+                f0 = min(first, key=lambda row: row["n"])
+                run = simulate(pendulum.double_pendulum(), Q0, QD0, T, f0["n"], "galerkin4", "whole")
+                lv = run.detail.levels
+                i = max(j for j, x in enumerate(lv) if x.purpose == "solve")
+                at_n = lv[i].build_time_s + lv[i].solve_time_s
+                before = sum(x.build_time_s + x.solve_time_s for x in lv[:i])
+                print(f"  where the time goes at N = {f0['n']}: {len(lv[:i])} coarser levels {before:.4f} s; the level at N: "
+                      f"build {lv[i].build_time_s:.4f} s + {lv[i].iterations} Newton iteration(s) {lv[i].solve_time_s:.4f} s "
+                      f"(CasADi functions {lv[i].function_time_s:.4f} s, the rest Ipopt/MUMPS)")
+                print(f"  ceiling: the level at N alone (one build and at least one Newton iteration over all "
+                      f"{f0['n']} steps) costs {at_n:.4f} s = {at_n / dop['cost']:.1f}x DOP853's whole run to {TARGET:g}; "
+                      f"5x DOP853 = {5 * dop['cost']:.4f} s; its one Newton iteration alone (Ipopt's KKT factorisation, "
+                      f"{lv[i].solve_time_s:.4f} s) is {lv[i].solve_time_s / dop['cost']:.1f}x DOP853")
 
     # ------------------------------------------------------------------ summary
     print()

@@ -93,10 +93,21 @@ def _lagrange(c: np.ndarray, tau: np.ndarray):
     return B, D
 
 
+_SNAPPED: dict = {}
+
+
 def _snap(values: np.ndarray, max_den: int = 1000):
     """``(numerators, denominator)`` if every value is a rational with a small common denominator (to
     rounding), else ``None``: the schemes with rational coefficients (midpoint, trapezoid, galerkin4)
-    are then written with exact integer coefficients, the expressions they always had."""
+    are then written with exact integer coefficients, the expressions they always had.  Remembered per
+    row of values (every system's discretisation asks for the same few rows)."""
+    key = (tuple(float(v) for v in np.ravel(values)), np.shape(values), max_den)
+    if key not in _SNAPPED:
+        _SNAPPED[key] = _snap_uncached(values, max_den)
+    return _SNAPPED[key]
+
+
+def _snap_uncached(values, max_den):
     fr = [Fraction(float(v)).limit_denominator(max_den) for v in np.ravel(values)]
     if any(abs(float(f) - float(v)) > 1e-13 * max(1.0, abs(float(v))) for f, v in zip(fr, np.ravel(values))):
         return None

@@ -148,6 +148,18 @@ def compiled(fn: ca.Function, build: bool = True) -> ca.Function:
         if _by_form.get(form) in _loaded:
             stats["memory_hits"] += 1
             return _loaded[_by_form[form]]
+        folder = cache_dir() / "jit"
+        # across processes, the serialised form names its library too (an index file beside it), so a
+        # function compiled before is loaded without generating its C code again (3-10 ms per kernel of
+        # a new system: every simulate() builds its system afresh)
+        indexed = _indexed(folder, form, cc)
+        if indexed is not None:
+            key, lib = indexed
+            out = _load(fn, lib)
+            stats["cache_hits"] += 1
+            _loaded[key] = out
+            _by_form[form] = key
+            return out
         code = c_code(fn)
         if len(code) > MAX_CODE_CHARS:
             _too_large[id(fn)] = fn          # (the reference keeps the id valid)
@@ -160,7 +172,6 @@ def compiled(fn: ca.Function, build: bool = True) -> ca.Function:
             return _loaded[key]
         if key in _failed:
             return fn
-        folder = cache_dir() / "jit"
         lib = folder / f"{fn.name()}_{key}.so"
         if lib.exists():
             stats["cache_hits"] += 1
@@ -171,15 +182,10 @@ def compiled(fn: ca.Function, build: bool = True) -> ca.Function:
             _build(code, cc, folder, lib)
             stats["compiled"] += 1
             _prune(folder)
-        try:
-            out = ca.external(fn.name(), str(lib))
-            if out.n_in() != fn.n_in() or out.n_out() != fn.n_out():
-                raise RuntimeError("compiled function has another signature")
-        except Exception:
-            lib.unlink(missing_ok=True)  # a damaged library: the next run compiles it again
-            raise
+        out = _load(fn, lib)
         _loaded[key] = out
         _by_form[form] = key
+        _index(folder, form, cc, lib)
         return out
     except Exception as exc:  # no compiler, failed compile, unwritable cache, failed load: use the VM
         interrupt.reraise(exc)          # ... but an interrupt inside CasADi's code generation stops
@@ -187,6 +193,47 @@ def compiled(fn: ca.Function, build: bool = True) -> ca.Function:
         if "key" in locals():
             _failed.add(key)
         return fn
+
+
+def _load(fn: ca.Function, lib: Path) -> ca.Function:
+    try:
+        out = ca.external(fn.name(), str(lib))
+        if out.n_in() != fn.n_in() or out.n_out() != fn.n_out():
+            raise RuntimeError("compiled function has another signature")
+    except Exception:
+        lib.unlink(missing_ok=True)  # a damaged library: the next run compiles it again
+        raise
+    return out
+
+
+def _index_path(folder: Path, form: str, cc: str) -> Path:
+    """The index file of a serialised form (with the compiler and flags, as the library's own key)."""
+    h = hashlib.sha256("\0".join([form, cc, *FLAGS]).encode()).hexdigest()[:24]
+    return folder / f"form_{h}.txt"
+
+
+def _indexed(folder: Path, form: str, cc: str):
+    """``(key, library)`` of a form compiled before, if its index file names a library that exists."""
+    try:
+        name = _index_path(folder, form, cc).read_text().strip()
+    except OSError:
+        return None
+    lib = folder / name
+    if not name.endswith(".so") or "/" in name or not lib.exists():
+        return None
+    _touch(lib)
+    return name[:-3].rsplit("_", 1)[-1], lib
+
+
+def _index(folder: Path, form: str, cc: str, lib: Path) -> None:
+    """Record ``form -> library`` (written atomically; a failure only costs the next process a lookup)."""
+    try:
+        fd, tmp = tempfile.mkstemp(dir=folder, prefix=".form.")
+        with os.fdopen(fd, "w") as fh:
+            fh.write(lib.name)
+        os.replace(tmp, _index_path(folder, form, cc))
+    except OSError:
+        pass
 
 
 def warm_up(run, active: bool = True):
@@ -218,6 +265,9 @@ def _prune(folder: Path) -> None:
     try:
         libs = sorted(folder.glob("*.so"), key=lambda q: q.stat().st_mtime)
         for old in libs[:max(0, len(libs) - MAX_ENTRIES)]:
+            old.unlink()
+        forms = sorted(folder.glob("form_*.txt"), key=lambda q: q.stat().st_mtime)  # (an index file is tiny)
+        for old in forms[:max(0, len(forms) - 4 * MAX_ENTRIES)]:
             old.unlink()
     except OSError:
         pass

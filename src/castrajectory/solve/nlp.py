@@ -28,6 +28,7 @@ that warm-starts each step from the last (see :meth:`NLP.solve`).
 """
 from __future__ import annotations
 
+import hashlib
 import time
 from dataclasses import dataclass
 from typing import Dict, List, Optional, Sequence
@@ -68,6 +69,10 @@ JIT = True
 #: smaller families use a compiled version only when one is cached already.  Below this size
 #: the virtual machine costs less than a compilation.
 JIT_MIN_ELEMENTS = 1000
+#: ... or whose evaluation over the family costs at least this many virtual-machine instructions
+#: (elements x instructions of the kernel): the heavy elements of a high-order scheme on few steps
+#: (galerkin10's stage Jacobian on 200 steps) compile too.
+JIT_MIN_WORK = 1_000_000
 
 
 #: Elements per compiled chunk: a family of E elements runs E // CHUNK calls of one compiled loop
@@ -91,19 +96,23 @@ class _Mapped:
         self.fn = fn
         self.compile_ = compile_
         self.el = self.chunk = None  # compiled versions, once available
-        self.looked_up = False  # the disk cache was searched (for the element and the chunk)
+        # the disk cache was searched for the element / the chunk: a miss is not searched again (generating
+        # the C code to look it up cost 28 ms per level build for galerkin10's kernels)
+        self.el_looked = self.chunk_looked = False
+        self.work = fn.n_instructions() if fn.is_a("SXFunction") else 0
         self.maps: Dict[tuple, ca.Function] = {}
 
     def _compiled(self, E: int) -> None:
-        build = E >= JIT_MIN_ELEMENTS
-        if self.el is None and (build or not self.looked_up):
+        build = E >= JIT_MIN_ELEMENTS or E * self.work >= JIT_MIN_WORK
+        if self.el is None and (build or not self.el_looked):
             el = jit.compiled(self.fn, build)
             self.el = el if el is not self.fn else None
-        if self.el is not None and self.chunk is None and E >= CHUNK_MIN_ELEMENTS and (build or not self.looked_up):
+            self.el_looked = True
+        if self.el is not None and self.chunk is None and E >= CHUNK_MIN_ELEMENTS and (build or not self.chunk_looked):
             m = self.fn.map(CHUNK, "serial")
             c = jit.compiled(m, build)
             self.chunk = c if c is not m else None
-        self.looked_up = self.looked_up or E >= CHUNK_MIN_ELEMENTS
+            self.chunk_looked = True
 
     def _map(self, f, E):
         if E <= 1:
@@ -160,6 +169,15 @@ def _kernels(fn: ca.Function, kinds: tuple, hessian: bool, compile_: bool) -> _K
     hit = _KERNELS.get(key)
     if hit is not None and hit.fn is fn:
         return hit
+    # the same element of another system object (every simulate() builds its system afresh): found by its
+    # serialised form, so its derivatives are not formed, nor its compiled code looked up, again
+    # (galerkin10 on the double pendulum: 0.049 -> s per build)
+    form = (hashlib.sha256(fn.serialize().encode()).hexdigest(), kinds, hessian, compile_, CHUNK) \
+        if fn.is_a("SXFunction") else None
+    hit = _KERNELS.get(form) if form is not None else None
+    if hit is not None:
+        _KERNELS[key] = _Kernels(fn, hit.keep, hit.value, hit.jac, hit.jac_rc, hit.hess, hit.hess_rc)
+        return _KERNELS[key]
     syms = [ca.SX.sym(f"a{i}", fn.size1_in(i) * fn.size2_in(i)) for i in range(fn.n_in())]
     out = ca.vec(fn(*[ca.reshape(s, fn.size1_in(i), fn.size2_in(i)) for i, s in enumerate(syms)]))
     # Empty arguments (e.g. no stage variables) are dropped: every kernel argument costs O(E) when
@@ -179,6 +197,8 @@ def _kernels(fn: ca.Function, kinds: tuple, hessian: bool, compile_: bool) -> _K
     if len(_KERNELS) >= _KERNELS_MAX:
         _KERNELS.clear()
     _KERNELS[key] = kern
+    if form is not None:
+        _KERNELS[form] = kern
     return kern
 
 
