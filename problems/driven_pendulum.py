@@ -12,8 +12,6 @@ period (a long run, e.g. ``--T 3000 --n 60000``, draws the strange attractor).
 import math
 import sys
 
-import numpy as np
-
 from castrajectory import cli
 from castrajectory.inspect import plotting
 from castrajectory.models import pendulum

@@ -34,26 +34,11 @@ from ..inspect.files import write_atomically
 from ..solve import budget
 from ..result import Result
 from ..validation import InputError
+from .registry import scene_modules
 
-#: Scene name -> module (the files in problems/, installed as castrajectory.problems).
-SCENES = {
-    "droplet": "castrajectory.problems.droplet",
-    "droplet_angle": "castrajectory.problems.droplet_angle",
-    "double_pendulum": "castrajectory.problems.double_pendulum",
-    "n_link_pendulum": "castrajectory.problems.n_link_pendulum",
-    "stiff_spring_pendulum": "castrajectory.problems.stiff_spring_pendulum",
-    "thrown_ball": "castrajectory.problems.thrown_ball",
-    "collision_impulse": "castrajectory.problems.collision_impulse",
-    "bouncing_ball": "castrajectory.problems.bouncing_ball",
-    "rectangle_drop": "castrajectory.problems.rectangle_drop",
-    "bowl": "castrajectory.problems.bowl",
-    "bowl3d": "castrajectory.problems.bowl3d",
-    "dzhanibekov": "castrajectory.problems.dzhanibekov",
-    "heavy_top": "castrajectory.problems.heavy_top",
-    "damped_oscillator": "castrajectory.problems.damped_oscillator",
-    "driven_pendulum": "castrajectory.problems.driven_pendulum",
-    "kapitza_pendulum": "castrajectory.problems.kapitza_pendulum",
-}
+#: Scene name -> module (the files in problems/, installed as castrajectory.problems): read from the
+#: scene registry (:mod:`castrajectory.cli.registry`), where each scene is registered once.
+SCENES = scene_modules()
 
 
 class ArgumentParser(argparse.ArgumentParser):

@@ -287,7 +287,7 @@ def _flow_step(dm: DiscreteMechanics, compile_: bool) -> ca.Function:
     hit = _FLOWS.get(key)
     if hit is not None and hit[0] is dm and (hit[2] or not compile_):  # the same object, not a reused id
         return hit[1]
-    n, st = dm.n, dm.scheme.stages
+    n = dm.n
     acc, lamf = dm.system.acceleration, dm.system.multiplier
     x, hs, ts = ca.SX.sym("x", 2 * n), ca.SX.sym("h"), ca.SX.sym("t0")
     if dm.timed:
