@@ -133,6 +133,16 @@ def test_a_system_file_that_lives_only_in_the_tests(tmp_path):
     ("import casadi as ca, castrajectory as ct\ndef system():\n    x = ca.SX.sym('x', 2)\n"
      "    return ct.LagrangianSystem(x, ct.MassMatrix(ca.DM.eye(2)), constraints=[(ca.dot(x, x) - 1) / 2])\n"
      "q0 = [2.0, 0.0]\nqd0 = [0.0, 0.0]\n", "violate the holonomic constraints"),
+    # forces and time (#22): a stray symbol is named, a force of the wrong length, a negative damping
+    ("import casadi as ca, castrajectory as ct\ndef system():\n    x = ca.SX.sym('x', 1)\n    k = ca.SX.sym('k')\n"
+     "    return ct.LagrangianSystem(x, ct.MassMatrix(1.0), [ct.Potential(k * x[0] ** 2)])\nq0 = [1.0]\nqd0 = [0.0]\n",
+     "depends on the symbol k"),
+    ("import casadi as ca, castrajectory as ct\ndef system():\n    x = ca.SX.sym('x', 1)\n"
+     "    return ct.LagrangianSystem(x, ct.MassMatrix(1.0), [ct.Force(ca.vertcat(1, ct.time()))])\n"
+     "q0 = [1.0]\nqd0 = [0.0]\n", "has 2 entries; it needs one per coordinate"),
+    ("import casadi as ca, castrajectory as ct\ndef system():\n    x = ca.SX.sym('x', 1)\n"
+     "    return ct.LagrangianSystem(x, ct.MassMatrix(1.0), [ct.Damping(-0.5)])\nq0 = [1.0]\nqd0 = [0.0]\n",
+     "damping must not be negative"),
 ])
 def test_bad_system_files_are_refused(tmp_path, text, needle):
     f = tmp_path / "user.py"

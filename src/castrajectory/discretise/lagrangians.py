@@ -108,9 +108,7 @@ class DiscreteMechanics:
         # the discrete forces on the step's start and end (zero without force terms), for inspection
         self.f_minus = ca.Function("f_minus", [a, Z, b, h] + tin, [ca.SX.zeros(n) if fm is None else fm])
         self.f_plus = ca.Function("f_plus", [a, Z, b, h] + tin, [ca.SX.zeros(n) if fp is None else fp])
-        pw = system.power
-        work = S.step_integral(lambda q, v, t: ca.vertcat(*pw(q, v, 0 if t is None else t)), X, h, t0)
-        self._work = ca.Function("work", [a, Z, b, h, t0], [work])
+        self._work_parts = (X, a, Z, b, h, t0)   # the work's quadrature is formed when first asked for
 
         cfun = system.constraint if self.m else None
 
@@ -210,5 +208,10 @@ class DiscreteMechanics:
         the change of the energy function."""
         N = q.shape[0] - 1
         tk = self.node_times(N, h, t0)
+        if not hasattr(self, "_work"):
+            X, a, Zs, b, hs, ts = self._work_parts
+            pw = self.system.power
+            work = self.scheme.step_integral(lambda qq, v, t: ca.vertcat(*pw(qq, v, t)), X, hs, ts)
+            self._work = ca.Function("work", [a, Zs, b, hs, ts], [work])
         w = np.asarray(self._work.map(N)(q[:-1].T, Z.T, q[1:].T, h, tk[None, :-1])).T
         return np.vstack([np.zeros((1, 2)), np.cumsum(w, axis=0)])

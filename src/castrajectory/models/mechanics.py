@@ -495,23 +495,27 @@ class LagrangianSystem:
 
     # -- symbolic pieces (expressions in self.q, self.qd)
     def kinetic_expr(self):
-        return self.kinetic.energy(self.q, self.qd)
+        return self._get("K_expr", lambda: self.kinetic.energy(self.q, self.qd))
 
     def potential_expr(self):
-        U = ca.SX(0)
-        for term in self.potential_terms:
-            U += term.energy(self)
-        return U
+        def build():
+            U = ca.SX(0)
+            for term in self.potential_terms:
+                U += term.energy(self)
+            return U
+        return self._get("U_expr", build)
 
     def force_expr(self):
         """The sum of the non-conservative forces ``Q(q, q̇, t)`` (zeros without force terms)."""
-        Q = ca.SX.zeros(self.nq)
-        for term in self.force_terms:
-            Q += term.force(self)
-        return Q
+        def build():
+            Q = ca.SX.zeros(self.nq)
+            for term in self.force_terms:
+                Q += term.force(self)
+            return Q
+        return self._get("Q_expr", build)
 
     def lagrangian_expr(self):
-        return self.kinetic_expr() - self.potential_expr()
+        return self._get("L_expr", lambda: self.kinetic_expr() - self.potential_expr())
 
     def constraint_expr(self):
         return ca.vertcat(*[ca.vec(c) for c in self.constraints]) if self.constraints else ca.SX(0, 1)
