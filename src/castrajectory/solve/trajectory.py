@@ -38,7 +38,7 @@ from typing import Dict, List, Optional
 import casadi as ca
 import numpy as np
 
-from ..discretise.lagrangians import DiscreteMechanics, rk4_step
+from ..discretise.lagrangians import DiscreteMechanics, discrete_mechanics, rk4_step
 from ..discretise.trajectory import TrajectoryTranscription
 from . import estimate, jit
 from ..models.mechanics import LagrangianSystem
@@ -283,9 +283,10 @@ def _flow_step(dm: DiscreteMechanics, compile_: bool) -> ca.Function:
     (:mod:`~castrajectory.solve.jit`), once per system and scheme (``h`` and ``t₀`` are inputs, so every
     level and window shares it); otherwise a compiled version is used only if one is cached (as for
     the NLP's element families)."""
-    key = (id(dm), "step")
+    # keyed by the discrete functions (shared by the systems of the same Lagrangian: discrete_mechanics)
+    key = (id(dm.del_residual), "step")
     hit = _FLOWS.get(key)
-    if hit is not None and hit[0] is dm and (hit[2] or not compile_):  # the same object, not a reused id
+    if hit is not None and hit[0] is dm.del_residual and (hit[2] or not compile_):  # not a reused id
         return hit[1]
     n = dm.n
     acc, lamf = dm.system.acceleration, dm.system.multiplier
@@ -316,7 +317,7 @@ def _flow_step(dm: DiscreteMechanics, compile_: bool) -> ca.Function:
     fast = jit.compiled(step, True) if (_nlp.JIT and compile_) else step
     if len(_FLOWS) > 64:
         _FLOWS.clear()
-    _FLOWS[key] = (dm, fast, fast is not step)
+    _FLOWS[key] = (dm.del_residual, fast, fast is not step)
     return fast
 
 
@@ -635,7 +636,7 @@ def solve_initial_value(system: LagrangianSystem, q0, qd0, T: float, N: int, sch
         ct = np.asarray(system.constraint_rate(q0, 0.0)).reshape(-1)
         if np.max(np.abs(np.asarray(c))) > 1e-9 or np.max(np.abs(np.asarray(C) @ qd0 + ct)) > 1e-9:
             raise InputError("the initial state violates the holonomic constraints (position or velocity level)")
-    dm = DiscreteMechanics(system, scheme)
+    dm = discrete_mechanics(system, scheme)
     p0 = np.asarray(system.momentum(q0, qd0, 0.0)).reshape(-1)
     log: List[Level] = []
     solved: List[tuple] = []  # (TrajectoryNLP, values) of the converged levels, finest last
@@ -797,7 +798,7 @@ def solve_boundary(system: LagrangianSystem, q0, qT, T: float, N: int, scheme: s
         raise InputError("the two-point boundary mode does not handle contact; use the initial-value mode")
     q0 = _check_state("q0", q0, system.nq)
     qT = _check_state("qT", qT, system.nq)
-    dm = DiscreteMechanics(system, scheme)
+    dm = discrete_mechanics(system, scheme)
     log: List[Level] = []
     prev, values = None, None
     solved: List[tuple] = []
