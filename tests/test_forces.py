@@ -121,6 +121,8 @@ def test_moving_constraint_is_the_moving_atom():
     # the constraint holds at every node to solver tolerance
     dd = rc.q - np.stack([np.zeros_like(rc.t), a * np.cos(w * rc.t)], axis=1)
     assert np.max(np.abs(np.sum(dd ** 2, axis=1) - l * l)) < 1e-11
+    # the moving constraint's reaction does work the balance does not count: said, not hidden
+    assert any("constraint moves" in w for w in rc.warnings) and not any("constraint moves" in w for w in ra.warnings)
 
 
 def test_the_derivation_prints_the_forced_time_dependent_equations():

@@ -455,6 +455,11 @@ class LagrangianSystem:
         return self._get("time_dependent", key)
 
     @property
+    def moving_constraints(self) -> bool:
+        """Does a holonomic constraint hold the time (its reaction then does work)?"""
+        return bool(self.nc) and bool(ca.depends_on(self.constraint_expr(), self.t))
+
+    @property
     def forced(self) -> bool:
         """Does the system hold non-conservative forces?"""
         return bool(self.force_terms)
