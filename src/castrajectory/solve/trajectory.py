@@ -177,7 +177,10 @@ class TrajectoryNLP(TrajectoryTranscription):
             opts["obj_scaling_factor"] = min(1.0, 100.0 * self.h ** 2 / (m_ref * size))
         opts.update(options or {})
         init = {k: v for k, v in guess.items() if k in self.nlp.variable_names}
+        before = self.nlp._solver
         res = self.nlp.solve(init=init, options=opts, verbose=verbose, bounds=self.fixed_bounds())
+        if before is not None and self.nlp._solver is before:
+            res.build_time_s = 0.0  # nothing was built for this solve (a reused NLP: _trajectory_nlp)
         stats = self.nlp.last_stats  # of the solver just used
         self.function_time_s = float(sum(v for k, v in stats.items() if k.startswith("t_wall_nlp_")))
         return res
