@@ -557,12 +557,18 @@ class LagrangianSystem:
 
     @property
     def power(self) -> ca.Function:
-        """``(q, q̇, t) ↦ (Q·q̇, −∂L/∂t)``: the power of the forces and of the time dependence, whose
-        integral is the change of the energy function (:meth:`energy_expr`)."""
+        """``(q, q̇, t) ↦ (Q·q̇, −∂L/∂t + λ·∂c/∂t)``: the power of the forces and of the time dependence,
+        whose integral is the change of the energy function (:meth:`energy_expr`).  The second part holds
+        the power of a moving constraint's reaction, ``−λ·C q̇ = λ·∂c/∂t`` with the multipliers of the
+        index-1 equations (:attr:`multiplier`), when a constraint holds the time."""
         def build():
             L = self.lagrangian_expr()
+            timed = -ca.jacobian(L, self.t)
+            if self.moving_constraints:
+                lam = self._index1_exprs()[1]
+                timed = timed + ca.dot(lam, ca.jacobian(self.constraint_expr(), self.t))
             return self._timed(ca.Function("power", [self.q, self.qd, self.t],
-                                           [ca.dot(self.force_expr(), self.qd), -ca.jacobian(L, self.t)]))
+                                           [ca.dot(self.force_expr(), self.qd), timed]))
         return self._get("power", build)
 
     @property
@@ -627,29 +633,34 @@ class LagrangianSystem:
         same sign and scale as the discrete multipliers of the trajectory NLP.  Empty without constraints."""
         return self._get("index1", self._index1)[1]
 
+    def _index1_exprs(self):
+        """The index-1 system's ``(q̈, λ)`` as expressions of ``(q, q̇, t)``."""
+        def build():
+            L = self.lagrangian_expr()
+            dLdqd = ca.gradient(L, self.qd)
+            M = ca.hessian(L, self.qd)[0]
+            f = ca.gradient(L, self.q) - ca.mtimes(ca.jacobian(dLdqd, self.q), self.qd)
+            if self.time_dependent:
+                f = f - ca.jacobian(dLdqd, self.t)
+            if self.force_terms:
+                f = f + self.force_expr()
+            if self.nc:
+                c = self.constraint_expr()
+                C = ca.jacobian(c, self.q)
+                cdot = ca.mtimes(C, self.qd)
+                if ca.depends_on(c, self.t):
+                    cdot = cdot + ca.jacobian(c, self.t)
+                gamma = -ca.mtimes(ca.jacobian(cdot, self.q), self.qd)
+                if ca.depends_on(cdot, self.t):
+                    gamma = gamma - ca.jacobian(cdot, self.t)
+                K = ca.blockcat([[M, C.T], [C, ca.SX(self.nc, self.nc)]])
+                sol = ca.solve(K, ca.vertcat(f, gamma))
+                return sol[:self.nq], sol[self.nq:]
+            return ca.solve(M, f), ca.SX(0, 1)
+        return self._get("index1_expr", build)
+
     def _index1(self):
-        L = self.lagrangian_expr()
-        dLdqd = ca.gradient(L, self.qd)
-        M = ca.hessian(L, self.qd)[0]
-        f = ca.gradient(L, self.q) - ca.mtimes(ca.jacobian(dLdqd, self.q), self.qd)
-        if self.time_dependent:
-            f = f - ca.jacobian(dLdqd, self.t)
-        if self.force_terms:
-            f = f + self.force_expr()
-        if self.nc:
-            c = self.constraint_expr()
-            C = ca.jacobian(c, self.q)
-            cdot = ca.mtimes(C, self.qd)
-            if ca.depends_on(c, self.t):
-                cdot = cdot + ca.jacobian(c, self.t)
-            gamma = -ca.mtimes(ca.jacobian(cdot, self.q), self.qd)
-            if ca.depends_on(cdot, self.t):
-                gamma = gamma - ca.jacobian(cdot, self.t)
-            K = ca.blockcat([[M, C.T], [C, ca.SX(self.nc, self.nc)]])
-            sol = ca.solve(K, ca.vertcat(f, gamma))
-            qdd, lam = sol[:self.nq], sol[self.nq:]
-        else:
-            qdd, lam = ca.solve(M, f), ca.SX(0, 1)
+        qdd, lam = self._index1_exprs()
         return (self._timed(ca.Function("qdd", [self.q, self.qd, self.t], [qdd])),
                 self._timed(ca.Function("lam", [self.q, self.qd, self.t], [lam])))
 

@@ -72,9 +72,6 @@ def simulate(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str = 
         run = _baseline(system, q0, qd0, T, N, scheme, method, rtol, n_max)
     if run.success and system.contact is None:
         run.warnings += resolution_warnings(system, q0, run.t[-1] / (len(run.t) - 1))
-    if run.success and system.moving_constraints:
-        run.warnings.append("a constraint moves with time: its reaction does work that the energy balance "
-                            "E - E(0) - W does not count (W holds the forces and the Lagrangian's time dependence)")
     return run
 
 
