@@ -194,8 +194,9 @@ class TrajectoryNLP(TrajectoryTranscription):
         return self.nlp.check(init, tol, bounds=self.fixed_bounds())
 
 
-#: Whole-trajectory NLPs kept for reuse, and the largest kept (unknowns); see :func:`_trajectory_nlp`.
-NLP_CACHE_ENTRIES, NLP_CACHE_MAX_UNKNOWNS = 8, 200_000
+#: Whole-trajectory NLPs kept for reuse, and the largest kept (unknowns: at about 2 kB each, see
+#: BYTES_PER_UNKNOWN, the cache holds at most some 300 MB); see :func:`_trajectory_nlp`.
+NLP_CACHE_ENTRIES, NLP_CACHE_MAX_UNKNOWNS = 8, 20_000
 _NLPS: "Dict[tuple, TrajectoryNLP]" = {}
 
 
