@@ -160,6 +160,10 @@ def compiled(fn: ca.Function, build: bool = True) -> ca.Function:
             _loaded[key] = out
             _by_form[form] = key
             return out
+        if not build:
+            # not compiled before (no index names it) and not to be compiled now: the virtual machine, without
+            # generating the C code only to look for a library that is not there
+            return fn
         code = c_code(fn)
         if len(code) > MAX_CODE_CHARS:
             _too_large[id(fn)] = fn          # (the reference keeps the id valid)

@@ -343,9 +343,9 @@ def _flow_step(dm: DiscreteMechanics, compile_: bool) -> ca.Function:
     empty = ca.SX(0, 1)
     step = ca.Function("guess_step", [x, hs, ts], [y, ca.vertcat(*stage) if stage else empty, lam_at(x, ts),
                                                    ca.vertcat(*stage_lam) if stage_lam else empty])
-    # a short flow runs in the virtual machine: looking a compiled one up would generate its C code first
-    # (10 ms for galerkin10's guess step, more than its evaluation on a few hundred steps)
-    fast = jit.compiled(step, True) if (_nlp.JIT and compile_) else step
+    # a short flow uses a compiled step only if one was compiled before (found by its serialised form,
+    # without generating its C code: jit's index); a long one compiles it
+    fast = jit.compiled(step, compile_) if _nlp.JIT else step
     if len(_FLOWS) > 64:
         _FLOWS.clear()
     _FLOWS[key] = (dm.del_residual, fast, fast is not step)
