@@ -107,9 +107,6 @@ class DiscreteMechanics:
         self.D2 = ca.Function("D2", [a, Z, b, h] + tin, [D2])
         self.p_plus = ca.Function("p_plus", [a, Z, b, h] + tin, [-D1 if fm is None else -D1 - fm])
         self.p_minus = ca.Function("p_minus", [a, Z, b, h] + tin, [D2 if fp is None else D2 + fp])
-        # the discrete forces on the step's start and end (zero without force terms), for inspection
-        self.f_minus = ca.Function("f_minus", [a, Z, b, h] + tin, [ca.SX.zeros(n) if fm is None else fm])
-        self.f_plus = ca.Function("f_plus", [a, Z, b, h] + tin, [ca.SX.zeros(n) if fp is None else fp])
         self._work_parts = (X, a, Z, b, h, t0)   # the work's quadrature is formed when first asked for
 
         cfun = system.constraint if self.m else None

@@ -283,11 +283,6 @@ class Scheme:
         return (r"L_d(q_k, Z_k, q_{k+1}) = h \sum_{i} w_i\, L\big(q(\tau_i), \dot q(\tau_i), t_k + \tau_i h\big),\ "
                 rf"q(\tau) \text{{ of degree {self.degree} through }} q_k, Z_k, q_{{k+1}} \text{{ at }} \tau = {nodes}")
 
-    def describe(self) -> str:
-        """One line: the polynomial, the quadrature and the order."""
-        return (f"{self.name}: order {self.order}; polynomial of degree {self.degree} per step "
-                f"({self.stages} stage{'s' if self.stages != 1 else ''}), {self.family}")
-
 
 def _interpolatory_weights(c: np.ndarray) -> np.ndarray:
     """Weights of the interpolatory quadrature on the points ``c`` of ``[0, 1]`` (Lobatto weights for
