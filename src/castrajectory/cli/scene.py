@@ -148,7 +148,8 @@ def trajectory_outcome(title: str, system, run, extra: Optional[dict] = None,
     names = list(system.names)
     final = ", ".join(f"{nm} = {v:.6g}" for nm, v in zip(names, run.q[-1]))
     how = f"method {run.method}" + (f", scheme {run.scheme}" if run.scheme else "")
-    work = run.as_dict().get("work")
+    from ..solve.trajectory import work_of
+    work = work_of(run)
     balance = work is not None and (system.forced or system.time_dependent)
     if balance:
         # forces or time dependence: the energy is not conserved, its balance is
