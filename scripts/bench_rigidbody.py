@@ -61,6 +61,9 @@ def lagrangian_run(system, T, n, scheme, method):
             "iterations": run.iterations, "error": r["flip_interval_error"], "flips": r["flip_times"].size,
             "L_drift": r["angular_momentum_norm_drift"],
             "final_level_s": sum(lv.build_time_s + lv.solve_time_s for lv in final),
+            # the floor of one run at this N: the level's build and one Newton iteration of it
+            "one_iteration_s": min(((lv.build_time_s + lv.solve_time_s / lv.iterations)
+                                    for lv in final if lv.horizon == n and lv.iterations > 0), default=math.nan),
             "final_level_solves": len(final),
             "attempts": sum(1 for lv in levels if lv.horizon == lv.n and lv.iterations > 0 and lv.purpose == "solve"),
             "windows": sum(1 for lv in levels if lv.horizon < lv.n and lv.purpose == "solve"),
@@ -238,6 +241,11 @@ def main(argv=None):
                   + ("; the flip is unstable (the rates grow exponentially near the intermediate axis): the "
                      "integrated guess parts from the discrete motion and the windows solve it piece by piece"
                      if first["windows"] else ""))
+            c = first["one_iteration_s"]
+            if math.isfinite(c):
+                print(f"        ceiling: the level at N = {first['n']:.0f} alone with one Newton iteration (its build and "
+                      f"one iteration) costs {c:.4f} s = {c / dop6:.1f}x DOP853 ({dop6:.4f} s); an answer also solves "
+                      f"its estimate's grid N/2")
     if math.isfinite(dop) and math.isfinite(tw):
         ok = tw <= 5 * dop and drift_whole <= 1e-12
         print(f"  {'PASS' if ok else 'MISS'}  (b) fastest whole ({best}) within 5x DOP853 at 1e-9: "

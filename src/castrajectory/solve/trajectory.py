@@ -44,7 +44,7 @@ from . import estimate
 from ..models.mechanics import LagrangianSystem
 from ..result import NLPResult, Result
 from .guesses import (EXTRAPOLATION_POINTS, GUESS_H_OMEGA, GUESS_SUBSTEPS, _extrapolate,  # noqa: F401
-                      _flow_guess, _initial_guess, _refine)  # (EXTRAPOLATION_POINTS: the tests read it here)
+                      _flow_guess, _initial_guess, _integrated, _refine)  # (EXTRAPOLATION_POINTS: the tests read it here)
 from .nlp import NLP
 from ..validation import InputError, integer_at_least, positive
 
@@ -266,6 +266,17 @@ def _levels(N: int, coarsest: int) -> List[int]:
 #: Iteration budget of a whole-trajectory attempt from an interpolated guess before the
 #: horizon continuation takes over (a good guess converges in 0-6 Newton iterations).
 FIRST_ATTEMPT_MAX_ITER = 10
+#: A motion that amplifies errors (see solve_initial_value) goes to N.  There a scheme of at least this
+#: order attempts the whole trajectory from the integrated motion, within SENSITIVE_FIRST_MAX_ITER
+#: iterations; a lower order goes straight to the horizon windows.  The attempt converges when the
+#: scheme's discrete motion at N is about as close to the motion as the guess (GUESS_TOL).  Measured
+#: on the Dzhanibekov flip (T = 100): galerkin4 N = 4000 1 iteration (0.76 s in all, against 19
+#: iterations and 0.87 s through windows), galerkin8 N = 300 2 (0.37 s, against 0.82 s).  Midpoint
+#: and trapezoid are 5e-3 s off in the flip interval at N = 4000: their attempt fails (3 iterations,
+#: 0.24 s lost at N = 4000, 1.2 s at N = 16000).
+SENSITIVE_WHOLE_MIN_ORDER = 4
+#: The whole attempt's iteration budget there: a converging one takes 1-2 iterations.
+SENSITIVE_FIRST_MAX_ITER = 3
 #: A level that converged from an *extrapolated* guess (:func:`_extrapolate`) in at most this
 #: many Newton iterations is in the asymptotic regime: the next level is the requested N itself
 #: (measured, double pendulum T = 5 s, N = 32000: midpoint 1000 -> 32000, galerkin4
@@ -283,16 +294,20 @@ WINDOW_MAX_ITER = 10
 
 def _solve_level(tn: TrajectoryNLP, guess, options, verbose, log: List[Level], allow_windows: bool,
                  final: bool = True, omega: float = math.inf, windows_first: bool = False,
-                 windows_after_failure: bool = True):
+                 windows_after_failure: bool = True, first_max_iter: int = None,
+                 guess_substeps: Optional[int] = None):
     """Solve one level: a whole attempt from ``guess``, then horizon windows if it fails
     (``windows_first``: straight to the windows, when the levels before showed that a whole
     attempt from a level guess does not converge; ``windows_after_failure = False``: return the
-    failed attempt instead, for the caller to go to N)."""
+    failed attempt instead, for the caller to go to N; ``first_max_iter``: the whole attempt's
+    iteration budget, :data:`FIRST_ATTEMPT_MAX_ITER` by default; ``guess_substeps``: the RK4 substeps
+    the level's integrated guess took, for the windows' own integrated guesses: the same motion on
+    the same step; measured again without it)."""
     first = dict(options or {})
     window_opts = dict(first)
     if allow_windows:
         cap = int(first.get("max_iter", TRAJECTORY_IPOPT["max_iter"]))
-        first["max_iter"] = min(cap, FIRST_ATTEMPT_MAX_ITER)
+        first["max_iter"] = min(cap, FIRST_ATTEMPT_MAX_ITER if first_max_iter is None else first_max_iter)
         window_opts["max_iter"] = min(cap, WINDOW_MAX_ITER)
     if not (windows_first and allow_windows):
         res = tn.solve(guess, options=first, verbose=verbose)
@@ -330,7 +345,7 @@ def _solve_level(tn: TrajectoryNLP, guess, options, verbose, log: List[Level], a
         wg = None
         if h * omega <= GUESS_SUBSTEPS * GUESS_H_OMEGA:  # the motion from the window's start state
             vK = dm.velocities(Qc[K][None, :], pK[None, :], tK)[0]
-            wg = _flow_guess(dm, Qc[K], vK, h, L, tK)
+            wg = _flow_guess(dm, Qc[K], vK, h, L, tK, guess_substeps)
         if wg is None:  # the level's guess, shifted to the window's start
             shift = Qc[K] - np.asarray(guess["q"]).reshape(N + 1, n)[K]
             wg = {"q": (np.asarray(guess["q"]).reshape(N + 1, n)[K:K + L + 1] + shift).reshape(-1)}
@@ -495,14 +510,29 @@ def solve_initial_value(system: LagrangianSystem, q0, qd0, T: float, N: int, sch
     windowed: List[bool] = []  # per level solved: did it need horizon windows?
     flow_first = False
     flow_failed = False  # a level that started from the integrated motion did not converge
+    first_cap = None  # the whole attempts' iteration budget (_solve_level's default)
     i = 0
     while i < len(levels):
         tn = _trajectory_nlp(dm, levels[i], T, "initial_value", q0, p0)
+        level_substeps = None  # the substeps of this level's integrated guess, if it has one
         if not solved:
             guess = None
             if tn.h * omega <= GUESS_SUBSTEPS * GUESS_H_OMEGA:
-                guess = _flow_guess(dm, q0, qd0, tn.h, tn.N)
+                guess, substeps = _integrated(dm, q0, qd0, tn.h, tn.N)
+                if guess is not None and substeps > GUESS_SUBSTEPS and i < len(levels) - 1:
+                    # The integrated motion needed more substeps than a smooth one to agree with itself:
+                    # the motion amplifies errors (an unstable flip, chaos), and so the coarse levels'
+                    # discrete motions part from the finer ones' -- each level's guess would fail and
+                    # need windows.  Go to N, from the integrated motion (measured: the Dzhanibekov
+                    # flip, T = 100, galerkin4, N = 4000: 59 iterations and 2.3 s through the ladder,
+                    # whose 32-substep guess at N = 125 converged; 3 iterations at N).
+                    i = len(levels) - 1
+                    tn = _trajectory_nlp(dm, levels[i], T, "initial_value", q0, p0)
+                    guess, substeps = _integrated(dm, q0, qd0, tn.h, tn.N)
+                    first_cap = SENSITIVE_FIRST_MAX_ITER
+                    flow_failed = dm.scheme.order < SENSITIVE_WHOLE_MIN_ORDER  # straight to the windows
             flow_first = guess is not None
+            level_substeps = substeps if flow_first else None
             guess = guess or _initial_guess(tn, qd0)
         elif len(solved) == 1:
             guess = _refine(*solved[-1], tn)
@@ -517,7 +547,8 @@ def solve_initial_value(system: LagrangianSystem, q0, qd0, T: float, N: int, sch
         # after a windowed level, a coarse level whose whole attempt fails is not windowed itself:
         # two such levels in a row send the ladder to N (below), where the windows are worth it
         res = _solve_level(tn, guess, level_options, verbose, log, allow_windows=True, final=final, omega=omega,
-                           windows_first=jumped, windows_after_failure=final or not after_windows)
+                           windows_first=jumped, windows_after_failure=final or not after_windows,
+                           first_max_iter=first_cap, guess_substeps=level_substeps)
         i += 1
         if res.success:
             solved.append((tn, res.values))
