@@ -654,8 +654,12 @@ def _estimate(solved: List[tuple], tn: TrajectoryNLP, res: NLPResult, answer: "T
             return estimate.ErrorEstimate.none(f"N = {tn.N} has no coarser grid")
         pc = _trajectory_nlp(tn.dm, Nc, tn.T, "initial_value", tn.q0, tn.end)
         n_log = len(log)
+        # solved the way the answer was: straight to the windows if the answer needed them (its whole
+        # attempt failed or was skipped: the discrete motions of N and N/2 part further than the guess
+        # from N is off; the 20-flip midpoint body, N = 11200: a whole attempt of 10 iterations, 2.1 s)
+        windowed = any(lv.n == tn.N and lv.horizon < tn.N for lv in log)
         rc = _solve_level(pc, _refine(tn, res.values, pc), options, verbose, log, allow_windows=True,
-                          final=True, omega=omega)
+                          final=True, omega=omega, windows_first=windowed)
         for lv in log[n_log:]:
             lv.purpose = "estimate"
         if not rc.success:
