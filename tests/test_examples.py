@@ -123,8 +123,6 @@ def test_a_system_file_that_lives_only_in_the_tests(tmp_path):
     ("x = 1\n", "defines no system()"),
     ("def system():\n    return 42\nq0 = [0]\nqd0 = [0]\n", "not a castrajectory.LagrangianSystem"),
     ("import casadi as ca, castrajectory as ct\ndef system():\n    q = ca.SX.sym('q', 2)\n"
-     "    return ct.LagrangianSystem(q, ct.MassMatrix(ca.DM.eye(2)))\nq0 = [0.0]\nqd0 = [0.0, 0.0]\n", "q0 has 1 values"),
-    ("import casadi as ca, castrajectory as ct\ndef system():\n    q = ca.SX.sym('q', 2)\n"
      "    return ct.LagrangianSystem(q, ct.MassMatrix(ca.DM.eye(2)))\nq0 = [0.0, float('nan')]\nqd0 = [0.0, 0.0]\n",
      "must be finite"),
     ("import casadi as ca, castrajectory as ct\ndef system():\n    q = ca.SX.sym('q', 2)\n"
@@ -143,6 +141,17 @@ def test_a_system_file_that_lives_only_in_the_tests(tmp_path):
     ("import casadi as ca, castrajectory as ct\ndef system():\n    x = ca.SX.sym('x', 1)\n"
      "    return ct.LagrangianSystem(x, ct.MassMatrix(1.0), [ct.Damping(-0.5)])\nq0 = [1.0]\nqd0 = [0.0]\n",
      "damping must not be negative"),
+    # a user's own system, tried as a new user would (#23)
+    ("import casadi as ca, castrajectory as ct\ndef system():\n    q = ca.SX.sym('q', 4)\n"
+     "    return ct.LagrangianSystem(q, ct.MassMatrix(ca.DM.eye(4)))\nq0 = [[0.1, 0.2], [0.3, 0.4]]\nqd0 = [0.0] * 4\n",
+     "q0 must be a flat list of 4 numbers"),
+    ("import casadi as ca, castrajectory as ct\ndef system():\n    q = ca.SX.sym('q', 2)\n"
+     "    return ct.LagrangianSystem(q, ct.MassMatrix(ca.DM.eye(2)))\nq0 = [0.0]\nqd0 = [0.0, 0.0]\n",
+     "the system has 2 coordinates (q_0, q_1)"),
+    ("import casadi as ca, castrajectory as ct\ndef system():\n    q = ca.SX.sym('q', 2)\n"
+     "    x = ca.vertcat(ca.sin(q[0]) * ca.cos(q[1]), ca.sin(q[0]) * ca.sin(q[1]), -ca.cos(q[0]))\n"
+     "    return ct.LagrangianSystem(q, ct.Atoms([x], [1.0]), [ct.Gravity(9.81)])\nq0 = [0.5, 0.0]\nqd0 = [0.0, 1.0]\n",
+     "Gravity on atoms of 3 coordinates needs a direction"),
 ])
 def test_bad_system_files_are_refused(tmp_path, text, needle):
     f = tmp_path / "user.py"

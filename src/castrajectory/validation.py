@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 
 class InputError(ValueError):
     """Bad input: a physically meaningless or unsupported parameter."""
@@ -54,3 +56,24 @@ def one_of(name: str, value, choices) -> str:
     if value not in choices:
         raise InputError(f"{name} must be one of {', '.join(map(str, choices))} (got {value!r})")
     return value
+
+
+def state_vector(name: str, value, n: int, names=None) -> np.ndarray:
+    """``value`` as a vector of ``n`` finite numbers, one per coordinate (``names``, for the message).
+
+    A nested value is refused even when its total size is ``n`` (``[[0.1, 0.2], [0.3, 0.4]]`` for four
+    coordinates is not a state); a column or row (``n × 1``, ``1 × n``, e.g. a CasADi ``DM``) is a vector."""
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be a list of {n} numbers (got {value!r})".splitlines()[0]) from None
+    if arr.ndim > 2 or (arr.ndim == 2 and min(arr.shape) != 1):
+        raise InputError(f"{name} must be a flat list of {n} numbers, one per coordinate (got an array of shape "
+                         f"{arr.shape})")
+    arr = arr.reshape(-1)
+    if arr.size != n:
+        which = f" ({', '.join(names)})" if names else ""
+        raise InputError(f"{name} has {arr.size} values, the system has {n} coordinates{which}")
+    if not np.all(np.isfinite(arr)):
+        raise InputError(f"{name} must be finite (got {arr.tolist()})")
+    return arr

@@ -53,7 +53,7 @@ import numpy as np
 from ..discretise.lagrangians import SCHEMES, DiscreteMechanics, rk4_step
 from ..models.mechanics import LagrangianSystem
 from ..result import Result
-from ..validation import InputError, integer_at_least, one_of, positive
+from ..validation import InputError, integer_at_least, one_of, positive, state_vector
 
 __all__ = ["Stepped", "rk4", "implicit_euler", "march", "reference"]
 
@@ -108,23 +108,11 @@ class Stepped(Result):
 
 
 # ----------------------------------------------------------------------------- input checks
-def _vector(name: str, value, n: int) -> np.ndarray:
-    try:
-        v = np.asarray(value, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        raise InputError(f"{name} must be a vector of {n} numbers (got {value!r})") from None
-    if v.size != n:
-        raise InputError(f"{name} must have {n} entries, one per coordinate (got {v.size})")
-    if not np.all(np.isfinite(v)):
-        raise InputError(f"{name} must be finite (got {v.tolist()})")
-    return v
-
-
 def _check_state(system: LagrangianSystem, q0, qd0) -> Tuple[np.ndarray, np.ndarray]:
     if not isinstance(system, LagrangianSystem):
         raise InputError(f"system must be a LagrangianSystem (got {type(system).__name__})")
     n = system.nq
-    q0, qd0 = _vector("q0", q0, n), _vector("qd0", qd0, n)
+    q0, qd0 = state_vector("q0", q0, n, system.names), state_vector("qd0", qd0, n, system.names)
     if system.nc:
         c, C = system.constraint(q0, 0.0)
         c, C = np.asarray(c).reshape(-1), np.asarray(C)

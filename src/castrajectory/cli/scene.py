@@ -285,6 +285,11 @@ def check_output_path(flag: str, path: Optional[str]) -> None:
         raise InputError(f"--{flag}: cannot write files in the folder {folder!r}") from None
     if not os.path.splitext(path)[1]:
         raise InputError(f"--{flag} {path!r} needs a file extension (the format is read from it)")
+    if flag == "plot":
+        from ..inspect.plotting import figure_formats
+        ext = os.path.splitext(path)[1][1:].lower()
+        if ext not in figure_formats():
+            raise InputError(f"--plot {path!r}: no picture format .{ext} (one of: {', '.join(figure_formats())})")
 
 
 #: Exit code of a run that was interrupted (SIGINT), as a shell reports it.

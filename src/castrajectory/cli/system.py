@@ -23,14 +23,12 @@ from typing import List, Optional
 
 import numpy as np
 
-from ..validation import InputError
+from ..validation import InputError, state_vector
 from .scene import (ArgumentParser, accuracy, add_trajectory_flags, check_animation_path, ipopt_options, run_scene,
                     trajectory_outcome)
 
 #: Horizon and steps when neither the file nor the flags give them.
 DEFAULT_T, DEFAULT_N = 5.0, 1000
-#: A mass matrix whose smallest eigenvalue is below this fraction of its largest is refused.
-PD_TOL = 1e-12
 
 
 def parser() -> ArgumentParser:
@@ -78,27 +76,20 @@ def described(module, path: str):
         raise InputError(f"{path}: system() raised {type(exc).__name__}: {exc}".splitlines()[0]) from None
     if not isinstance(system, LagrangianSystem):
         raise InputError(f"{path}: system() returned a {type(system).__name__}, not a castrajectory.LagrangianSystem")
+    from ..solve.trajectory import check_inertia
     vectors = []
     for name in ("q0", "qd0"):
         if not hasattr(module, name):
             raise InputError(f"{path} defines no {name}")
         try:
-            v = np.asarray(getattr(module, name), dtype=float).reshape(-1)
-        except (TypeError, ValueError):
-            raise InputError(f"{path}: {name} is not a list of numbers") from None
-        if v.size != system.nq:
-            raise InputError(f"{path}: {name} has {v.size} values, the system has {system.nq} coordinates "
-                             f"({', '.join(system.names)})")
-        if not np.all(np.isfinite(v)):
-            raise InputError(f"{path}: {name} must be finite (got {v.tolist()})")
-        vectors.append(v)
+            vectors.append(state_vector(name, getattr(module, name), system.nq, system.names))
+        except InputError as exc:
+            raise InputError(f"{path}: {exc}") from None
     q0, qd0 = vectors
-    M = np.asarray(system.mass_matrix(q0, 0.0), float)
-    lam, vec = np.linalg.eigh(0.5 * (M + M.T))
-    if not np.all(np.isfinite(lam)) or lam[0] <= PD_TOL * max(abs(lam[-1]), 1e-300):
-        j = int(np.argmax(np.abs(vec[:, 0])))
-        raise InputError(f"{path}: the mass matrix is not positive definite at q0 (smallest eigenvalue "
-                         f"{lam[0]:.3g}): coordinate {system.names[j]!r} has no inertia")
+    try:
+        check_inertia(system, q0)
+    except InputError as exc:
+        raise InputError(f"{path}: {exc}") from None
     if system.nc:
         c, C = (np.asarray(x, float) for x in system.constraint(q0, 0.0))
         cv = C @ qd0 + np.asarray(system.constraint_rate(q0, 0.0), float).reshape(-1)

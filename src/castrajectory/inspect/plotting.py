@@ -18,6 +18,11 @@ from .animation import (  # noqa: F401  (the animations, re-exported: scenes cal
 _ERROR_STYLE = {"shape": "o-", "contact_angle": "s-", "span": "^-", "energy": "v-", "pressure": "d-"}
 
 
+def figure_formats() -> List[str]:
+    """The file extensions a figure can be saved as (matplotlib's, lower case, sorted)."""
+    return sorted(Figure().canvas.get_supported_filetypes())
+
+
 def _mark_contact_angle(ax, point, theta: float, size: float, digits: int = 4, color: str = "C3") -> None:
     """Draw the contact angle ``theta`` at the left contact ``point`` of a drop on ``y = point[1]``.
 

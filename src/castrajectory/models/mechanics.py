@@ -142,31 +142,67 @@ class Atoms:
 # ----------------------------------------------------------------------------- potential terms
 @dataclass
 class Gravity:
-    """Uniform gravity ``g`` acting along ``-e_y`` on every atom: ``U = Σ m_a g y_a``.
+    """Uniform gravity of strength ``g`` along the unit vector of ``direction``: ``U = −Σ m_a g d̂·x_a``.
 
-    For a :class:`MassMatrix` system give ``heights`` (expressions) and ``masses``
-    explicitly.  A scene without gravity leaves the term out (``g = 0`` adds nothing):
+    Planar atoms (2 coordinates) are pulled along ``−e_y`` unless a direction is given.  Atoms in
+    3-D need the direction (a z-up model wants ``direction=(0, 0, -1)``, a y-up one ``(0, -1, 0)``):
+    it is refused rather than guessed.  For a :class:`MassMatrix` system give ``heights``
+    (expressions, measured against gravity) and ``masses`` explicitly.  A scene without gravity
+    leaves the term out (``g = 0`` adds nothing):
 
     >>> import casadi as ca, castrajectory as ct
     >>> y = ca.SX.sym("y", 1)
     >>> ball = ct.LagrangianSystem(y, ct.Atoms([ca.vertcat(0, y)], [1.0]), [ct.Gravity(9.81)])
     >>> float(ball.acceleration([1.0], [0.0]))
     -9.81
+    >>> z = ca.SX.sym("z", 1)   # z up, in 3-D
+    >>> ball3 = ct.LagrangianSystem(z, ct.Atoms([ca.vertcat(0, 0, z)], [1.0]),
+    ...                             [ct.Gravity(9.81, direction=(0, 0, -1))])
+    >>> float(ball3.acceleration([1.0], [0.0]))
+    -9.81
     """
 
     g: float
     heights: Optional[Sequence[object]] = None
     masses: Optional[Sequence[float]] = None
+    direction: Optional[Sequence[float]] = None
+
+    def __post_init__(self):
+        self.g = finite("g", self.g)
+        if self.direction is not None:
+            try:
+                d = np.asarray(self.direction, dtype=float)
+            except (TypeError, ValueError):
+                raise InputError(f"Gravity direction must be a vector of numbers (got {self.direction!r})") from None
+            if d.ndim != 1 or d.size < 1 or not np.all(np.isfinite(d)) or not np.any(d != 0.0):
+                raise InputError(f"Gravity direction must be a finite, nonzero vector (got {self.direction!r})")
+            if self.heights is not None:
+                raise InputError("Gravity takes either heights (a mass-matrix system) or a direction, not both")
+            self.direction = tuple(float(v) for v in d)
 
     def energy(self, system: "LagrangianSystem"):
         if self.heights is not None:
             hs, ms = self.heights, self.masses
-        elif isinstance(system.kinetic, Atoms):
-            hs = [x[1] for x in system.kinetic.positions]
-            ms = system.kinetic.masses
-        else:
-            raise ValueError("Gravity on a mass-matrix system needs explicit heights and masses")
-        return sum(m * self.g * h for m, h in zip(ms, hs))
+            return sum(m * self.g * h for m, h in zip(ms, hs))
+        if not isinstance(system.kinetic, Atoms):
+            raise InputError("Gravity on a mass-matrix system needs explicit heights and masses")
+        xs, ms = system.kinetic.positions, system.kinetic.masses
+        dims = sorted({int(ca.SX(x).numel()) for x in xs})
+        if self.direction is None:
+            if dims != [2]:
+                raise InputError(f"Gravity on atoms of {' and '.join(map(str, dims))} coordinates needs a direction, "
+                                 f"e.g. ct.Gravity({self.g:g}, direction=(0, 0, -1)) for z up (only planar atoms "
+                                 f"default to -y)")
+            return sum(m * self.g * x[1] for m, x in zip(ms, xs))  # U = Σ m g y (the planar default)
+        d = np.asarray(self.direction)
+        if dims != [d.size]:
+            raise InputError(f"Gravity direction has {d.size} components, the atoms {' and '.join(map(str, dims))} "
+                             f"coordinates")
+        d = d / np.linalg.norm(d)
+        # the height of an atom is −d̂·x; zero components add no terms (the expressions stay as short
+        # as a hand-written one: −1 · x is −x)
+        return sum(m * self.g * sum(-float(dj) * ca.SX(x)[j] for j, dj in enumerate(d) if dj != 0.0)
+                   for m, x in zip(ms, xs))
 
 
 @dataclass
@@ -356,6 +392,14 @@ class _Timed(ca.Function):
         return super().__call__(*args, **kw)
 
 
+def _symbol_names(q: ca.SX) -> List[str]:
+    """The coordinates' default names: their symbols' (``theta_0, theta_1`` for ``SX.sym("theta", 2)``),
+    or ``q[0], q[1], …`` where two symbols share a name -- never ``q0``, which a system file uses for its
+    initial coordinates."""
+    names = [q[i].name() for i in range(q.numel())]
+    return names if len(set(names)) == len(names) else [f"q[{i}]" for i in range(q.numel())]
+
+
 @dataclass
 class LagrangianSystem:
     """``L(q, q̇) = K(q, q̇) − U(q)`` with optional holonomic constraints ``c(q) = 0``.
@@ -396,7 +440,9 @@ class LagrangianSystem:
             raise ValueError("q must be a column of SX symbols")
         self.qd = velocity(self.q)
         self.t = _TIME
-        self.names = list(self.names) if self.names else [f"q{i}" for i in range(self.nq)]
+        if self.names is not None and len(list(self.names)) != self.nq:
+            raise InputError(f"names has {len(list(self.names))} entries, the system has {self.nq} coordinates")
+        self.names = [str(n) for n in self.names] if self.names else _symbol_names(self.q)
         if self.points_expr is None and isinstance(self.kinetic, Atoms):
             self.points_expr = list(self.kinetic.positions)
         self.potentials = list(self.potentials)

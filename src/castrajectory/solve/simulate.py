@@ -86,8 +86,8 @@ def _baseline(system, q0, qd0, T, N, scheme, method, rtol, n_max) -> Run:
     limit = estimate.limit_n(None if n_max is None else integer_at_least("n_max", n_max, N),
                              trajectory._memory_limit(system))
     # (the whole solve checks the state itself)
-    trajectory._check_finite_state(system, trajectory._check_state("q0", q0, system.nq),
-                                   trajectory._check_state("qd0", qd0, system.nq))
+    trajectory._check_finite_state(system, trajectory._check_state("q0", q0, system.nq, system.names),
+                                   trajectory._check_state("qd0", qd0, system.nq, system.names))
     order = SCHEMES[scheme].order if method == "march" else BASELINE_ORDER[method]
 
     def step(n):

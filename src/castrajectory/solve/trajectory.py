@@ -46,7 +46,7 @@ from ..result import NLPResult, Result
 from .guesses import (EXTRAPOLATION_POINTS, GUESS_H_OMEGA, GUESS_SUBSTEPS, _extrapolate,  # noqa: F401
                       _flow_guess, _initial_guess, _integrated, _refine)  # (EXTRAPOLATION_POINTS: the tests read it here)
 from .nlp import NLP
-from ..validation import InputError, integer_at_least, positive
+from ..validation import InputError, integer_at_least, positive, state_vector
 
 #: Ipopt settings for the square DEL systems (MUMPS scaling off: see solve.nlp.DEFAULT_IPOPT_OPTIONS).
 #: ``min_refinement_steps 0``: no forced iterative-refinement solve per KKT solve (Ipopt still
@@ -130,9 +130,28 @@ def trajectory_keys(run) -> dict:
     return out
 
 
+#: A mass matrix whose smallest eigenvalue is below this fraction of its largest at q0 is refused.
+PD_TOL = 1e-12
+
+
+def check_inertia(system: LagrangianSystem, q0) -> None:
+    """Refuse a mass matrix that is not positive definite at ``q0``, naming the coordinate without
+    inertia (the eigenvector of the smallest eigenvalue points at it), before any solve."""
+    M = np.asarray(system.mass_matrix(q0, 0.0), float)
+    with np.errstate(all="ignore"):
+        ok = np.all(np.isfinite(M))
+        lam, vec = np.linalg.eigh(0.5 * (M + M.T)) if ok else (np.array([np.nan]), np.eye(M.shape[0]))
+    if not np.all(np.isfinite(lam)) or lam[0] <= PD_TOL * max(abs(lam[-1]), 1e-300):
+        j = int(np.argmax(np.abs(vec[:, 0])))
+        raise InputError(f"the mass matrix is not positive definite at q0 (smallest eigenvalue {lam[0]:.3g}): "
+                         f"coordinate {system.names[j]!r} has no inertia")
+
+
 def _check_finite_state(system: LagrangianSystem, q0, qd0) -> None:
-    """Refuse an initial state whose energy or acceleration overflows (finite inputs such as 1e300 whose
-    squares do not exist in floating point), before any solve."""
+    """Refuse an initial state whose mass matrix is singular (:func:`check_inertia`), or whose energy or
+    acceleration overflows (finite inputs such as 1e300 whose squares do not exist in floating point),
+    before any solve."""
+    check_inertia(system, q0)
     with np.errstate(all="ignore"):
         E = float(np.asarray(system.energy(q0, qd0, 0.0)).reshape(-1)[0])
         a = np.asarray(system.acceleration(q0, qd0, 0.0), float).reshape(-1)
@@ -146,12 +165,8 @@ def _check_finite_state(system: LagrangianSystem, q0, qd0) -> None:
 MAX_COORDINATE = 1e15
 
 
-def _check_state(name, value, n):
-    arr = np.asarray(value, dtype=float).reshape(-1)
-    if arr.size != n:
-        raise InputError(f"{name} needs {n} values (got {arr.size})")
-    if not np.all(np.isfinite(arr)):
-        raise InputError(f"{name} must be finite (got {arr.tolist()})")
+def _check_state(name, value, n, names=None):
+    arr = state_vector(name, value, n, names)
     if name.startswith("q") and not name.startswith("qd") and np.max(np.abs(arr), initial=0.0) >= MAX_COORDINATE:
         raise InputError(f"{name} = {arr.tolist()} is too large: a coordinate of {MAX_COORDINATE:.0e} or more leaves "
                          "no digits of double precision for its motion")
@@ -486,8 +501,8 @@ def solve_initial_value(system: LagrangianSystem, q0, qd0, T: float, N: int, sch
     T, N = _validate(system, T, N)
     rtol = None if rtol is None else positive("rtol", rtol)
     n_limit = estimate.limit_n(None if n_max is None else integer_at_least("n_max", n_max, N), _memory_limit(system))
-    q0 = _check_state("q0", q0, system.nq)
-    qd0 = _check_state("qd0", qd0, system.nq)
+    q0 = _check_state("q0", q0, system.nq, system.names)
+    qd0 = _check_state("qd0", qd0, system.nq, system.names)
     _check_finite_state(system, q0, qd0)
     if system.contact is not None:
         from .contact import solve_contact
@@ -678,8 +693,8 @@ def solve_boundary(system: LagrangianSystem, q0, qT, T: float, N: int, scheme: s
     T, N = _validate(system, T, N)
     if system.contact is not None:
         raise InputError("the two-point boundary mode does not handle contact; use the initial-value mode")
-    q0 = _check_state("q0", q0, system.nq)
-    qT = _check_state("qT", qT, system.nq)
+    q0 = _check_state("q0", q0, system.nq, system.names)
+    qT = _check_state("qT", qT, system.nq, system.names)
     dm = discrete_mechanics(system, scheme)
     log: List[Level] = []
     prev, values = None, None

@@ -110,7 +110,8 @@ def _solve_once(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str
     length = _length_scale(system, q0)
     if np.any(phi0 < -TOUCH_TOL * length):
         j = int(np.argmin(phi0))
-        raise InputError(f"the body starts inside the ground: gap of {system.contact.names[j]} is {phi0[j]:.3g}")
+        raise InputError(f"the start penetrates contact {system.contact.names[j]!r}: its gap is {phi0[j]:.3g} "
+                         f"(every gap must be >= 0 at q0)")
     if cm.m:
         c0, C0 = (np.asarray(x) for x in system.constraint(q0))
         if np.max(np.abs(c0)) > 1e-9 * length:
