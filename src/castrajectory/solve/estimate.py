@@ -50,7 +50,9 @@ class ErrorEstimate:
     ``errors``: estimated absolute error per quantity (in the quantity's units); ``scales``: the
     scale each is measured against; ``relative``: ``max errors[k] / scales[k]`` over the quantities
     with a scale; ``levels``: the two grids (coarse, fine); ``order``: the ``p`` used;
-    ``note``: how it was formed, or why it could not be (then ``available`` is False).
+    ``note``: how it was formed, or why it could not be (then ``available`` is False); ``final``: why no
+    finer grid can give one either (a motion near a singular chart, :mod:`~castrajectory.solve.charts`):
+    a refinement for ``rtol`` stops at once with it.
     """
 
     available: bool
@@ -60,17 +62,18 @@ class ErrorEstimate:
     errors: Dict[str, float] = field(default_factory=dict)
     scales: Dict[str, float] = field(default_factory=dict)
     relative: float = float("nan")
+    final: Optional[str] = None
 
     @classmethod
-    def none(cls, why: str) -> "ErrorEstimate":
-        """No estimate, and why."""
-        return cls(available=False, note=why)
+    def none(cls, why: str, final: bool = False) -> "ErrorEstimate":
+        """No estimate, and why (``final``: refining cannot cure it)."""
+        return cls(available=False, note=why, final=why if final else None)
 
     def as_dict(self) -> dict:
         return {"available": self.available, "method": "richardson" if self.available else None,
                 "levels": list(self.levels), "order": self.order, "errors": dict(self.errors),
                 "scales": dict(self.scales), "relative": self.relative,
-                "note": self.note}
+                "note": self.note, "final": self.final}
 
     def line(self) -> str:
         """One line for a summary."""
@@ -82,6 +85,8 @@ class ErrorEstimate:
 
     def warnings(self) -> List[str]:
         """A warning when the estimate is large, or missing."""
+        if self.final:
+            return [self.final]
         if not self.available:
             return [f"no error estimate could be formed: {self.note}"]
         if not (self.relative <= WARN_RELATIVE):
@@ -134,8 +139,8 @@ def kinetic_scale(system, q: np.ndarray, v: np.ndarray) -> float:
 
 def trajectory_estimate(coarse, fine, order: float, smooth: bool = True,
                         extra: Optional[Tuple[Dict[str, float], Dict[str, float], Dict[str, float]]] = None,
-                        energy_scale: Optional[float] = None, levels: Optional[Tuple[int, int]] = None
-                        ) -> ErrorEstimate:
+                        energy_scale: Optional[float] = None, levels: Optional[Tuple[int, int]] = None,
+                        system=None) -> ErrorEstimate:
     """Richardson estimate of the finer of two trajectories (objects with ``t``, ``q``, ``energy``).
 
     The configuration is compared at the nodes both grids share; where they share only the ends
@@ -145,7 +150,15 @@ def trajectory_estimate(coarse, fine, order: float, smooth: bool = True,
     ``energy_scale``, the motion's largest kinetic energy, :func:`kinetic_scale`).  ``extra``:
     (coarse values, fine values, scales) of further quantities (impact times, ...).  ``levels``: the two grids' step counts (default: their
     nodes less one; a contact grid refined where impacts crowd has more nodes than its base steps).
+    ``system``: the finer motion is first watched for a singular chart
+    (:func:`castrajectory.solve.charts.singular_chart`); near one there is no estimate, for this grid or
+    any finer one (``final``).
     """
+    if system is not None:
+        from .charts import singular_chart
+        why = singular_chart(system, fine.t, fine.q)
+        if why is not None:
+            return ErrorEstimate.none(why, final=True)
     t_c, t_f = np.asarray(coarse.t, float), np.asarray(fine.t, float)
     q_c, q_f = np.asarray(coarse.q, float), np.asarray(fine.q, float)
     E_c, E_f = np.asarray(coarse.energy, float), np.asarray(fine.energy, float)
@@ -202,6 +215,8 @@ def refine(rtol: Optional[float], N: int, est: ErrorEstimate, order: float, limi
     ``(True, its estimate)`` or ``(False, the solver's status)``.  Returns ``(estimate, N, why)``: the last
     answer's, and why it stopped short (``None`` when the tolerance was met, or none was asked)."""
     while rtol is not None and not (est.available and est.relative <= rtol):
+        if est.final:
+            return est, N, est.final
         n2 = next_grid(N, est, rtol, order, limit)
         if n2 is None:
             return est, N, "the grid cannot be refined further"
@@ -246,6 +261,8 @@ def conclude(result, est: ErrorEstimate, costs, rtol: Optional[float], N: int, l
 
 def tolerance_message(estimate: ErrorEstimate, rtol: float, N: int, limit: int, why: str) -> str:
     """The message of a run that ended above its tolerance."""
+    if estimate.final:
+        return f"the requested rtol = {rtol:g} was not reached at N = {N}: {estimate.final}"
     got = f"{estimate.relative:.3g}" if estimate.available else f"unknown ({estimate.note})"
     return (f"the requested rtol = {rtol:g} was not reached: the estimated relative error at N = {N} is {got}, "
             f"and {why} (limit N <= {limit})")

@@ -72,6 +72,12 @@ def simulate(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str = 
         run = _baseline(system, q0, qd0, T, N, scheme, method, rtol, n_max)
     if run.success and system.contact is None:
         run.warnings += resolution_warnings(system, q0, run.t[-1] / (len(run.t) - 1))
+    if not run.success and len(run.t) > 1:
+        # a failure near a singular chart says where (a success says it through its estimate)
+        from .charts import singular_chart
+        why = singular_chart(system, run.t, run.q)
+        if why is not None:
+            run.message += f"; {why}"
     return run
 
 
@@ -114,7 +120,8 @@ def _baseline(system, q0, qd0, T, N, scheme, method, rtol, n_max) -> Run:
             return estimate.ErrorEstimate.none(f"N = {len(f.t) - 1} has no coarser grid")
         if not c.success:
             return estimate.ErrorEstimate.none(f"the run on N = {len(c.t) - 1} for the estimate failed")
-        return estimate.trajectory_estimate(c, f, order, energy_scale=estimate.kinetic_scale(system, f.q, f.v))
+        return estimate.trajectory_estimate(c, f, order, energy_scale=estimate.kinetic_scale(system, f.q, f.v),
+                                            system=system)
 
     fine, est, n, short = estimate.refine_runs(rtol, fine, est_of(coarse, fine), N, order, limit, step, est_of, runs)
     return estimate.conclude(fine, est, runs, rtol, n, limit, short)

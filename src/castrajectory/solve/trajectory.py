@@ -684,7 +684,8 @@ def _estimate(solved: List[tuple], tn: TrajectoryNLP, res: NLPResult, answer: "T
             _polish(pc, rc, [])
         partner = (pc, rc.values)
     return estimate.trajectory_estimate(_path(*partner), answer, tn.dm.scheme.order,
-                                        energy_scale=estimate.kinetic_scale(tn.dm.system, answer.q, answer.v))
+                                        energy_scale=estimate.kinetic_scale(tn.dm.system, answer.q, answer.v),
+                                        system=tn.dm.system)
 
 
 def solve_boundary(system: LagrangianSystem, q0, qT, T: float, N: int, scheme: str = "midpoint",
@@ -719,10 +720,11 @@ def solve_boundary(system: LagrangianSystem, q0, qT, T: float, N: int, scheme: s
         out.build_time_s += rc.build_time_s
         out.solve_time_s += rc.solve_time_s
         solved.insert(0, (pc, rc.values))
-        out.error_estimate = estimate.trajectory_estimate(_path(pc, rc.values), out, dm.scheme.order) if rc.success \
+        out.error_estimate = estimate.trajectory_estimate(_path(pc, rc.values), out, dm.scheme.order,
+                                                          system=system) if rc.success \
             else estimate.ErrorEstimate.none(f"the grid N = {Nc} for the estimate did not converge ({rc.solver_status})")
     else:
-        out.error_estimate = estimate.trajectory_estimate(_path(*solved[-2]), out, dm.scheme.order)
+        out.error_estimate = estimate.trajectory_estimate(_path(*solved[-2]), out, dm.scheme.order, system=system)
     if res.success:
         out.warnings += out.error_estimate.warnings()
     return out

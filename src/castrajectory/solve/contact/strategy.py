@@ -90,7 +90,7 @@ def _estimate(coarse: Optional[ContactTrajectory], fine: ContactTrajectory, orde
         extra = ({"impact_times": tc[k]}, {"impact_times": tf[k]}, {"impact_times": float(fine.t[-1])})
     est = estimate.trajectory_estimate(coarse, fine, order, smooth=False, extra=extra,
                                        energy_scale=estimate.kinetic_scale(fine_system, fine.q, fine.v),
-                                       levels=(coarse.n, fine.n))
+                                       levels=(coarse.n, fine.n), system=fine_system)
     if len(tc) != len(tf):
         est.note += f"; the grids resolve {len(tc)} and {len(tf)} impacts (paired in order)"
     return est
