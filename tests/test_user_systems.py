@@ -204,3 +204,38 @@ def test_euler_angles_at_gimbal_lock(eps, warns):
                                                                + (1 - math.cos(run.t[k])) * K @ K)))
                   for k in range(0, 601, 10))
         assert err < 2e-8 and run.error_estimate.relative < 1e-8      # measured 2.1e-10, 7.9e-11
+
+
+# ----------------------------------------------------------------------------- memory
+_LIMITED = r"""
+import os, resource, sys
+import castrajectory as ct
+from castrajectory.models.pendulum import double_pendulum
+ct.simulate(double_pendulum(), [1.0, 0.5], [0.0, 0.0], 1.0, 50)       # the libraries mapped, Ipopt loaded
+mapped = int(open("/proc/self/statm").read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
+resource.setrlimit(resource.RLIMIT_AS, (int(mapped + float(sys.argv[1])), resource.RLIM_INFINITY))
+from castrajectory.cli import main
+sys.exit(main(["run", "double_pendulum", "--rtol", "1e-13", "--n", "1000"]))
+"""
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="RLIMIT_AS and /proc/self/statm are Linux's")
+def test_refinement_stops_within_an_address_space_limit():
+    """A refinement towards an unreachable rtol under 1.5 GB of address space beyond the mapped
+    libraries: it stops at its memory limit with the tolerance message (exit 1), not killed or aborted
+    by std::bad_alloc (which a reserve-free limit gave at 0.5 GB)."""
+    p = subprocess.run([sys.executable, "-c", _LIMITED, "1.5e9"], capture_output=True, text=True, timeout=600,
+                       env={**__import__("os").environ, "MPLBACKEND": "Agg"})
+    assert p.returncode == 1, p.stderr[-2000:]
+    err = p.stderr.strip().splitlines()
+    assert len(err) == 1 and "the grid cannot be refined further" in err[0] and "Traceback" not in p.stderr
+
+
+def test_memory_per_step_follows_the_scheme():
+    """The estimate grows with the unknowns and Jacobian nonzeros of a step: galerkin4 carries a stage
+    and its couplings (2 -> 4 unknowns, 12 -> 32 nonzeros per step of the double pendulum)."""
+    from castrajectory.models.pendulum import double_pendulum
+    from castrajectory.solve import trajectory as tr
+    a, b = tr.bytes_per_step(double_pendulum(), "midpoint"), tr.bytes_per_step(double_pendulum(), "galerkin4")
+    assert a == tr.BYTES_PER_UNKNOWN * 2 + tr.BYTES_PER_NONZERO * 12
+    assert b == tr.BYTES_PER_UNKNOWN * 4 + tr.BYTES_PER_NONZERO * 32

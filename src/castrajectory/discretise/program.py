@@ -336,6 +336,21 @@ class Program:
                 "parameters": int(sum(b.init.size for b in self._params)),
                 "equality_rows": rows["equality"], "inequality_rows": rows["inequality"]}
 
+    def jacobian_nonzeros(self) -> int:
+        """Structural nonzeros of the constraint Jacobian carried by the element families (each element's
+        Jacobian with respect to its variable inputs, times the family's count): what the linear solver's
+        memory grows with."""
+        total = 0
+        for g in self._g:
+            if not isinstance(g, _Group):
+                continue
+            per = 0
+            for i, a in enumerate(g.args):
+                if isinstance(a, X) and not isinstance(a, P):  # variables, not parameters
+                    per += g.fn.sparsity_jac(i, 0).nnz()
+            total += per * int(g.count)
+        return int(total)
+
     def anatomy(self) -> dict:
         """What the program carries, read from its description: variables, equality and inequality rows,
         complementarity pairs (those of :meth:`complementarity` and :meth:`complementarity_elements`,

@@ -87,10 +87,10 @@ BASELINE_ORDER = {"rk4": 4, "implicit-euler": 1}
 
 def _baseline(system, q0, qd0, T, N, scheme, method, rtol, n_max) -> Run:
     """A time-stepping baseline, with the same error estimate (the stepper on ``N/2``) and ``rtol``."""
-    T, N = trajectory._validate(system, T, N)
+    T, N = trajectory._validate(system, T, N, scheme)
     rtol = None if rtol is None else positive("rtol", rtol)
     limit = estimate.limit_n(None if n_max is None else integer_at_least("n_max", n_max, N),
-                             trajectory._memory_limit(system))
+                             trajectory._memory_limit(system, scheme))
     # (the whole solve checks the state itself)
     trajectory._check_finite_state(system, trajectory._check_state("q0", q0, system.nq, system.names),
                                    trajectory._check_state("qd0", qd0, system.nq, system.names))
