@@ -193,7 +193,7 @@ def test_derive_writes_the_document(tmp_path):
     assert p.returncode == 0, p.stderr
     text = out.read_text()
     for heading in ("## Coordinates", "## Energies and the Lagrangian", "## The Euler–Lagrange equations",
-                    "## The discrete problem", "## Conserved quantities"):
+                    "## The discrete problem", "## Energy", "## Symmetries and conserved quantities"):
         assert heading in text
     assert r"\lambda" in text and "= 0$$" in text            # the constraint and its multiplier
     p = subprocess.run([sys.executable, "-m", "castrajectory.cli", "derive", str(tmp_path / "none.py"),

@@ -165,12 +165,20 @@ def trajectory_outcome(title: str, system, run, extra: Optional[dict] = None,
              *(extra_lines or []),
              status_line(run.status, run)]
 
+    state = state_keys(system, run)
+    extra = {**state, **(extra or {})}
+    for name, vals in state.get("quantities", {}).items():
+        vals = np.asarray(vals, float)
+        lines.insert(-1, f"{name}: {vals[0]:.10g} at t = 0, max change {np.max(np.abs(vals - vals[0])):.3e}")
+
     def plot(path):
         if balance:  # forces or time dependence: the balance E − W, whose change is the error
-            fig = plotting.energy_plot(run.t, {how: e - np.asarray(work, float)},
-                                       title=f"{title}: energy balance error |E − E₀ − W| / |E₀|")
+            fig = plotting.energy_quantities_plot(run.t, {how: e - np.asarray(work, float)},
+                                                  state.get("quantities", {}),
+                                                  title=f"{title}: energy balance error |E − E₀ − W| / |E₀|")
         else:
-            fig = plotting.energy_plot(run.t, {how: e}, title=f"{title}: energy error")
+            fig = plotting.energy_quantities_plot(run.t, {how: e}, state.get("quantities", {}),
+                                                  title=f"{title}: energy error")
         fig.savefig(path)
 
     def animate(path):
@@ -179,6 +187,32 @@ def trajectory_outcome(title: str, system, run, extra: Optional[dict] = None,
         plotting.animate_points(system.positions(run.q, run.t), run.t, path, links=links, title=title)
 
     return Outcome.of(run, extra, lines, writers={"plot": plot, "animate": animate})
+
+
+def state_keys(system, run) -> dict:
+    """The whole state of a mechanics answer for its JSON: velocities ``v`` and momenta ``p`` at the nodes
+    (``p = ∂L/∂q̇``: for a variational answer the discrete momenta, whose Legendre transform ``v`` is), the
+    system's declared ``quantities`` at every node, and for a contact answer its ``impacts`` -- one entry
+    per contact and impact, so that every contact of a simultaneous impact is listed."""
+    t = np.asarray(run.t, float)
+    q, v = np.asarray(run.q, float), np.asarray(run.v, float)
+    out = {"v": v}
+    p = getattr(run, "p", None)
+    if p is None:
+        mom = system.momentum.map(q.shape[0])
+        p = np.asarray(mom(q.T, v.T, t[None, :]), float).T
+    out["p"] = np.asarray(p, float)
+    if system.quantities:
+        out["quantities"] = system.quantity_values(q, v, t)
+    impacts = getattr(run, "impacts", None)
+    if impacts is None:
+        impacts = getattr(getattr(run, "detail", None), "impacts", None)
+    if system.contact is not None and impacts is not None:
+        names = system.contact.names
+        # each impact as the solution records it (its contact's index, impulse mu, velocities), with the
+        # contact's name and its impulse under that name
+        out["impacts"] = [{**i.as_dict(), "name": names[i.contact], "impulse": float(i.mu)} for i in impacts]
+    return out
 
 
 def contact_outcome(title: str, system, tr, data: dict, lines: List[str], ground=None,
@@ -206,8 +240,8 @@ def contact_outcome(title: str, system, tr, data: dict, lines: List[str], ground
                                 ground=ground, title=title)
 
     # the JSON: the trajectory's as_dict() (with solver_status and message, which say how the answer
-    # was reached, e.g. Rows_Verified), the scene's keys on top
-    return Outcome.of(tr, data, lines, writers={"plot": plot, "animate": animate})
+    # was reached, e.g. Rows_Verified), the whole state, the scene's keys on top
+    return Outcome.of(tr, {**state_keys(system, tr), **data}, lines, writers={"plot": plot, "animate": animate})
 
 
 @dataclass(kw_only=True)

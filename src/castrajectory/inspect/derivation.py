@@ -251,7 +251,7 @@ def markdown(system, title: str, scheme: str = "midpoint", simplify: bool = True
                   r"$$p_k^- = D_2 L_d(q_{k-1}, q_k) + f_{k-1}^+, \qquad p_k^+ = -D_1 L_d(q_k, q_{k+1}) - f_k^-, "
                   r"\qquad p_0^+ = \frac{\partial L}{\partial \dot q}(q_0, \dot q_0, 0).$$", ""]
     if eq.Q is None and not eq.time_dependent:
-        lines += ["## Conserved quantities", "",
+        lines += ["## Energy", "",
                   "$L$ does not depend on time, so the energy $E = \\dot q^{\\mathsf T} \\partial L/\\partial \\dot q - L "
                   "= K + U$ is conserved; the variational scheme keeps its discrete counterpart bounded.", ""]
     else:
@@ -260,10 +260,62 @@ def markdown(system, title: str, scheme: str = "midpoint", simplify: bool = True
                   "", r"$$\frac{dE}{dt} = Q \cdot \dot q - \frac{\partial L}{\partial t},$$", "",
                   "so $E(t) - E(0) - W(t) = 0$ with $W$ the integral of that power; the solver reports $W$ by the "
                   "scheme's quadrature, and the balance's error converges at the scheme's order.", ""]
-        if eq.cyclic:
-            lines += ["## Conserved quantities", ""]
+    lines += _symmetry_lines(system, eq, sp, simplify)
+    return "\n".join(lines) + "\n"
+
+
+def _symmetry_lines(system, eq, sp, simplify: bool) -> List[str]:
+    """The symmetries (affine, found from L itself: :mod:`castrajectory.models.symmetries`), their
+    momenta, and which of the system's declared quantities the discrete solution conserves."""
+    from ..models.symmetries import affine_symmetries, conserved_by
+    tex = sp.latex
+    S = (lambda e: sp.simplify(e)) if simplify else (lambda e: e)  # noqa: E731
+    q0 = np.zeros(system.nq)
+    syms = affine_symmetries(system)
+
+    def sym(expr):
+        f = ca.Function("J", [system.q, system.qd, system.t], [ca.SX(expr)])
+        return S(sp.nsimplify(to_sympy(f, [eq.q, eq.qd, [eq.t]])[0][0], rational=True))
+    lines = ["## Symmetries and conserved quantities", ""]
+    if syms:
+        lines += ["The system is invariant under these affine vector fields $\\xi(q) = A q + b$ (found from $L$, the "
+                  "forces, the constraints and the contact gaps: each leaves them unchanged). By Noether's theorem "
+                  "each momentum $J = \\partial L/\\partial \\dot q \\cdot \\xi(q)$ is conserved, and **exactly by the "
+                  "discrete solution**: an affine map commutes with the scheme's polynomial interpolation, so the "
+                  "discrete Lagrangian is invariant too (discrete Noether theorem).", ""]
+        for k, sy in enumerate(syms):
+            lines.append(f"- {sy.description}: $J_{{{k + 1}}} = {tex(sym(sy.momentum))}$")
+        lines.append("")
+    else:
+        lines += ["No affine symmetry (translation, rotation or other linear vector field) leaves $L$, the forces "
+                  "and the constraints unchanged, so no momentum is conserved by Noether's theorem.", ""]
     for i in eq.cyclic:
         lines.append(f"${tex(eq.q[i])}$ does not appear in $L$ (cyclic): its momentum "
                      f"$p_{{{tex(eq.q[i])}}} = {tex(eq.momenta[i])}$ is conserved, exactly by the discrete "
                      "Noether theorem.")
-    return "\n".join(lines) + "\n"
+    if eq.cyclic:
+        lines.append("")
+    for name, expr in (system.quantities or {}).items():
+        what = conserved_by(system, expr, syms, q0)
+        head = f"The declared quantity **{name}** $= {tex(sym(expr))}$"
+        if what is not None:
+            lines.append(f"{head} is the momentum of the symmetry {what.description}: the discrete solution "
+                         "conserves it exactly (to the solver's tolerance).")
+        elif _is_energy(system, expr):
+            lines.append(f"{head} is the energy: conserved by the motion; the variational scheme keeps its "
+                         "error bounded, not exactly zero.")
+        else:
+            lines.append(f"{head} is not the momentum of an affine symmetry: the discrete solution need not "
+                         "conserve it.")
+        lines.append("")
+    return lines
+
+
+def _is_energy(system, expr) -> bool:
+    """Is ``expr`` the energy function (up to a constant) of an unforced, time-independent system?"""
+    if system.forced or system.time_dependent:
+        return False
+    rng = np.random.default_rng(5)
+    f = ca.Function("e", [system.q, system.qd, system.t], [ca.SX(expr) - system.energy_expr()])
+    vals = [float(f(rng.standard_normal(system.nq), rng.standard_normal(system.nq), 0.0)) for _ in range(12)]
+    return bool(np.ptp(vals) <= 1e-9 * max(1.0, max(abs(v) for v in vals)))

@@ -202,6 +202,28 @@ def energy_plot(t, energies: Dict[str, np.ndarray], title: Optional[str] = None,
     return fig
 
 
+def energy_quantities_plot(t, energies: Dict[str, np.ndarray], quantities: Dict[str, np.ndarray],
+                           title: Optional[str] = None, relative: bool = True) -> Figure:
+    """:func:`energy_plot` with a second panel: the declared quantities of a system against time, each
+    as its change from its first value (a conserved one is a flat line at rounding level)."""
+    if not quantities:
+        return energy_plot(t, energies, title, relative)
+    fig = Figure(figsize=(6.4, 6.4), layout="constrained")
+    ax, bx = fig.subplots(2, 1)
+    _energy_axes(ax, t, energies, relative)
+    ax.set_title(title or "Energy error", fontsize=10)
+    for name, y in quantities.items():
+        y = np.asarray(y, float).reshape(-1)
+        bx.plot(np.asarray(t, float)[:y.size], y - y[0], lw=1.2, label=name)
+    bx.axhline(0.0, color="0.5", lw=0.8)
+    bx.set_xlabel("t")
+    bx.set_ylabel("change from t = 0")
+    bx.set_title("declared quantities", fontsize=10)
+    bx.grid(True, alpha=0.3)
+    bx.legend(fontsize=8)
+    return fig
+
+
 #: More coordinates than this in one panel of :func:`trajectory_plot` get no legend.
 _MAX_LEGEND = 12
 

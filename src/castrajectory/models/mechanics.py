@@ -34,7 +34,7 @@ Example (planar pendulum, one atom)::
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import List, Optional, Sequence
+from typing import Dict, List, Optional, Sequence
 
 import casadi as ca
 import numpy as np
@@ -424,6 +424,10 @@ class LagrangianSystem:
     names: coordinate names, for output.
     points: optional SX points (e.g. atom positions) returned by :meth:`points` for plots.
     contact: optional :class:`Contact` term (unilateral gaps with restitution).
+    quantities: optional ``{name: expression}`` of quantities of the user's own (scalar SX expressions of
+        the coordinates, their velocities ``ct.velocity(q)`` and the time), e.g. an angular momentum in
+        Cartesian coordinates: their values at every node are reported (:meth:`quantity_values`, the
+        JSON, the plot) and the derivation says which of them the discrete solution conserves.
     """
 
     q: object
@@ -433,6 +437,7 @@ class LagrangianSystem:
     names: Optional[Sequence[str]] = None
     points_expr: Optional[Sequence[object]] = None
     contact: Optional[Contact] = None
+    quantities: Optional[Dict[str, object]] = None
     _fn: dict = field(default_factory=dict, init=False, repr=False)
 
     def __post_init__(self):
@@ -487,6 +492,15 @@ class LagrangianSystem:
         if self.points_expr:
             for k, pnt in enumerate(self.points_expr):
                 check(pnt, f"plotted point {k}")
+        if self.quantities is not None:
+            if not isinstance(self.quantities, dict):
+                raise InputError("quantities must be a dict {name: expression}")
+            for name, expr in self.quantities.items():
+                e = ca.SX(expr)
+                if e.numel() != 1:
+                    raise InputError(f"the quantity {name!r} must be a scalar expression (it has {e.numel()} entries)")
+                check(e, f"the quantity {name!r}", rates=True)
+            self.quantities = {str(k): ca.SX(v) for k, v in self.quantities.items()}
 
     @staticmethod
     def _term_name(term) -> str:
@@ -729,6 +743,18 @@ class LagrangianSystem:
         out = np.asarray(F(q.T, np.broadcast_to(np.asarray(t, float), (q.shape[0],)).reshape(1, -1)))  # (n_points, len(q) * dim), one dim-block per row of q
         npts = len(self.points_expr)
         return out.reshape(npts, q.shape[0], -1).transpose(1, 0, 2)
+
+    def quantity_values(self, q: np.ndarray, qd: np.ndarray, t=0.0) -> Dict[str, np.ndarray]:
+        """The declared :attr:`quantities` at the states ``(q, q̇)`` (one row per node) and times ``t``."""
+        if not self.quantities:
+            return {}
+        q = np.atleast_2d(np.asarray(q, float))
+        qd = np.atleast_2d(np.asarray(qd, float))
+        tt = np.broadcast_to(np.asarray(t, float), (q.shape[0],))
+        fn = self._get("quantities_fn", lambda: ca.Function(
+            "quantities", [self.q, self.qd, self.t], [ca.vertcat(*self.quantities.values())]))
+        vals = np.asarray(fn.map(q.shape[0])(q.T, qd.T, tt[None, :]), float)
+        return {name: vals[i] for i, name in enumerate(self.quantities)}
 
     def energies(self, q: np.ndarray, qd: np.ndarray, t=0.0) -> np.ndarray:
         """The energy function for each row of ``(q, q̇)`` at the times ``t`` (a number or one per row)."""
