@@ -48,7 +48,7 @@ def initial_state(tilt: float, spin: float, precession: float):
 
 def reference(args, inertia, t):
     """Tilt and precession of Euler–Poisson (CVODES) at the times ``t``."""
-    pivot = inertia.shifted(args.mass, [0.0, 0.0, args.distance])
+    pivot = inertia.about(args.mass, [0.0, 0.0, args.distance])
     q0, _, w0 = initial_state(args.tilt, args.spin, args.precession)
     q, _ = euler.euler_reference(pivot.moments, q0, w0, t, weight=args.mass * args.g,
                                  com=[0.0, 0.0, args.distance])

@@ -10,7 +10,8 @@ import castrajectory as ct
 def test_the_public_names():
     assert set(ct.__all__) == {"LagrangianSystem", "Atoms", "MassMatrix", "Gravity", "Spring", "Potential",
                                "Contact", "RigidBody", "Inertia", "simulate", "Force", "Dissipation", "Damping",
-                               "time", "velocity", "schemes"}
+                               "time", "velocity", "schemes", "rotation", "body_point", "unit_norm",
+                               "quaternion_rate", "angular_velocity", "angular_momentum"}
 
 
 @pytest.mark.parametrize("name", sorted(ct.__all__))
@@ -20,5 +21,12 @@ def test_docstring_example_runs(name):
     tests = doctest.DocTestFinder(recurse=False).find(obj, name, globs={})
     runner = doctest.DocTestRunner(optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
     for t in tests:
+        runner.run(t)
+    assert runner.failures == 0 and runner.tries > 0
+
+
+def test_inertia_about_a_pivot_example_runs():
+    runner = doctest.DocTestRunner(optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
+    for t in doctest.DocTestFinder(recurse=False).find(ct.Inertia.about, "Inertia.about", globs={}):
         runner.run(t)
     assert runner.failures == 0 and runner.tries > 0

@@ -254,7 +254,7 @@ def _top_run(T, N, scheme):
 
 def _top_reference(t):
     q0, wb = _top_start()
-    pivot = TOP["inertia"].shifted(TOP["mass"], [0.0, 0.0, TOP["distance"]])
+    pivot = TOP["inertia"].about(TOP["mass"], [0.0, 0.0, TOP["distance"]])
     q, _ = euler.euler_reference(pivot.moments, q0, wb, t, weight=TOP["mass"] * TOP["g"],
                                  com=[0.0, 0.0, TOP["distance"]])
     a = rb.rotation(q)[:, :, 2]

@@ -36,8 +36,11 @@ def test_tutorial_command_runs(command, tmp_path):
             assert (tmp_path / token).stat().st_size > 0
 
 
-def test_the_tutorial_file_is_the_example():
-    """The file the tutorial builds is examples/coupled_pendulums.py, statement for statement."""
-    (code,) = blocks("python")
-    example = open(os.path.join(ROOT, "examples", "coupled_pendulums.py")).read()
-    assert example.endswith(code) and example[:len(example) - len(code)].strip().endswith('"""')
+def test_the_tutorial_files_are_the_examples():
+    """The files the tutorial shows are examples/coupled_pendulums.py and examples/heavy_top.py, statement
+    for statement (after their docstrings)."""
+    codes = blocks("python")
+    assert len(codes) == 2
+    for code, name in zip(codes, ("coupled_pendulums", "heavy_top")):
+        example = open(os.path.join(ROOT, "examples", f"{name}.py")).read()
+        assert example.endswith(code) and example[:len(example) - len(code)].strip().endswith('"""')

@@ -325,3 +325,23 @@ def test_the_discrete_solution_conserves_the_momenta_of_the_symmetries_found():
         J = ca.Function("J", [body.q, body.qd], [s.momentum]).map(run.q.shape[0])
         vals = np.asarray(J(run.q.T, run.v.T)).reshape(-1)
         assert np.ptp(vals) < 1e-11 * max(1.0, np.max(np.abs(vals)))
+
+
+def test_heavy_top_written_with_public_names_keeps_its_momenta():
+    """examples/heavy_top.py (public names only): L_z and L_3 conserved along the solve (measured 1.3e-13 and
+    1.6e-14), the declared L_z equal to ct.angular_momentum of the solution's (q, p) (2.7e-15), and the
+    motion equal to the package's own heavy top (models.rigidbody.heavy_top: the same Lagrangian, so the
+    same discrete equations; identical to the last bit here)."""
+    from castrajectory.cli import system as cli_system
+    from castrajectory.models import rigidbody as rb
+    path = __import__("os").path.join(ROOT, "examples", "heavy_top.py")
+    mod = cli_system.load(path)
+    system, q0, qd0 = cli_system.described(mod, path)
+    run = ct.simulate(system, q0, qd0, T=1.0, N=500, scheme="galerkin4")
+    assert run.success and run.warnings == []
+    qv = system.quantity_values(run.q, run.v, run.t)
+    assert np.ptp(qv["L_z"]) < 5e-12 and np.ptp(qv["L_3"]) < 1e-12
+    L = ct.angular_momentum(run.q, run.p)
+    assert np.max(np.abs(L[:, 2] - qv["L_z"])) < 1e-13
+    ref = ct.simulate(rb.heavy_top(mod.m, mod.inertia, mod.l, mod.g), q0, qd0, T=1.0, N=500, scheme="galerkin4")
+    assert np.max(np.abs(run.q - ref.q)) < 1e-13

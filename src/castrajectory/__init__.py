@@ -24,7 +24,9 @@ runnable example, run by ``tests/test_api.py``)::
 
 ``LagrangianSystem``, ``Atoms``, ``MassMatrix``, ``Gravity``, ``Spring``, ``Potential``, ``Contact``,
 ``RigidBody`` and ``Inertia`` describe, with the non-conservative ``Force``, ``Dissipation`` and ``Damping``
-terms, the time symbol ``time()`` and the velocity symbol ``velocity(q)``; ``schemes()`` lists the
+terms, the time symbol ``time()`` and the velocity symbol ``velocity(q)``; for 3-D bodies on a
+quaternion, ``rotation``, ``body_point``, ``unit_norm``, ``quaternion_rate``, ``Inertia.about`` (a pivot),
+and ``angular_velocity`` / ``angular_momentum`` of a solution (its ``q``, ``v``, ``p``); ``schemes()`` lists the
 discrete Lagrangians with their orders; ``simulate`` solves (one whole-trajectory stationary-action
 problem) and returns the result contract with ``t``, ``q``, ``energy``, ``error_estimate`` and
 ``warnings``.  Everything else is internal.
@@ -84,11 +86,13 @@ if not any(isinstance(f, _Alias) for f in sys.meta_path):
 from .models.mechanics import (  # noqa: E402
     Atoms, Contact, Damping, Dissipation, Force, Gravity, LagrangianSystem, MassMatrix, Potential, Spring, time,
     velocity)
-from .models.rigidbody import Inertia, RigidBody  # noqa: E402
+from .models.rigidbody import (  # noqa: E402
+    Inertia, RigidBody, angular_momentum, angular_velocity, body_point, quaternion_rate, rotation, unit_norm)
 from .solve.simulate import simulate  # noqa: E402
 
 __all__ = ["LagrangianSystem", "Atoms", "MassMatrix", "Gravity", "Spring", "Potential", "Contact", "RigidBody",
-           "Inertia", "Force", "Dissipation", "Damping", "time", "velocity", "schemes", "simulate"]
+           "Inertia", "Force", "Dissipation", "Damping", "time", "velocity", "schemes", "simulate",
+           "rotation", "body_point", "unit_norm", "quaternion_rate", "angular_velocity", "angular_momentum"]
 
 
 def schemes() -> dict:

@@ -198,10 +198,7 @@ def state_keys(system, run) -> dict:
     q, v = np.asarray(run.q, float), np.asarray(run.v, float)
     out = {"v": v}
     p = getattr(run, "p", None)
-    if p is None:
-        mom = system.momentum.map(q.shape[0])
-        p = np.asarray(mom(q.T, v.T, t[None, :]), float).T
-    out["p"] = np.asarray(p, float)
+    out["p"] = np.asarray(p if p is not None else system.momenta(q, v, t), float)
     if system.quantities:
         out["quantities"] = system.quantity_values(q, v, t)
     impacts = getattr(run, "impacts", None)

@@ -756,6 +756,12 @@ class LagrangianSystem:
         vals = np.asarray(fn.map(q.shape[0])(q.T, qd.T, tt[None, :]), float)
         return {name: vals[i] for i, name in enumerate(self.quantities)}
 
+    def momenta(self, q: np.ndarray, qd: np.ndarray, t=0.0) -> np.ndarray:
+        """The momenta ``p = ∂L/∂q̇`` for each row of ``(q, q̇)`` at the times ``t``: one row each."""
+        q, qd = np.atleast_2d(np.asarray(q, float)), np.atleast_2d(np.asarray(qd, float))
+        t = np.broadcast_to(np.asarray(t, float), (q.shape[0],)).reshape(1, -1)
+        return np.asarray(self.momentum.map(q.shape[0])(q.T, qd.T, t), float).T
+
     def energies(self, q: np.ndarray, qd: np.ndarray, t=0.0) -> np.ndarray:
         """The energy function for each row of ``(q, q̇)`` at the times ``t`` (a number or one per row)."""
         q, qd = np.atleast_2d(q), np.atleast_2d(qd)

@@ -62,7 +62,14 @@ def quat_conjugate(q):
 
 
 def rotation(q):
-    """The quadratic rotation map ``R(q)`` (3 × 3), ``R(q) v = q ⊗ v ⊗ q̄``; CasADi or numpy (…, 4)."""
+    """The quadratic rotation map ``R(q)`` (3 × 3), ``R(q) v = q ⊗ v ⊗ q̄``; CasADi or numpy (…, 4).
+    For a unit quaternion it is the rotation matrix from body to world axes.
+
+    >>> import numpy as np, castrajectory as ct
+    >>> R = ct.rotation(ct.models.rigidbody.axis_angle([0, 0, 1], np.pi / 2))
+    >>> np.round(R @ [1.0, 0.0, 0.0], 12).tolist()
+    [0.0, 1.0, 0.0]
+    """
     sym = isinstance(q, (ca.SX, ca.MX, ca.DM))
     w, x, y, z = (q[0], q[1], q[2], q[3]) if sym else np.moveaxis(np.asarray(q, float), -1, 0)
     rows = [[w * w + x * x - y * y - z * z, 2 * (x * y - w * z), 2 * (x * z + w * y)],
@@ -71,6 +78,65 @@ def rotation(q):
     if sym:
         return ca.vertcat(*[ca.horzcat(*r) for r in rows])
     return np.stack([np.stack(r, axis=-1) for r in rows], axis=-2)
+
+
+def body_point(quat, point: Sequence[float], origin=None):
+    """World position ``origin + R(quat) point`` of a point fixed in a body (``point`` in body axes from the
+    body's reference point ``origin``, the world origin by default); CasADi expressions or numpy rows.
+
+    The centre of mass of a top pivoted at the origin, 0.3 along its symmetry axis, tilted 90° about x:
+
+    >>> import numpy as np, castrajectory as ct
+    >>> quat = ct.models.rigidbody.axis_angle([1, 0, 0], np.pi / 2)
+    >>> np.round(ct.body_point(quat, [0.0, 0.0, 0.3]), 12).tolist()
+    [0.0, -0.3, 0.0]
+    """
+    R = rotation(quat)
+    if isinstance(R, (ca.SX, ca.MX, ca.DM)):
+        x = ca.mtimes(R, ca.DM(np.asarray(point, float)) if not isinstance(point, (ca.SX, ca.MX, ca.DM)) else point)
+        return x if origin is None else origin + x
+    x = R @ np.asarray(point, float)
+    return x if origin is None else np.asarray(origin, float) + x
+
+
+def angular_velocity(quat: np.ndarray, quat_rate: np.ndarray, frame: str = "body") -> np.ndarray:
+    """Angular velocity of a body from its orientation quaternions and their rates (rows, e.g. a run's
+    ``q`` and ``v`` columns of the quaternion, or CasADi expressions such as ``ct.velocity(quat)`` for a
+    declared quantity): ``ω = 2 Im(q̄ ⊗ q̇)`` in body axes, or ``R ω`` in space (``frame="space"``).
+
+    >>> import numpy as np, castrajectory as ct
+    >>> q = np.array([1.0, 0.0, 0.0, 0.0])
+    >>> ct.angular_velocity(q, ct.quaternion_rate(q, [0.0, 0.0, 2.0])).tolist()
+    [0.0, 0.0, 2.0]
+    """
+    if frame not in ("body", "space"):
+        raise InputError(f"frame must be 'body' or 'space' (got {frame!r})")
+    if isinstance(quat, (ca.SX, ca.MX)) or isinstance(quat_rate, (ca.SX, ca.MX)):  # an expression (a quantity)
+        w = 2.0 * quat_multiply(quat_conjugate(quat), quat_rate)[1:4]
+        return w if frame == "body" else ca.mtimes(rotation(quat), w)
+    w = body_rates(np.asarray(quat, float), np.asarray(quat_rate, float))
+    return w if frame == "body" else np.einsum("...ij,...j->...i", rotation(quat), w)
+
+
+def angular_momentum(quat: np.ndarray, quat_momentum: np.ndarray, frame: str = "space") -> np.ndarray:
+    """Angular momentum of a body from its quaternions and their conjugate momenta ``p = ∂L/∂q̇`` (rows,
+    e.g. a run's ``q`` and ``p`` columns of the quaternion): the momentum map of spatial rotations
+    (``frame="space"``, conserved by a free body, exactly by the discrete solution) or of body rotations
+    (``"body"``).  A radial momentum (the unit-norm constraint's force) contributes nothing.
+
+    >>> import numpy as np, casadi as ca, castrajectory as ct
+    >>> quat = ca.SX.sym("q", 4)
+    >>> body = ct.LagrangianSystem(quat, ct.RigidBody(quat, ct.Inertia(1.0, 2.0, 3.0)), constraints=[ct.unit_norm(quat)])
+    >>> q0 = np.array([1.0, 0, 0, 0])
+    >>> run = ct.simulate(body, q0, ct.quaternion_rate(q0, [0.1, 1.0, 0.1]), T=5.0, N=500, scheme="galerkin4")
+    >>> L = ct.angular_momentum(run.q, run.p)
+    >>> np.round(L[0], 12).tolist(), bool(np.max(np.abs(L - L[0])) < 1e-11)
+    ([0.1, 2.0, 0.3], True)
+    """
+    if frame not in ("body", "space"):
+        raise InputError(f"frame must be 'body' or 'space' (got {frame!r})")
+    out = (spatial_momentum if frame == "space" else body_momentum)(np.asarray(quat, float), np.asarray(quat_momentum, float))
+    return out if np.ndim(quat) > 1 else out.reshape(3)
 
 
 def axis_angle(axis: Sequence[float], angle: float) -> np.ndarray:
@@ -93,7 +159,12 @@ def tilt_precession(q: np.ndarray):
 
 
 def quaternion_rate(q: np.ndarray, omega_body: np.ndarray) -> np.ndarray:
-    """``q̇ = ½ q ⊗ (0, ω)`` for a body angular velocity ``ω``."""
+    """``q̇ = ½ q ⊗ (0, ω)`` for a body angular velocity ``ω``: the initial velocity of a quaternion body.
+
+    >>> import castrajectory as ct
+    >>> ct.quaternion_rate([1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 2.0]).tolist()
+    [0.0, 0.0, 0.0, 1.0]
+    """
     q = np.asarray(q, float)
     w = np.concatenate([np.zeros(q.shape[:-1] + (1,)), np.asarray(omega_body, float)], axis=-1)
     return 0.5 * quat_multiply(q, w)
@@ -170,12 +241,33 @@ class Inertia:
         m = self.moments
         return np.maximum(0.5 * (m.sum() - 2.0 * m), 0.0)
 
+    def about(self, mass: float, offset: Sequence[float]) -> "Inertia":
+        """The moments about a pivot at ``offset`` (body axes) from the centre of mass, for a body of ``mass``
+        whose moments these are about its centre of mass (Steiner: ``I_i + m(|d|² − d_i²)``).  The pivot
+        must lie on a principal axis through the centre of mass (otherwise the axes change, and products
+        of inertia appear that principal moments cannot hold): refused, with a message, elsewhere.
+
+        A top of mass 2 pivoted 0.5 below its centre of mass on its symmetry axis:
+
+        >>> import castrajectory as ct
+        >>> ct.Inertia(0.1, 0.1, 0.05).about(2.0, [0.0, 0.0, 0.5]).moments.tolist()
+        [0.6, 0.6, 0.05]
+        """
+        m = positive("mass", mass)
+        try:
+            d = np.asarray(offset, float).reshape(3)
+        except (TypeError, ValueError):
+            raise InputError(f"offset must be 3 numbers (got {offset!r})") from None
+        if not np.all(np.isfinite(d)):
+            raise InputError(f"offset must be finite (got {d.tolist()})")
+        if np.count_nonzero(d) > 1:
+            raise InputError(f"the pivot offset {d.tolist()} is not on a principal axis: the products of inertia "
+                             "it brings change the principal axes; give the offset along one body axis")
+        return Inertia(*(self.moments + m * (float(d @ d) - d * d)))
+
     def shifted(self, mass: float, offset: Sequence[float]) -> "Inertia":
-        """Moments about a point ``offset`` along a principal axis from the centre of mass (Steiner)."""
-        d = np.asarray(offset, float)
-        extra = mass * (float(d @ d) - d * d)
-        m = self.moments + extra
-        return Inertia(*m)
+        """:meth:`about` (its earlier name)."""
+        return self.about(mass, offset)
 
 
 # ----------------------------------------------------------------------------- the kinetic term
@@ -219,7 +311,12 @@ class RigidBody:
 
 
 def unit_norm(quat):
-    """The holonomic constraint ``(qᵀq − 1)/2 = 0`` of an orientation quaternion."""
+    """The holonomic constraint ``(qᵀq − 1)/2 = 0`` of an orientation quaternion.
+
+    >>> import casadi as ca, castrajectory as ct
+    >>> float(ct.unit_norm(ca.DM([0.6, 0.8, 0.0, 0.0])))
+    0.0
+    """
     return (ca.dot(quat, quat) - 1.0) / 2.0
 
 
@@ -300,7 +397,7 @@ def heavy_top(mass: float, inertia: Inertia, distance: float, g: float = 9.81) -
     if abs(inertia.I1 - inertia.I2) > 1e-12 * max(inertia.I1, inertia.I2):
         raise InputError(f"a symmetric top needs I1 = I2 (got {inertia.I1:g}, {inertia.I2:g})")
     q = ca.SX.sym("q", 4)
-    pivot_inertia = inertia.shifted(m, [0.0, 0.0, ell])
+    pivot_inertia = inertia.about(m, [0.0, 0.0, ell])
     com = ca.mtimes(rotation(q), ca.DM([0.0, 0.0, ell]))
     terms = [Gravity(g, heights=[com[2]], masses=[m])] if g != 0.0 else []
     r = 0.5 * np.sqrt(max(inertia.I1, 1e-300) / m)

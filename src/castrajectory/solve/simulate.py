@@ -34,6 +34,8 @@ class Run(Result):
     scheme: Optional[str]
     method: str
     detail: object = None
+    #: momenta ``∂L/∂q̇`` at the nodes (for a variational answer, its discrete momenta)
+    p: Optional[np.ndarray] = None
 
     def as_dict(self) -> dict:
         """The JSON keys shared by every mechanics scene: the contract, scheme, method, t, q, energy."""
@@ -72,6 +74,11 @@ def simulate(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str = 
         run = _baseline(system, q0, qd0, T, N, scheme, method, rtol, n_max)
     if run.success and system.contact is None:
         run.warnings += resolution_warnings(system, q0, run.t[-1] / (len(run.t) - 1))
+    own = getattr(run.detail, "p", None)
+    if own is not None:
+        run.p = np.asarray(own, float)
+    elif np.all(np.isfinite(run.q)) and np.all(np.isfinite(run.v)):
+        run.p = system.momenta(run.q, run.v, run.t)
     if not run.success and len(run.t) > 1:
         # a failure near a singular chart says where (a success says it through its estimate)
         from .charts import singular_chart
