@@ -489,16 +489,16 @@ def test_output_paths_are_refused_before_the_solve(tmp_path):
     assert not (tmp_path / "missing").exists() and not (tmp_path / "noext").exists()
 
 
-def test_a_picture_that_cannot_be_written_keeps_the_answer(tmp_path):
-    """The solve succeeds but its picture cannot be written (a format matplotlib does not know): the
-    JSON is printed all the same, the failure gets its own line and exit 3, the earlier file stays."""
+def test_a_picture_format_nobody_writes_is_refused_before_the_solve(tmp_path):
+    """A --plot path whose format matplotlib does not know: exit 2 and one line before any solve (it was
+    solved, printed, then exit 3), the earlier file left as it was."""
     bad = tmp_path / "plot.unknownformat"
     bad.write_bytes(b"earlier output")
     p = run([script("double_pendulum"), "--T", "1", "--n", "100", "--json", "--plot", str(bad)])
-    assert p.returncode == 3, p.stderr
-    assert json.loads(p.stdout)["status"] == "ok"
+    assert p.returncode == 2, p.stderr
+    assert p.stdout == ""
     lines = p.stderr.strip().splitlines()
-    assert len(lines) == 1 and "could not write --plot" in lines[0]
+    assert len(lines) == 1 and "no picture format .unknownformat" in lines[0]
     assert bad.read_bytes() == b"earlier output"
     assert sorted(f.name for f in tmp_path.iterdir()) == ["plot.unknownformat"]
 

@@ -345,3 +345,21 @@ def test_heavy_top_written_with_public_names_keeps_its_momenta():
     assert np.max(np.abs(L[:, 2] - qv["L_z"])) < 1e-13
     ref = ct.simulate(rb.heavy_top(mod.m, mod.inertia, mod.l, mod.g), q0, qd0, T=1.0, N=500, scheme="galerkin4")
     assert np.max(np.abs(run.q - ref.q)) < 1e-13
+
+
+def test_cli_rtol_near_a_singular_chart_exits_at_once(tmp_path):
+    """A user's spherical pendulum in angles passing 1e-6 rad from the pole, asked for --rtol 1e-6: exit 1 with
+    the chart's message on one line (the first grid solved only; it ran 506 s before the watch)."""
+    f = tmp_path / "sph.py"
+    f.write_text("import math, casadi as ca, castrajectory as ct\n"
+                 f"q0 = [1.0, 0.0]\nqd0 = [0.0, {_pole_rate(1e-6)!r}]\nT, n = 3.0, 1000\n"
+                 "def system():\n    q = ca.SX.sym('q', 2)\n"
+                 "    x = ca.vertcat(ca.sin(q[0]) * ca.cos(q[1]), ca.sin(q[0]) * ca.sin(q[1]), -ca.cos(q[0]))\n"
+                 "    return ct.LagrangianSystem(q, ct.Atoms([x], [1.0]), [ct.Gravity(9.81, direction=(0, 0, -1))],\n"
+                 "                               names=['theta', 'phi'])\n")
+    p = _cli("system", str(f), "--scheme", "galerkin4", "--rtol", "1e-6")
+    assert p.returncode == 1
+    err = p.stderr.strip().splitlines()
+    assert len(err) == 1 and "(theta, phi) are near a singular chart" in err[0] and "N = 1000" in err[0]
+    p = _cli("system", str(f), "--scheme", "galerkin4")
+    assert p.returncode == 0 and "warning: the coordinates (theta, phi) are near a singular chart" in p.stdout
