@@ -11,7 +11,8 @@ def test_the_public_names():
     assert set(ct.__all__) == {"LagrangianSystem", "Atoms", "MassMatrix", "Gravity", "Spring", "Potential",
                                "Contact", "RigidBody", "Inertia", "simulate", "Force", "Dissipation", "Damping",
                                "time", "velocity", "schemes", "rotation", "body_point", "unit_norm",
-                               "quaternion_rate", "angular_velocity", "angular_momentum"}
+                               "quaternion_rate", "angular_velocity", "angular_momentum", "Control",
+                               "OptimalControl"}
 
 
 @pytest.mark.parametrize("name", sorted(ct.__all__))

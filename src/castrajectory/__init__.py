@@ -88,11 +88,14 @@ from .models.mechanics import (  # noqa: E402
     velocity)
 from .models.rigidbody import (  # noqa: E402
     Inertia, RigidBody, angular_momentum, angular_velocity, body_point, quaternion_rate, rotation, unit_norm)
+from .models.control import Control  # noqa: E402
+from .solve.optimal_control import OptimalControl  # noqa: E402
 from .solve.simulate import simulate  # noqa: E402
 
 __all__ = ["LagrangianSystem", "Atoms", "MassMatrix", "Gravity", "Spring", "Potential", "Contact", "RigidBody",
            "Inertia", "Force", "Dissipation", "Damping", "time", "velocity", "schemes", "simulate",
-           "rotation", "body_point", "unit_norm", "quaternion_rate", "angular_velocity", "angular_momentum"]
+           "rotation", "body_point", "unit_norm", "quaternion_rate", "angular_velocity", "angular_momentum",
+           "Control", "OptimalControl"]
 
 
 def schemes() -> dict:

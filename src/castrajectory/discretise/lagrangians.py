@@ -89,6 +89,12 @@ class DiscreteMechanics:
         h = ca.SX.sym("h")
         t0 = ca.SX.sym("t")
         tin = [t0] if self.timed else []
+        # control inputs (optimal control): one vector per step, an input of every forced element after the
+        # time; a system without controls builds exactly the elements it had
+        self.controls = list(system.controls)
+        self.nu = int(sum(c.size for c in self.controls))
+        U, Um = ca.SX.sym("u", self.nu), ca.SX.sym("um", self.nu)
+        uin = [U] if self.nu else []
         Lf = system.L
         Lq = (lambda q, v, t: Lf(q, v, t)) if self.timed else (lambda q, v, t: Lf(q, v))  # noqa: E731
         X = [a] + [Z[j * n:(j + 1) * n] for j in range(S.stages)] + [b]
@@ -98,15 +104,20 @@ class DiscreteMechanics:
         DZ = ca.gradient(Ld, Z) if self.s else ca.SX(0, 1)
         if self.forced:
             Qf = system.force
-            f = S.discrete_forces(lambda q, v, t: Qf(q, v, 0 if t is None else t), X, h, t0 if self.timed else None)
+            if self.nu:
+                f = S.discrete_forces(lambda q, v, t: Qf(q, v, 0 if t is None else t, U), X, h,
+                                      t0 if self.timed else None)
+            else:
+                f = S.discrete_forces(lambda q, v, t: Qf(q, v, 0 if t is None else t), X, h,
+                                      t0 if self.timed else None)
             fm, fp = f[0], f[-1]
             fZ = ca.vertcat(*f[1:-1]) if self.s else ca.SX(0, 1)
         else:
             fm = fp = fZ = None
         self.D1 = ca.Function("D1", [a, Z, b, h] + tin, [D1])
         self.D2 = ca.Function("D2", [a, Z, b, h] + tin, [D2])
-        self.p_plus = ca.Function("p_plus", [a, Z, b, h] + tin, [-D1 if fm is None else -D1 - fm])
-        self.p_minus = ca.Function("p_minus", [a, Z, b, h] + tin, [D2 if fp is None else D2 + fp])
+        self.p_plus = ca.Function("p_plus", [a, Z, b, h] + tin + uin, [-D1 if fm is None else -D1 - fm])
+        self.p_minus = ca.Function("p_minus", [a, Z, b, h] + tin + uin, [D2 if fp is None else D2 + fp])
         self._work_parts = (X, a, Z, b, h, t0)   # the work's quadrature is formed when first asked for
 
         cfun = system.constraint if self.m else None
@@ -127,17 +138,24 @@ class DiscreteMechanics:
         # (1 for midpoint/trapezoid, 1/3 for Simpson): lam_k is then the physical multiplier.
         if fm is None:
             r = (self.D2(qm, Zm, q, h, *targ(tk - h)) + self.D1(q, Zp, qp, h, *targ(tk))) / h
+        elif self.nu:  # the steps either side of the node have their own controls
+            r = (self.p_minus(qm, Zm, q, h, *targ(tk - h), Um) - self.p_plus(q, Zp, qp, h, *targ(tk), U)) / h
         else:
             r = (self.p_minus(qm, Zm, q, h, *targ(tk - h)) - self.p_plus(q, Zp, qp, h, *targ(tk))) / h
         r = r - 2 * S.node_weight * grad_c(q, lam, tk)
-        self.del_residual = ca.Function("del", [qm, Zm, q, Zp, qp, lam, h] + tin, [r])
+        self.del_residual = ca.Function("del", [qm, Zm, q, Zp, qp, lam, h] + tin + ([Um, U] if self.nu else []), [r])
         p0 = ca.SX.sym("p0", n)
         if fm is None:
             r0 = (p0 + self.D1(q, Zp, qp, h, *targ(tk))) / h
         else:
-            r0 = (p0 - self.p_plus(q, Zp, qp, h, *targ(tk))) / h
+            r0 = (p0 - self.p_plus(q, Zp, qp, h, *targ(tk), *uin)) / h
         r0 = r0 - S.node_weight * grad_c(q, lam, tk)
-        self.initial_residual = ca.Function("del0", [q, Zp, qp, p0, lam, h] + tin, [r0])
+        self.initial_residual = ca.Function("del0", [q, Zp, qp, p0, lam, h] + tin + uin, [r0])
+        # the final node's momentum, p_N⁻ − p_N, for a boundary velocity at the end (optimal control)
+        # (the end node's half of a DEL row: p_N⁻ − w∇c(q_N)ᵀλ_N = p_N)
+        self.final_residual = ca.Function("delN", [qm, Zm, q, p0, lam, h] + tin + uin,
+                                          [(self.p_minus(qm, Zm, q, h, *targ(tk - h), *uin) - p0) / h
+                                           - S.node_weight * grad_c(q, lam, tk)])
         if self.s:
             nu = ca.SX.sym("nu", self.m * S.stages)
             rz = DZ / h if fZ is None else (DZ + fZ) / h
@@ -146,7 +164,7 @@ class DiscreteMechanics:
                     tj = t0 + float(S.stage_times[j]) * h
                     rz[j * n:(j + 1) * n] -= S.stage_weights[j] * grad_c(Z[j * n:(j + 1) * n],
                                                                          nu[j * self.m:(j + 1) * self.m], tj)
-            self.stage_residual = ca.Function("stage", [a, Z, b, nu, h] + tin, [rz])
+            self.stage_residual = ca.Function("stage", [a, Z, b, nu, h] + tin + uin, [rz])
         else:
             self.stage_residual = None
         # Constraint rows, for the NLP: at a node (its time), and at stage j of a step (the step's start and h)

@@ -459,16 +459,22 @@ class LagrangianSystem:
     def _check_symbols(self) -> None:
         """Every expression may hold the coordinates and the time; the kinetic energy and the forces also
         the velocities.  Anything else is refused here, by name (it made a CasADi traceback in the solve)."""
+        from .control import is_control_symbol
         allowed = {e.element_hash() for e in ca.symvar(ca.vertcat(self.q, self.qd, self.t))}
         qd = {e.element_hash() for e in ca.symvar(self.qd)}
 
-        def check(expr, what, rates=False):
+        def check(expr, what, rates=False, controls=False):
             for v in ca.symvar(ca.SX(expr)):
                 hsh = v.element_hash()
                 if hsh in qd and not rates:
                     raise InputError(f"{what} depends on the velocity {v}: a velocity-dependent force is a "
                                      "ct.Force or ct.Dissipation term")
+                if controls and is_control_symbol(v):
+                    continue
                 if hsh not in allowed:
+                    if is_control_symbol(v):
+                        raise InputError(f"{what} depends on the control {v}: controls enter through forces "
+                                         "(ct.Force)")
                     raise InputError(f"{what} depends on the symbol {v}, which is neither a coordinate, its "
                                      "velocity (ct.velocity(q)) nor the time (ct.time())")
 
@@ -480,7 +486,7 @@ class LagrangianSystem:
             if Q.numel() != self.nq:
                 raise InputError(f"the force {self._term_name(term)!r} has {Q.numel()} entries; it needs one per "
                                  f"coordinate ({self.nq})")
-            check(Q, f"the force {self._term_name(term)!r}", rates=True)
+            check(Q, f"the force {self._term_name(term)!r}", rates=True, controls=True)
         for k, c in enumerate(self.constraints):
             check(c, f"constraint {k}")
         if self.contact is not None:
@@ -523,6 +529,18 @@ class LagrangianSystem:
     def forced(self) -> bool:
         """Does the system hold non-conservative forces?"""
         return bool(self.force_terms)
+
+    @property
+    def controls(self) -> list:
+        """The :class:`~castrajectory.models.control.Control` inputs in the forces, in creation order."""
+        from .control import controls_in
+        return self._get("controls", lambda: controls_in(self.force_expr()) if self.forced else [])
+
+    @property
+    def control_vector(self) -> ca.SX:
+        """All control entries as one column (empty without controls)."""
+        cs = self.controls
+        return ca.vertcat(*[ca.SX(c) for c in cs]) if cs else ca.SX(0, 1)
 
     # -- sizes
     @property
@@ -638,6 +656,9 @@ class LagrangianSystem:
     @property
     def force(self) -> ca.Function:
         """The non-conservative force ``Q(q, q̇, t)``."""
+        if self.controls:  # a controlled system's force takes the controls after the time: Q(q, q̇, t, u)
+            return self._get("Q", lambda: ca.Function("Q", [self.q, self.qd, self.t, self.control_vector],
+                                                      [self.force_expr()]))
         return self._get("Q", lambda: self._timed(ca.Function("Q", [self.q, self.qd, self.t], [self.force_expr()])))
 
     @property

@@ -63,6 +63,9 @@ def simulate(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str = 
     """
     one_of("method", method, METHODS)
     one_of("scheme", scheme, tuple(SCHEMES))
+    if isinstance(system, LagrangianSystem) and system.controls:
+        raise InputError(f"the system has control inputs ({', '.join(c.name for c in system.controls)}): solve it "
+                         "with ct.OptimalControl")
     if system.contact is not None and method != "whole":
         raise InputError(f"the {method} baseline has no contact model; contact scenes use method 'whole'")
     if method == "whole":

@@ -1,0 +1,186 @@
+"""Discrete mechanics and optimal control (DMOC): the forced discrete Euler–Lagrange equations of a whole
+trajectory, with controls, a cost and boundary conditions, as one program.
+
+Ober-Blöbaum, Junge and Marsden (ESAIM: COCV 17, 2011): the dynamics are the discrete Lagrange–d'Alembert
+principle with the controls in the forces; the cost is the scheme's own quadrature of the running cost
+along each step's polynomial (the same quadrature as the discrete Lagrangian); the boundary velocities
+enter through the discrete Legendre transforms.  On a uniform grid ``t_k = k h``, ``h = T/N``:
+
+* unknowns: ``q_0..q_N`` (entries of ``q_0``/``q_N`` that are given are fixed by bounds), the stages
+  ``Z_k`` of a higher-order scheme, the constraint multipliers, the controls ``u_k`` (constant on step
+  ``k``: the force's quadrature sees one value per step), and ``h`` when the final time is free;
+* rows: the DEL equation at every interior node (the controls of both steps at the node), the stage
+  equations, the holonomic constraints, ``p(q_0, q̇_0) = p_0⁺`` when ``q̇_0`` is given and
+  ``p_N⁻ = p(q_N, q̇_N)`` when ``q̇_N`` is, the path constraints at the nodes;
+* objective: ``Σ_k h Σ_i w_i ℓ(q(τ_i), q̇(τ_i), u_k, t_i) + φ(q_N, T)``.
+
+The multipliers of the DEL rows are the **discrete costates** (their sign: see
+:class:`castrajectory.result.NLPResult`, ``∂J*/∂rhs``; a DEL row is a force balance divided by ``h``).
+"""
+from __future__ import annotations
+
+from typing import List, Optional, Sequence
+
+import casadi as ca
+import numpy as np
+
+from .lagrangians import DiscreteMechanics
+from .program import Program, X
+
+
+class ControlTranscription:
+    """One grid of a DMOC problem (see the module docstring).
+
+    ``start``, ``end``: ``(q, q̇)`` pairs of arrays with NaN for a free entry (``q̇`` may be ``None``: free);
+    ``T``: a number, or ``(lo, hi)`` for a free final time; ``running(q, v, u, t)`` and ``final(q, T)``:
+    CasADi functions of the costs (``None``: none); ``path``: ``[(function(q, u, t), lb, ub)]`` evaluated at
+    every node with the control of the step that starts there (the last step's at ``q_N``).
+    """
+
+    program = Program
+
+    def __init__(self, dm: DiscreteMechanics, N: int, T, start, end, running: Optional[ca.Function],
+                 final: Optional[ca.Function], path: Sequence = (), u_bounds=None):
+        self.dm, self.N = dm, int(N)
+        n, s, m, st, nu = dm.n, dm.s, dm.m, dm.scheme.stages, dm.nu
+        self.free_time = not np.isscalar(T)
+        self.T_spec = T
+        self.nlp = nlp = self.program(hessian="exact")
+        (q0, v0), (qN, vN) = start, end
+        self.q0, self.v0, self.qN, self.vN = q0, v0, qN, vN
+        nlp.variable("q", (N + 1) * n)
+        if s:
+            nlp.variable("Z", N * s)
+        interior = np.arange(1, N)
+        if m:
+            nlp.variable("lam", (N - 1) * m)
+            if s:
+                nlp.variable("nu", N * st * m)
+            if v0 is not None:
+                nlp.variable("lam0", m)
+            if vN is not None:
+                nlp.variable("lamN", m)
+        lo, hi = u_bounds if u_bounds is not None else (np.full(nu, -np.inf), np.full(nu, np.inf))
+        nlp.variable("u", N * nu, lb=np.tile(lo, N), ub=np.tile(hi, N),
+                     init=np.tile(np.clip(0.0, lo, hi), N))
+        if self.free_time:
+            tlo, thi = T
+            nlp.variable("h", 1, lb=tlo / N, ub=thi / N, init=0.5 * (tlo + thi) / N)
+            hh = X(nlp.index("h"))
+        else:
+            hh = np.array([float(T) / N])
+        self.hh = hh
+        Q = nlp.index("q").reshape(N + 1, n)
+        Zi = nlp.index("Z").reshape(N, s) if s else np.zeros((N, 0), dtype=np.int64)
+        Ui = nlp.index("u").reshape(N, nu)
+        none = np.zeros(0)
+        zarg = (lambda rows: X(Zi[rows])) if s else (lambda rows: none)  # noqa: E731
+        if dm.timed:
+            times = np.arange(N + 1) * (float(T) / N)
+            targ = lambda rows: [times[rows][:, None] if np.ndim(rows) else np.array([times[rows]])]  # noqa: E731
+        else:
+            targ = lambda rows: []  # noqa: E731
+        self.Q, self.Zi, self.Ui = Q, Zi, Ui
+        uarg = lambda rows: [X(Ui[rows])] if nu else []  # noqa: E731
+
+        # dynamics: the DEL rows at the interior nodes, the controls of both steps
+        if N > 1:
+            Li = nlp.index("lam").reshape(N - 1, m) if m else None
+            nlp.equal_elements("del", dm.del_residual,
+                               [X(Q[interior - 1]), zarg(interior - 1), X(Q[interior]), zarg(interior),
+                                X(Q[interior + 1]), X(Li) if m else none, hh] + targ(interior)
+                               + ([X(Ui[interior - 1]), X(Ui[interior])] if nu else []))
+        if s:
+            k = np.arange(N)
+            Ni = nlp.index("nu").reshape(N, st * m) if m else None
+            nlp.equal_elements("stage", dm.stage_residual,
+                               [X(Q[k]), X(Zi[k]), X(Q[k + 1]), X(Ni) if m else none, hh] + targ(k) + uarg(k))
+        # boundary velocities, through the discrete Legendre transforms
+        sysm = dm.system
+        if v0 is not None:
+            nlp.parameter("p0", n, value=np.zeros(n))
+            self._p0_fn = sysm.momentum
+            nlp.equal_elements("initial", dm.initial_residual,
+                               [X(Q[0]), zarg(0), X(Q[1]), _P(nlp, "p0"),
+                                X(nlp.index("lam0")) if m else none, hh] + targ(0) + uarg(0))
+        if vN is not None:
+            nlp.parameter("pN", n, value=np.zeros(n))
+            nlp.equal_elements("final", dm.final_residual,
+                               [X(Q[N - 1]), zarg(N - 1), X(Q[N]), _P(nlp, "pN"),
+                                X(nlp.index("lamN")) if m else none, hh] + targ(N - 1) + uarg(N - 1))
+        # holonomic constraints at every node with a free entry, and at the stages
+        if m:
+            nodes = [k for k in range(N + 1) if not (k == 0 and _all_fixed(q0)) and not (k == N and _all_fixed(qN))]
+            nodes = np.array(nodes)
+            nlp.equal_elements("constraint", dm.constraint_rows, [X(Q[nodes])] + targ(nodes))
+            if s:
+                for j in range(st):
+                    nlp.equal_elements(f"stage_constraint{j}", dm.stage_constraint_rows[j],
+                                       [X(Zi[:, j * n:(j + 1) * n])] + (targ(np.arange(N)) + [hh] if dm.timed else []))
+        # path constraints at the nodes
+        for j, (fn, lb, ub) in enumerate(path):
+            k = np.arange(N + 1)
+            ku = np.minimum(k, N - 1)
+            args = [X(Q[k]), X(Ui[ku]) if nu else np.zeros(0), _node_times(self, k)]
+            nlp.inequality_elements(f"path{j}", fn, args, lb=np.tile(lb, N + 1), ub=np.tile(ub, N + 1))
+        # the cost
+        if running is not None:
+            k = np.arange(N)
+            nlp.minimize_elements("running", self._running_element(running),
+                                  [X(Q[k]), zarg(k), X(Q[k + 1]), hh, (np.arange(N) * 1.0)[:, None]]
+                                  + ([X(Ui[k])] if nu else [np.zeros((N, 0))]))
+        if final is not None:
+            nlp.minimize_elements("final", self._final_element(final), [X(Q[N]), hh])
+        if running is None and final is None:
+            nlp.minimize(ca.SX(0))
+
+    def _running_element(self, running: ca.Function) -> ca.Function:
+        """``h Σ w_i ℓ(q(τ_i), q̇(τ_i), u, t_i)`` over one step (the scheme's quadrature), ``t_i = (k + τ_i) h``."""
+        dm = self.dm
+        n, s, nu = dm.n, dm.s, dm.nu
+        a, b, Z, h, k = ca.SX.sym("a", n), ca.SX.sym("b", n), ca.SX.sym("Z", s), ca.SX.sym("h"), ca.SX.sym("k")
+        u = ca.SX.sym("u", nu)
+        Xs = [a] + [Z[j * n:(j + 1) * n] for j in range(dm.scheme.stages)] + [b]
+        val = dm.scheme.discrete_lagrangian(lambda q, v, t: running(q, v, u, t), Xs, h, k * h)
+        return ca.Function("running", [a, Z, b, h, k, u], [val])
+
+    def _final_element(self, final: ca.Function) -> ca.Function:
+        n = self.dm.n
+        q, h = ca.SX.sym("q", n), ca.SX.sym("h")
+        return ca.Function("final", [q, h], [final(q, h * self.N)])
+
+    def bounds(self):
+        """Bounds fixing the given entries of ``q_0`` and ``q_N``."""
+        N, n = self.N, self.dm.n
+        qlo = np.full((N + 1, n), -np.inf)
+        qhi = np.full((N + 1, n), np.inf)
+        for k, qk in ((0, self.q0), (N, self.qN)):
+            given = ~np.isnan(qk)
+            qlo[k, given] = qhi[k, given] = qk[given]
+        return {"q": (qlo.reshape(-1), qhi.reshape(-1))}
+
+
+def _P(nlp, name):
+    from .program import P
+    return P(nlp.parameter_index(name))
+
+
+def _all_fixed(q) -> bool:
+    return bool(np.all(~np.isnan(q)))
+
+
+def _node_times(tr: ControlTranscription, k: np.ndarray):
+    """The node times as element arguments: constants for a fixed final time (a free one: ``t`` is refused
+    in path constraints, see :mod:`castrajectory.solve.optimal_control`)."""
+    T = tr.T_spec if not tr.free_time else tr.T_spec[1]
+    return (k * (float(T) / tr.N))[:, None]
+
+
+def split_controls(values: np.ndarray, controls: List, N: int) -> dict:
+    """The control vector per step, ``(N, nu)``, split by control name: ``{name: (N, size)}``."""
+    U = np.asarray(values, float).reshape(N, -1)
+    out, j = {}, 0
+    for c in controls:
+        out[c.name] = U[:, j:j + c.size]
+        j += c.size
+    return out

@@ -1,0 +1,370 @@
+"""Optimal control on the discrete action (DMOC), solved whole by Ipopt, and certified.
+
+The public face, in the style of CasADi's ``Opti`` and rockit::
+
+    u = ct.Control("u", 1, lower=-20, upper=20)
+    sys = ct.LagrangianSystem(q, ct.Atoms(...), [ct.Gravity(9.81), ct.Force(ca.vertcat(u, 0))])
+    ocp = ct.OptimalControl(sys, T=2.0, N=100, scheme="midpoint")     # T=(lo, hi): free final time
+    ocp.initial(q=[0, 0], qd=[0, 0])
+    ocp.final(q=[1, ca.pi], qd=[0, 0])                                # any entry None: free
+    ocp.minimize(running=u ** 2)                                      # and/or final=..., in q, T
+    ocp.subject_to(-2 <= q[0], q[0] <= 2)                             # at every node
+    sol = ocp.solve()
+
+The transcription is :mod:`castrajectory.discretise.optimal_control`.  Controls are constant per step:
+the forces' quadrature sees one value per step.  With midpoint that is the scheme's own order (2);
+a higher-order scheme keeps the order of the dynamics' quadrature, but a piecewise-constant control
+limits the cost's and the controls' accuracy to what a piecewise-constant function can be (see
+``docs/derivations.md``).
+
+Every answer is **certified**: its controls are marched forward, step by step, with the same discrete
+equations (a Newton solve per step) from its initial state, and the march must reproduce the optimal
+trajectory; the residual is reported (``certificate``), and an answer whose march departs is a failure.
+"""
+from __future__ import annotations
+
+import math
+import time as _time
+from dataclasses import dataclass, field
+from typing import Dict, List, Optional
+
+import casadi as ca
+import numpy as np
+
+from ..discretise.lagrangians import SCHEMES, discrete_mechanics
+from ..discretise.optimal_control import ControlTranscription, split_controls
+from ..models.mechanics import LagrangianSystem
+from ..result import Result
+from ..validation import InputError, integer_at_least, one_of
+from .nlp import NLP
+
+#: Ipopt settings of the DMOC solve (exact Hessian; MUMPS scaling off as for every program here).
+OCP_IPOPT = {"tol": 1e-10, "max_iter": 3000, "mumps_pivtol": 1e-8, "bound_relax_factor": 0.0}
+#: The march of the certificate must reproduce the optimal configurations to this, relative to their scale.
+CERTIFICATE_TOL = 1e-7
+
+
+class _Transcription(ControlTranscription):
+    program = NLP
+
+
+@dataclass(kw_only=True)
+class ControlResult(Result):
+    """The answer of an :class:`OptimalControl`: the result contract, plus ``cost``, ``T``, node times ``t``,
+    configurations ``q`` and velocities ``v`` at the nodes, the controls ``u`` per step (``(N, nu)``; by name
+    in ``controls``), the discrete ``costates`` at the interior nodes, ``(N−1, n)``: ``∂J*/∂p_k``, the change
+    of the optimal cost per unit impulse at node k (the DEL row's multiplier ``∂J*/∂rhs`` times ``−1/h``:
+    an impulse ``ι`` is the right-hand side ``−ι/h`` of the row, a momentum balance per unit time), which
+    converge to the continuous costates of the momenta; and the ``certificate``: the largest
+    distance of the march of the controls from the optimal configurations (relative to their scale)."""
+
+    cost: float
+    T: float
+    t: np.ndarray
+    q: np.ndarray
+    v: np.ndarray
+    u: np.ndarray
+    controls: Dict[str, np.ndarray] = field(default_factory=dict)
+    costates: Optional[np.ndarray] = None
+    certificate: float = math.nan
+    scheme: str = "midpoint"
+
+    def as_dict(self) -> dict:
+        return {**super().as_dict(), "cost": self.cost, "T": self.T, "t": self.t, "q": self.q, "v": self.v,
+                "u": self.u, "controls": self.controls, "costates": self.costates, "certificate": self.certificate,
+                "scheme": self.scheme}
+
+
+def _vector(name, value, n, names, allow_none=True):
+    """A boundary value: ``n`` entries, each a number or ``None`` (free): NaN for a free one."""
+    if value is None:
+        return None
+    try:
+        seq = list(np.asarray(value, dtype=object).reshape(-1))
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be a list of {n} numbers (or None for a free entry)") from None
+    if len(seq) != n:
+        raise InputError(f"{name} has {len(seq)} values, the system has {n} coordinates ({', '.join(names)})")
+    out = np.full(n, np.nan)
+    for i, v in enumerate(seq):
+        if v is None:
+            if not allow_none:
+                raise InputError(f"{name}: every entry must be given")
+            continue
+        try:
+            out[i] = float(v)
+        except (TypeError, ValueError):
+            raise InputError(f"{name}[{i}] must be a number or None (got {v!r})") from None
+        if not math.isfinite(out[i]):
+            raise InputError(f"{name}[{i}] must be finite (got {v!r})")
+    return out
+
+
+class OptimalControl:
+    """An optimal-control problem on the discrete action of ``system`` (see the module docstring).
+
+    ``T``: the horizon, or ``(lo, hi)`` for a free final time (``0 < lo <= hi``); ``N`` steps; ``scheme``: any
+    of ``ct.schemes()``.  :attr:`T_symbol` is the final time in a final cost (``minimize(final=ocp.T_symbol)``
+    is the minimum-time problem).
+
+    A block of unit mass moved by 1 in 1 s at least effort (``J* = 12``; midpoint on N steps: ``12N²/(N²−1)``):
+
+    >>> import casadi as ca, castrajectory as ct
+    >>> u = ct.Control("u", 1)
+    >>> x = ca.SX.sym("x", 1)
+    >>> block = ct.LagrangianSystem(x, ct.MassMatrix(1.0), [ct.Force(u)])
+    >>> ocp = ct.OptimalControl(block, T=1.0, N=10)
+    >>> ocp.initial(q=[0.0], qd=[0.0]); ocp.final(q=[1.0], qd=[0.0]); ocp.minimize(running=u ** 2)
+    >>> sol = ocp.solve()
+    >>> sol.success, round(sol.cost, 9) == round(12 * 100 / 99, 9), sol.certificate < 1e-9
+    (True, True, True)
+    """
+
+    def __init__(self, system: LagrangianSystem, T, N: int, scheme: str = "midpoint"):
+        if not isinstance(system, LagrangianSystem):
+            raise InputError(f"system must be a LagrangianSystem (got {type(system).__name__})")
+        if system.contact is not None:
+            raise InputError("optimal control with contact is not supported yet (contact-implicit planning)")
+        if not system.controls:
+            raise InputError("the system has no control: put a ct.Control in a ct.Force")
+        self.system = system
+        self.N = integer_at_least("N", N, 2)
+        self.scheme = one_of("scheme", scheme, tuple(SCHEMES))
+        if isinstance(T, (tuple, list)):
+            if len(T) != 2:
+                raise InputError(f"a free final time is an interval (lo, hi) (got {T!r})")
+            lo, hi = (float(v) for v in T)
+            if not (math.isfinite(lo) and math.isfinite(hi)) or lo <= 0 or lo > hi:
+                raise InputError(f"the free final time needs 0 < lo <= hi (got ({lo:g}, {hi:g}))")
+            self.T = (lo, hi)
+            if system.time_dependent:
+                raise InputError("a free final time needs a time-independent system (its node times move)")
+        else:
+            try:
+                Tv = float(T)
+            except (TypeError, ValueError):
+                raise InputError(f"T must be a number or an interval (lo, hi) (got {T!r})") from None
+            if not math.isfinite(Tv) or Tv <= 0:
+                raise InputError(f"T must be positive (got {T!r})")
+            self.T = Tv
+        self.T_symbol = ca.SX.sym("T")
+        n = system.nq
+        self._start = (np.full(n, np.nan), None)
+        self._end = (np.full(n, np.nan), None)
+        self._running = None
+        self._final = None
+        self._path: List[tuple] = []
+        self._controls = system.controls
+        self._u = system.control_vector
+
+    # -------------------------------------------------------------- the problem
+    def initial(self, q=None, qd=None) -> None:
+        """The initial configuration and velocity (``None``, or an entry ``None``: free)."""
+        self._start = self._boundary("initial", q, qd)
+
+    def final(self, q=None, qd=None) -> None:
+        """The final configuration and velocity (``None``, or an entry ``None``: free)."""
+        self._end = self._boundary("final", q, qd)
+
+    def _boundary(self, which, q, qd):
+        s = self.system
+        qv = _vector(f"{which} q", q, s.nq, s.names)
+        qv = np.full(s.nq, np.nan) if qv is None else qv
+        vv = _vector(f"{which} qd", qd, s.nq, s.names, allow_none=False)
+        if vv is not None and np.any(np.isnan(qv)):
+            raise InputError(f"a {which} velocity needs the {which} configuration given in full")
+        if s.nc and not np.any(np.isnan(qv)):
+            c, C = (np.asarray(x, float) for x in s.constraint(qv, 0.0))
+            if np.max(np.abs(c)) > 1e-9 * (1.0 + np.max(np.abs(qv))):
+                raise InputError(f"the {which} configuration violates the holonomic constraints "
+                                 f"(|c| = {np.max(np.abs(c)):.3g})")
+            if vv is not None and np.max(np.abs(C @ vv)) > 1e-9 * (1.0 + np.max(np.abs(vv))):
+                raise InputError(f"the {which} velocity is not tangent to the holonomic constraints "
+                                 f"(|C qd| = {np.max(np.abs(C @ vv)):.3g})")
+        return qv, vv
+
+    def _check_expr(self, expr, what: str, rates: bool, final: bool = False) -> ca.SX:
+        from ..models.control import is_control_symbol
+        e = ca.SX(expr)
+        if e.numel() != 1:
+            raise InputError(f"the {what} must be a scalar (it has {e.numel()} entries)")
+        s = self.system
+        allowed = {v.element_hash() for v in ca.symvar(ca.vertcat(s.q, s.t))}
+        if rates:
+            allowed |= {v.element_hash() for v in ca.symvar(s.qd)}
+        if final:
+            allowed.add(self.T_symbol.element_hash())
+        mine = {v.element_hash() for v in ca.symvar(self._u)} if self._u.numel() else set()
+        for v in ca.symvar(e):
+            hsh = v.element_hash()
+            if hsh in allowed or (not final and hsh in mine):
+                continue
+            if is_control_symbol(v):
+                raise InputError(f"the {what} holds the control {v}, which appears in no force of the system")
+            raise InputError(f"the {what} depends on the symbol {v}, which is not a coordinate"
+                             + (", its velocity" if rates else "") + (", the final time T" if final else "")
+                             + ("" if final else ", a control") + " or the time")
+        return e
+
+    def minimize(self, running=None, final=None) -> None:
+        """The cost: ``∫ running(q, q̇, u, t) dt + final(q_N, T)`` (``T``: :attr:`T_symbol`)."""
+        if running is None and final is None:
+            raise InputError("minimize() needs a running or a final cost")
+        if running is not None:
+            self._running = self._check_expr(running, "running cost", rates=True)
+        if final is not None:
+            self._final = self._check_expr(final, "final cost", rates=False, final=True)
+
+    def subject_to(self, *constraints) -> None:
+        """Path constraints ``a <= b``, ``a >= b`` or ``a == b`` (CasADi comparisons) in ``q``, the controls and
+        the time, imposed at every node."""
+        for con in constraints:
+            e = ca.SX(con)
+            for i in range(e.numel()):
+                ei = e[i]
+                if ei.is_op(ca.OP_LE) or ei.is_op(ca.OP_LT):
+                    g, lb, ub = ei.dep(0) - ei.dep(1), -np.inf, 0.0
+                elif ei.is_op(ca.OP_EQ):
+                    g, lb, ub = ei.dep(0) - ei.dep(1), 0.0, 0.0
+                else:
+                    raise InputError("subject_to() takes comparisons such as q[0] <= 2 (CasADi expressions)")
+                self._check_expr(g, "path constraint", rates=False)
+                if self._is_free_time() and ca.depends_on(g, self.system.t):
+                    raise InputError("a path constraint in t needs a fixed final time")
+                self._path.append((g, lb, ub))
+
+    def _is_free_time(self) -> bool:
+        return isinstance(self.T, tuple)
+
+    # -------------------------------------------------------------- the solve
+    def solve(self, guess: Optional[Dict[str, np.ndarray]] = None, options: Optional[dict] = None,
+              verbose: bool = False) -> ControlResult:
+        """Solve the whole DMOC program with Ipopt from ``guess`` (``{"q": (N+1, n), "u": (N, nu), "T": …}``,
+        any part; the rest: the boundary conditions interpolated, zero controls clipped to their bounds),
+        then certify the answer (see the module docstring)."""
+        if self._running is None and self._final is None:
+            raise InputError("no cost: call minimize() first")
+        s, N = self.system, self.N
+        n, nu = s.nq, self._u.numel()
+        dm = discrete_mechanics(s, self.scheme)
+        q, qd, t, u = s.q, s.qd, s.t, self._u
+        running = ca.Function("l", [q, qd, u, t], [self._running]) if self._running is not None else None
+        final = ca.Function("phi", [q, self.T_symbol], [self._final]) if self._final is not None else None
+        path = [(ca.Function(f"g{j}", [q, u, t], [g]), lb, ub) for j, (g, lb, ub) in enumerate(self._path)]
+        lo = np.concatenate([c.lower for c in self._controls])
+        hi = np.concatenate([c.upper for c in self._controls])
+        t0 = _time.perf_counter()
+        tr = _Transcription(dm, N, self.T, self._start, self._end, running, final, path, (lo, hi))
+        (q0, v0), (qN, vN) = self._start, self._end
+        if v0 is not None:
+            tr.nlp.set_parameter("p0", np.asarray(s.momentum(q0, v0, 0.0)).reshape(-1))
+        if vN is not None:
+            T_end = self.T if not self._is_free_time() else self.T[1]
+            tr.nlp.set_parameter("pN", np.asarray(s.momentum(qN, vN, T_end)).reshape(-1))
+        init = self._guess(dm, guess, lo, hi)
+        opts = {**OCP_IPOPT, **(options or {})}
+        res = tr.nlp.solve(init, options=opts, verbose=verbose, bounds=tr.bounds())
+        wall = _time.perf_counter() - t0
+        vals = res.values
+        Q = vals["q"].reshape(N + 1, n)
+        Z = vals["Z"].reshape(N, dm.s) if dm.s else np.zeros((N, 0))
+        U = vals["u"].reshape(N, nu)
+        h = float(vals["h"][0]) if self._is_free_time() else self.T / N
+        T = h * N
+        times = h * np.arange(N + 1)
+        p = _momenta(dm, Q, Z, U, h, times)
+        v = dm.velocities(Q, p, times)
+        # costate_k = ∂J*/∂p_k: an impulse ι at node k is the DEL row's right-hand side −ι/h, and the row's
+        # multiplier is ∂J*/∂rhs
+        costates = -res.multipliers["del"].reshape(N - 1, n) / h if "del" in res.multipliers else None
+        cert = _certify(dm, Q, Z, U, h, times, p[0]) if res.success else math.nan
+        out = ControlResult(success=res.success, solver_status=res.solver_status, message=res.message, iterations=res.iterations, build_time_s=res.build_time_s,
+                            solve_time_s=wall - res.build_time_s, cost=float(res.objective), T=T, t=times, q=Q,
+                            v=v, u=U, controls=split_controls(U, self._controls, N), costates=costates,
+                            certificate=cert, scheme=self.scheme)
+        if res.success and not (cert <= CERTIFICATE_TOL):
+            out.fail("Certificate_Failed", f"the march of the optimal controls departs from the optimal "
+                                           f"trajectory by {cert:.3g} (relative): not a motion of the system")
+        return out
+
+    def _guess(self, dm, guess, lo, hi) -> Dict[str, np.ndarray]:
+        s, N = self.system, self.N
+        n = s.nq
+        (q0, _), (qN, _) = self._start, self._end
+        a = np.where(np.isnan(q0), np.where(np.isnan(qN), 0.0, qN), q0)
+        b = np.where(np.isnan(qN), a, qN)
+        w = np.linspace(0.0, 1.0, N + 1)[:, None]
+        Q = a[None, :] + w * (b - a)[None, :]
+        U = np.tile(np.clip(0.0, lo, hi), (N, 1))
+        g = {"q": Q, "u": U}
+        if self._is_free_time():
+            g["T"] = 0.5 * sum(self.T)
+        for k, val in (guess or {}).items():
+            g[k] = np.asarray(val, float)
+        Q = np.asarray(g["q"], float).reshape(N + 1, n)
+        out = {"q": Q.reshape(-1), "u": np.asarray(g["u"], float).reshape(-1)}
+        if dm.s:
+            out["Z"] = dm.stage_guess(Q[:-1], Q[1:]).reshape(-1)
+        if self._is_free_time():
+            out["h"] = np.array([float(g["T"]) / N])
+        return out
+
+
+def _momenta(dm, Q, Z, U, h, times) -> np.ndarray:
+    """Nodal momenta ``p_k⁺`` (k < N) and ``p_N⁻`` of a controlled solution."""
+    N = Q.shape[0] - 1
+    targ = [times[None, :-1]] if dm.timed else []
+    uarg = [U.T] if dm.nu else []
+    pp = np.asarray(dm.p_plus.map(N)(Q[:-1].T, Z.T, Q[1:].T, h, *targ, *uarg)).T
+    pN = np.asarray(dm.p_minus(Q[-2], Z[-1], Q[-1], h, *dm.time_args(times[-2]), *([U[-1]] if dm.nu else []))).reshape(1, -1)
+    return np.vstack([pp, pN])
+
+
+def _certify(dm, Q, Z, U, h, times, p0) -> float:
+    """March the controls ``U`` with the same discrete equations from ``(q_0, p_0⁺)``: each step a Newton
+    solve (CasADi's rootfinder) of the DEL row at the node (the initial Legendre row first), the stage
+    rows and the constraint rows at the new node; return the largest distance of the marched configurations
+    from ``Q``, relative to the motion's scale."""
+    n, s, m, st, nu = dm.n, dm.s, dm.m, dm.scheme.stages, dm.nu
+    N = Q.shape[0] - 1
+    w = ca.SX.sym("w", n + s + m + st * m)
+    qn, Zk, lam, nuk = w[:n], w[n:n + s], w[n + s:n + s + m], w[n + s + m:]
+    qm, Zm, qk = ca.SX.sym("qm", n), ca.SX.sym("Zm", s), ca.SX.sym("qk", n)
+    um, uk = ca.SX.sym("um", nu), ca.SX.sym("uk", nu)
+    p0s, tk = ca.SX.sym("p0", n), ca.SX.sym("t")
+    ta = dm.time_args(tk)
+    ua = [uk] if nu else []
+    none = ca.SX(0, 1)
+    rows_first = [dm.initial_residual(qk, Zk if s else none, qn, p0s, lam, h, *ta, *ua)]
+    rows_next = [dm.del_residual(qm, Zm if s else none, qk, Zk if s else none, qn, lam, h, *ta,
+                                 *([um, uk] if nu else []))]
+    common = []
+    if s:
+        common.append(dm.stage_residual(qk, Zk, qn, nuk if m else none, h, *ta, *ua))
+    if m:
+        common.append(dm.constraint_rows(qn, *dm.time_args(tk + h)))
+        for j in range(st):
+            zj = Zk[j * n:(j + 1) * n]
+            common.append(dm.stage_constraint_rows[j](zj, tk, h) if dm.timed else dm.constraint_rows(zj))
+    par = ca.vertcat(qm, Zm, qk, um, uk, p0s, tk)
+    G0 = ca.Function("g0", [w, par], [ca.vertcat(*(rows_first + common))])
+    G1 = ca.Function("g1", [w, par], [ca.vertcat(*(rows_next + common))])
+    R0 = ca.rootfinder("march0", "newton", G0, {"abstol": 1e-13, "max_iter": 50, "error_on_fail": False})
+    R1 = ca.rootfinder("march1", "newton", G1, {"abstol": 1e-13, "max_iter": 50, "error_on_fail": False})
+    qs = [Q[0]]
+    Zprev = np.zeros(s)
+    wk = np.concatenate([Q[1], Z[0] if s else [], np.zeros(m + st * m)])
+    for k in range(N):
+        qprev = qs[k - 1] if k else np.zeros(n)
+        ukv = U[k] if nu else np.zeros(0)
+        umv = U[k - 1] if (nu and k) else np.zeros(nu)
+        p = np.concatenate([qprev, Zprev, qs[k], umv, ukv, p0, [times[k]]])
+        guess = np.concatenate([2 * qs[k] - qprev if k else Q[1], Z[k] if s else [], np.zeros(m + st * m)])
+        wk = np.asarray((R0 if k == 0 else R1)(guess, p)).reshape(-1)
+        if not np.all(np.isfinite(wk)):
+            return math.inf
+        qs.append(wk[:n])
+        Zprev = wk[n:n + s]
+    qs = np.array(qs)
+    scale = max(1.0, float(np.max(np.abs(Q))))
+    return float(np.max(np.abs(qs - Q))) / scale

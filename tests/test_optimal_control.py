@@ -1,0 +1,141 @@
+"""Optimal control on the discrete action (DMOC, #24): exact discrete optima, closed forms, fitted orders,
+the costates, the certificate, failures and bad input.
+
+Oracles: the block move ẍ = u, 0 -> d at rest in T, min ∫u²: J* = 12d²/T³, u* = (6 − 12t/T)d/T², and the
+midpoint DMOC optimum exactly J_N = J*·N²/(N²−1); the minimum-time move with |u| <= u_max: T* = 2√(d/u_max)
+(bang-bang, switch at T*/2); the damped transfer ẍ + cẋ + kx = u, min ∫u², J* = dᵀW⁻¹d with the
+controllability Gramian (1.674735875385 for c = 0.5, k = 1, T = 2, d = (1, 0)).
+"""
+from __future__ import annotations
+
+
+import casadi as ca
+import numpy as np
+import pytest
+
+import castrajectory as ct
+from castrajectory.validation import InputError
+
+
+def block(lower=None, upper=None):
+    u = ct.Control("u", 1, lower=lower, upper=upper)
+    x = ca.SX.sym("x", 1)
+    return ct.LagrangianSystem(x, ct.MassMatrix(1.0), [ct.Force(u)], names=["x"]), u
+
+
+def block_move(N, scheme="midpoint", d=1.0, T=1.0):
+    system, u = block()
+    ocp = ct.OptimalControl(system, T=T, N=N, scheme=scheme)
+    ocp.initial(q=[0.0], qd=[0.0])
+    ocp.final(q=[d], qd=[0.0])
+    ocp.minimize(running=u ** 2)
+    return ocp.solve()
+
+
+@pytest.mark.parametrize("scheme", ["midpoint", "trapezoid", "galerkin4"])
+@pytest.mark.parametrize("N", [2, 7, 40])
+def test_block_move_hits_the_exact_discrete_optimum(scheme, N):
+    """J_N = 12 N²/(N² − 1) for d = T = 1 (measured to 2e-13 at most; galerkin4 too: a piecewise-constant
+    control sees the same discrete problem)."""
+    sol = block_move(N, scheme)
+    assert sol.success and sol.certificate < 1e-12
+    assert abs(sol.cost - 12 * N * N / (N * N - 1)) < 1e-11
+
+
+def test_block_move_converges_at_second_order_to_the_closed_form():
+    """Fitted orders of the cost and of the controls (at the step midpoints) against J* and u*."""
+    Ns = np.array([10, 20, 40, 80])
+    dJ, du = [], []
+    for N in Ns:
+        sol = block_move(int(N), d=0.7, T=1.3)
+        tm = (np.arange(N) + 0.5) * 1.3 / N
+        dJ.append(abs(sol.cost - 12 * 0.7 ** 2 / 1.3 ** 3))
+        du.append(np.max(np.abs(sol.u[:, 0] - (6 - 12 * tm / 1.3) * 0.7 / 1.3 ** 2)))
+    oJ = -np.polyfit(np.log(Ns), np.log(dJ), 1)[0]
+    ou = -np.polyfit(np.log(Ns), np.log(du), 1)[0]
+    assert abs(oJ - 2.0) < 0.05 and abs(ou - 2.0) < 0.1
+
+
+def test_block_move_costates_converge_to_the_adjoint():
+    """The continuous costate of the velocity is λ_v(t) = −2u*(t) = −2(6 − 12t) (d = T = 1): linear in t.
+    The discrete costates (∂J*/∂p_k) are linear in t too (a straight-line fit leaves 3e-16 of their range)
+    and converge to λ_v at second order (measured errors 9.7e-2 ... 1.8e-3 for N = 10 ... 80, slope 1.91)."""
+    Ns = np.array([10, 20, 40, 80])
+    errs = []
+    for N in Ns:
+        sol = block_move(int(N))
+        lam, t = sol.costates[:, 0], sol.t[1:-1]
+        assert sol.costates.shape == (N - 1, 1)
+        assert np.max(np.abs(lam - np.polyval(np.polyfit(t, lam, 1), t))) < 5e-14 * np.ptp(lam)
+        errs.append(np.max(np.abs(lam + 2 * (6 - 12 * t))))
+    order = -np.polyfit(np.log(Ns), np.log(errs), 1)[0]
+    assert abs(order - 2.0) < 0.15 and errs[-1] < 4e-3
+
+
+def test_minimum_time_move_is_bang_bang():
+    """|u| <= 1, d = 1: T* = 2 (for even N the discrete minimum is the continuous one), switch at T/2."""
+    system, u = block(-1.0, 1.0)
+    ocp = ct.OptimalControl(system, T=(0.5, 10.0), N=20)
+    ocp.initial(q=[0.0], qd=[0.0])
+    ocp.final(q=[1.0], qd=[0.0])
+    ocp.minimize(final=ocp.T_symbol)
+    sol = ocp.solve()
+    assert sol.success and sol.certificate < 1e-12
+    assert abs(sol.T - 2.0) < 1e-8                             # measured 1.8e-10 (Ipopt's tol)
+    assert np.allclose(sol.u[:10, 0], 1.0, atol=1e-6) and np.allclose(sol.u[10:, 0], -1.0, atol=1e-6)
+
+
+def test_damped_transfer_converges_to_the_gramian_optimum():
+    u = ct.Control("w", 1)
+    x = ca.SX.sym("x", 1)
+    system = ct.LagrangianSystem(x, ct.MassMatrix(1.0), [ct.Potential(0.5 * x[0] ** 2, "spring"), ct.Damping(0.5),
+                                                         ct.Force(u)])
+    errs = []
+    Ns = np.array([20, 40, 80])
+    for N in Ns:
+        ocp = ct.OptimalControl(system, T=2.0, N=int(N))
+        ocp.initial(q=[0.0], qd=[0.0])
+        ocp.final(q=[1.0], qd=[0.0])
+        ocp.minimize(running=u ** 2)
+        sol = ocp.solve()
+        assert sol.success and sol.certificate < 1e-12
+        errs.append(sol.cost - 1.674735875385)
+    order = -np.polyfit(np.log(Ns), np.log(np.abs(errs)), 1)[0]
+    assert abs(order - 2.0) < 0.05 and abs(errs[-1]) < 5e-4    # measured 2.57e-4 at N = 80
+
+
+def test_an_infeasible_problem_is_a_failure():
+    """|u| <= 0.1 cannot move the block by 1 in 1 s (the most it can do is 0.025)."""
+    system, u = block(-0.1, 0.1)
+    ocp = ct.OptimalControl(system, T=1.0, N=20)
+    ocp.initial(q=[0.0], qd=[0.0])
+    ocp.final(q=[1.0], qd=[0.0])
+    ocp.minimize(running=u ** 2)
+    sol = ocp.solve()
+    assert not sol.success and sol.status != "ok" and "Infeasible" in sol.solver_status
+
+
+@pytest.mark.parametrize("make,needle", [
+    (lambda s, u: ct.OptimalControl(s, T=(0.0, 1.0), N=10), "0 < lo <= hi"),
+    (lambda s, u: ct.OptimalControl(s, T=(2.0, 1.0), N=10), "0 < lo <= hi"),
+    (lambda s, u: ct.OptimalControl(s, T=1.0, N=10).initial(q=[0.0, 1.0]), "has 2 values"),
+    (lambda s, u: ct.OptimalControl(s, T=1.0, N=10).minimize(running=ca.vertcat(u, u)), "must be a scalar"),
+    (lambda s, u: ct.OptimalControl(s, T=1.0, N=10).minimize(running=ct.Control("v", 1) ** 2), "appears in no force"),
+    (lambda s, u: ct.Control("w", 1, lower=1.0, upper=0.0), "lower bound is above"),
+])
+def test_bad_problems_are_refused(make, needle):
+    system, u = block()
+    with pytest.raises(InputError, match=needle):
+        make(system, u)
+
+
+def test_a_system_without_controls_is_refused():
+    x = ca.SX.sym("x", 1)
+    with pytest.raises(InputError, match="no control"):
+        ct.OptimalControl(ct.LagrangianSystem(x, ct.MassMatrix(1.0)), T=1.0, N=10)
+
+
+def test_a_controlled_system_cannot_be_simulated():
+    system, u = block()
+    with pytest.raises(InputError, match="control"):
+        ct.simulate(system, [0.0], [0.0], T=1.0, N=10)
