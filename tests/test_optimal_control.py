@@ -9,6 +9,8 @@ controllability Gramian (1.674735875385 for c = 0.5, k = 1, T = 2, d = (1, 0)).
 from __future__ import annotations
 
 
+import math
+
 import casadi as ca
 import numpy as np
 import pytest
@@ -139,3 +141,43 @@ def test_a_controlled_system_cannot_be_simulated():
     system, u = block()
     with pytest.raises(InputError, match="control"):
         ct.simulate(system, [0.0], [0.0], T=1.0, N=10)
+
+
+# ----------------------------------------------------------------------------- the scenes
+import json  # noqa: E402
+import os  # noqa: E402
+import subprocess  # noqa: E402
+import sys  # noqa: E402
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def scene(name, *args):
+    return subprocess.run([sys.executable, os.path.join(ROOT, "problems", f"{name}.py"), *args], capture_output=True,
+                          text=True, timeout=300, env={**os.environ, "MPLBACKEND": "Agg"})
+
+
+@pytest.mark.parametrize("name,args,oracle,tol", [
+    ("block_move", ("--distance", "2", "--T", "3", "--n", "30"), lambda d: 12 * 4 / 27 * 900 / 899, 1e-12),
+    ("min_time", ("--distance", "3", "--u-max", "0.5", "--n", "20"), lambda d: 2 * math.sqrt(6.0), 1e-8),
+    ("damped_transfer", ("--n", "160"), lambda d: 1.674735875385, 1e-4),
+])
+def test_scene_json_against_its_oracle(name, args, oracle, tol):
+    """Each scene's JSON: cost, T, t, q, u, costates, certificate, error_vs_exact; the answer against its closed
+    form (block move: the exact discrete optimum; min time: T*; damped transfer: the Gramian's J*, 6.4e-5 at
+    N = 160 measured)."""
+    p = scene(name, *args, "--json")
+    assert p.returncode == 0, p.stderr
+    d = json.loads(p.stdout)
+    for key in ("cost", "T", "t", "q", "u", "costates", "certificate", "error_vs_exact"):
+        assert key in d, key
+    value = d["T"] if name == "min_time" else d["cost"]
+    assert abs(value - oracle(d)) < tol and d["certificate"] < 1e-12
+
+
+def test_scene_picture_and_bad_input(tmp_path):
+    out = tmp_path / "bm.png"
+    p = scene("block_move", "--n", "20", "--plot", str(out))
+    assert p.returncode == 0 and out.stat().st_size > 0
+    p = scene("min_time", "--u-max", "-1")
+    assert p.returncode == 2 and len(p.stderr.strip().splitlines()) == 1 and "--u-max" in p.stderr

@@ -164,6 +164,10 @@ SCENES: List[Scene] = [
     Scene("heavy_top", "rigid bodies", report=(
         Entry("heavy_top", ("--reference",), "heavy top: spin 100 rad/s, tilt 0.3 rad, T = 2 s, "
               "against Euler–Poisson (CVODES)", True),)),
+    # optimal control on the discrete action (#24); their report section comes with the rest of the issue
+    Scene("block_move"),
+    Scene("min_time"),
+    Scene("damped_transfer"),
 ]
 
 #: The stability table's order of families (a family's cases in the order of its scenes)

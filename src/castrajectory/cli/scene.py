@@ -104,6 +104,16 @@ def solve_trajectory(system, q0, qd0, args):
                              verbose=args.verbose, **accuracy(args))
 
 
+def add_control_flags(p: argparse.ArgumentParser, n: int, scheme: str = "midpoint") -> None:
+    """Flags shared by the optimal-control scenes: grid, scheme, plot and animation (the horizon and the
+    physics are each scene's own)."""
+    from ..discretise.lagrangians import SCHEMES
+    p.add_argument("--n", type=int, default=n, help="number of time steps N (>= 2)")
+    p.add_argument("--scheme", choices=list(SCHEMES), default=scheme, help="discrete Lagrangian")
+    add_plot(p)
+    p.add_argument("--animate", metavar="PATH", help="write an animation (.gif, or .mp4 when ffmpeg is present)")
+
+
 def add_plot(p: argparse.ArgumentParser) -> None:
     p.add_argument("--plot", metavar="PATH", help="write a picture (format from the extension, e.g. .png, .pdf)")
 
@@ -210,6 +220,28 @@ def state_keys(system, run) -> dict:
         # contact's name and its impulse under that name
         out["impacts"] = [{**i.as_dict(), "name": names[i.contact], "impulse": float(i.mu)} for i in impacts]
     return out
+
+
+def control_outcome(title: str, system, sol, extra: Optional[dict] = None, extra_lines: Optional[List[str]] = None,
+                    exact_u=None) -> "Outcome":
+    """Summary, JSON data and plot/animation writers of an optimal-control scene (a
+    :class:`~castrajectory.solve.optimal_control.ControlResult`)."""
+    from ..inspect import plotting
+    cert = "-" if not np.isfinite(sol.certificate) else f"{sol.certificate:.1e}"
+    lines = [f"{title}: DMOC, scheme {sol.scheme}, N = {len(sol.t) - 1}, T = {sol.T:.10g} s",
+             f"cost J = {sol.cost:.12g}; certificate (the controls marched, against the optimum) {cert}",
+             *(extra_lines or []), status_line(sol.status, sol)]
+    unames = [f"{c.name}[{i}]" if c.size > 1 else c.name for c in system.controls for i in range(c.size)]
+
+    def plot(path):
+        plotting.control_plot(sol.t, sol.q, system.names, sol.u, unames, title=title, exact_u=exact_u).savefig(path)
+
+    def animate(path):
+        if system.points is None:
+            raise InputError("this scene has no points to animate")
+        plotting.animate_points(system.positions(sol.q, sol.t), sol.t, path, links=True, title=title)
+
+    return Outcome.of(sol, extra, lines, writers={"plot": plot, "animate": animate})
 
 
 def contact_outcome(title: str, system, tr, data: dict, lines: List[str], ground=None,

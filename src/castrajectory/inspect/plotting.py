@@ -224,6 +224,33 @@ def energy_quantities_plot(t, energies: Dict[str, np.ndarray], quantities: Dict[
     return fig
 
 
+def control_plot(t, q, names: Sequence[str], u, control_names: Sequence[str], title: Optional[str] = None,
+                 exact_u=None) -> Figure:
+    """An optimal control's answer: the configuration against time, and the controls (constant per step:
+    drawn as steps), with a closed-form control ``exact_u(t)`` dashed where one exists."""
+    t = np.asarray(t, float)
+    q, u = np.atleast_2d(np.asarray(q, float)), np.asarray(u, float).reshape(t.size - 1, -1)
+    fig = Figure(figsize=(6.4, 6.0), layout="constrained")
+    ax, bx = fig.subplots(2, 1, sharex=True)
+    for j in range(q.shape[1]):
+        ax.plot(t, q[:, j], lw=1.2, label=names[j] if j < len(names) else f"q{j}")
+    ax.set_ylabel("q")
+    ax.grid(True, alpha=0.3)
+    if q.shape[1] <= _MAX_LEGEND:
+        ax.legend(fontsize=8)
+    ax.set_title(title or "optimal control", fontsize=10)
+    for j in range(u.shape[1]):
+        bx.stairs(u[:, j], t, lw=1.2, label=control_names[j] if j < len(control_names) else f"u{j}")
+    if exact_u is not None:
+        tt = np.linspace(t[0], t[-1], 400)
+        bx.plot(tt, exact_u(tt), "k--", lw=0.9, label="closed form")
+    bx.set_xlabel("t")
+    bx.set_ylabel("u")
+    bx.grid(True, alpha=0.3)
+    bx.legend(fontsize=8)
+    return fig
+
+
 #: More coordinates than this in one panel of :func:`trajectory_plot` get no legend.
 _MAX_LEGEND = 12
 
