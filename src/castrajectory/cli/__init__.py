@@ -38,6 +38,11 @@ def main(argv: Optional[List[str]] = None) -> int:
                    add_help=False)
     sub.add_parser("derive", help="write the derivation of FILE.py: castrajectory derive FILE.py --out PATH",
                    add_help=False)
+    sub.add_parser("control", help="solve the optimal-control problem of FILE.py: castrajectory control FILE.py "
+                                   "[flags]", add_help=False)
+    if argv[:1] == ["control"]:
+        from . import control
+        return control.main(argv[1:])
     if argv[:1] == ["system"]:
         from . import system
         return system.main(argv[1:])

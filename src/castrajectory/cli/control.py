@@ -1,0 +1,75 @@
+"""``castrajectory control FILE.py``: an optimal-control problem the user describes in a file, solved whole
+on the discrete action (DMOC) and certified, with the conventions of every scene (:func:`.scene.run_scene`).
+
+The file is plain Python and defines ``problem()`` returning a :class:`castrajectory.OptimalControl`
+(its system, horizon, boundary conditions, cost and path constraints), and optionally ``title`` and for
+pictures ``exact_u(t)``, a closed-form control to draw beside the answer.  ``--n`` and ``--scheme``
+override the grid and the scheme the file chose.
+
+Bad input is refused before any solve (exit 2, one line): a file that does not exist or does not import,
+no ``problem()``, a ``problem()`` that does not return an ``OptimalControl`` or raises (its message), and
+every refusal of the problem itself (boundary conditions of the wrong length or off the constraints,
+bounds crossed, a cost that is not a scalar, a control in no force, a free-time interval out of order).
+"""
+from __future__ import annotations
+
+import os
+import sys
+from typing import List, Optional
+
+from ..validation import InputError, integer_at_least, one_of
+from .scene import ArgumentParser, add_plot, check_animation_path, control_outcome, ipopt_options, run_scene
+from .system import load
+
+
+def parser() -> ArgumentParser:
+    from ..discretise.lagrangians import SCHEMES
+    p = ArgumentParser(prog="castrajectory control",
+                       description="Solve the optimal-control problem of FILE.py on the discrete action (DMOC).")
+    p.add_argument("file", metavar="FILE.py", help="a Python file defining problem() -> ct.OptimalControl")
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout and nothing else")
+    p.add_argument("--verbose", action="store_true", help="stream Ipopt's log (to stderr with --json)")
+    p.add_argument("--max-iter", type=int, default=None, help="Ipopt iterations")
+    p.add_argument("--n", type=int, default=None, help="number of time steps N (default: the file's)")
+    p.add_argument("--scheme", choices=list(SCHEMES), default=None, help="discrete Lagrangian (default: the file's)")
+    add_plot(p)
+    p.add_argument("--animate", metavar="PATH", help="write an animation (.gif, or .mp4 when ffmpeg is present)")
+    return p
+
+
+def described(module, path: str):
+    from ..solve.optimal_control import OptimalControl
+    fn = getattr(module, "problem", None)
+    if not callable(fn):
+        raise InputError(f"{path} defines no problem() function")
+    try:
+        ocp = fn()
+    except InputError as exc:
+        raise InputError(f"{path}: problem(): {exc}") from None
+    except Exception as exc:  # noqa: BLE001 - whatever the user's file raises is bad input
+        raise InputError(f"{path}: problem() raised {type(exc).__name__}: {exc}".splitlines()[0]) from None
+    if not isinstance(ocp, OptimalControl):
+        raise InputError(f"{path}: problem() returned a {type(ocp).__name__}, not a castrajectory.OptimalControl")
+    return ocp
+
+
+def run(args):
+    check_animation_path(args.animate)
+    module = load(args.file)
+    ocp = described(module, args.file)
+    if args.n is not None:
+        ocp.N = integer_at_least("n", args.n, 2)
+    if args.scheme is not None:
+        ocp.scheme = one_of("scheme", args.scheme, (args.scheme,))
+    sol = ocp.solve(options=ipopt_options(args), verbose=args.verbose)
+    title = str(getattr(module, "title", os.path.splitext(os.path.basename(args.file))[0]))
+    exact_u = getattr(module, "exact_u", None)
+    return control_outcome(title, ocp.system, sol, exact_u=exact_u if callable(exact_u) else None)
+
+
+def main(argv: Optional[List[str]] = None) -> int:
+    return run_scene(parser(), run, argv)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
