@@ -168,6 +168,7 @@ SCENES: List[Scene] = [
     Scene("block_move"),
     Scene("min_time"),
     Scene("damped_transfer"),
+    Scene("satellite_slew"),
 ]
 
 #: The stability table's order of families (a family's cases in the order of its scenes)
