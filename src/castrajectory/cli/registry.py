@@ -169,6 +169,7 @@ SCENES: List[Scene] = [
     Scene("min_time"),
     Scene("damped_transfer"),
     Scene("satellite_slew"),
+    Scene("cartpole_swingup"),
 ]
 
 #: The stability table's order of families (a family's cases in the order of its scenes)
