@@ -264,3 +264,11 @@ def test_cartpole_swing_up_converges_to_kellys_optimum():
         assert d["certificate"] < 1e-11 and max(abs(v[0]) for v in d["u"]) < 20.0
         errs.append(d["cost"] - 58.8076674582)
     assert abs(np.log2(errs[0] / errs[1]) - 2.0) < 0.05 and 0 < errs[1] < 0.05
+
+
+def test_an_impossible_swing_up_exits_1_with_ipopts_status():
+    p = scene("pendulum_swingup", "--u-max", "0.1", "--T", "1", "--n", "50")
+    assert p.returncode == 1 and "Infeasible_Problem_Detected" in p.stderr
+    p = scene("pendulum_swingup", "--n", "100", "--json")
+    d = json.loads(p.stdout)
+    assert p.returncode == 0 and abs(d["cost"] - 65.77087593) < 1e-6 and d["certificate"] < 1e-11

@@ -170,6 +170,7 @@ SCENES: List[Scene] = [
     Scene("damped_transfer"),
     Scene("satellite_slew"),
     Scene("cartpole_swingup"),
+    Scene("pendulum_swingup"),
 ]
 
 #: The stability table's order of families (a family's cases in the order of its scenes)
