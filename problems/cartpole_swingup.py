@@ -36,14 +36,14 @@ def parser():
     return p
 
 
-def problem(m1, m2, l, g, T, target, x_max, u_max, N, scheme="midpoint"):
+def problem(m1, m2, l, g, T, target, x_max, u_max, N, scheme="midpoint", controls="quadrature"):
     u = ct.Control("u", 1, lower=-u_max, upper=u_max)
     q = ca.SX.sym("q", 2)
     cart = ca.vertcat(q[0], 0)
     bob = ca.vertcat(q[0] + l * ca.sin(q[1]), -l * ca.cos(q[1]))
     system = ct.LagrangianSystem(q, ct.Atoms([cart, bob], [m1, m2]), [ct.Gravity(g), ct.Force(ca.vertcat(u, 0))],
                                  names=["x", "theta"])
-    ocp = ct.OptimalControl(system, T=T, N=N, scheme=scheme)
+    ocp = ct.OptimalControl(system, T=T, N=N, scheme=scheme, controls=controls)
     ocp.initial(q=[0.0, 0.0], qd=[0.0, 0.0])
     ocp.final(q=[target, ca.pi], qd=[0.0, 0.0])
     ocp.minimize(running=u ** 2)
@@ -60,7 +60,7 @@ def run(args):
         raise InputError(f"--target {args.target:g} lies outside |x| <= --x-max {args.x_max:g}")
     cli.check_animation_path(args.animate)
     system, ocp = problem(args.cart_mass, args.pole_mass, args.length, args.g, args.T, args.target, args.x_max,
-                          args.u_max, args.n, args.scheme)
+                          args.u_max, args.n, args.scheme, args.controls)
     sol = ocp.solve(options=cli.ipopt_options(args), verbose=args.verbose)
     kelly = (args.cart_mass, args.pole_mass, args.length, args.g, args.T, args.target, args.x_max, args.u_max) == \
         (1.0, 0.3, 0.5, 9.81, 2.0, 1.0, 2.0, 20.0)

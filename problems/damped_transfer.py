@@ -60,7 +60,7 @@ def run(args):
     if args.damping:
         terms.insert(-1, ct.Damping(args.damping))
     system = ct.LagrangianSystem(x, ct.MassMatrix(1.0), terms, names=["x"], points_expr=[ca.vertcat(x[0], 0)])
-    ocp = ct.OptimalControl(system, T=args.T, N=args.n, scheme=args.scheme)
+    ocp = ct.OptimalControl(system, T=args.T, N=args.n, scheme=args.scheme, controls=args.controls)
     ocp.initial(q=[0.0], qd=[0.0])
     ocp.final(q=[args.distance], qd=[0.0])
     ocp.minimize(running=u ** 2)

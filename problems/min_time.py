@@ -37,12 +37,14 @@ def run(args):
     system = ct.LagrangianSystem(x, ct.MassMatrix(1.0), [ct.Force(u)], names=["x"],
                                  points_expr=[ca.vertcat(x[0], 0)])
     Ts = 2.0 * math.sqrt(d / umax)
-    ocp = ct.OptimalControl(system, T=(0.1 * Ts, 10.0 * Ts), N=N, scheme=args.scheme)
+    ocp = ct.OptimalControl(system, T=(0.1 * Ts, 10.0 * Ts), N=N, scheme=args.scheme, controls=args.controls)
     ocp.initial(q=[0.0], qd=[0.0])
     ocp.final(q=[d], qd=[0.0])
     ocp.minimize(final=ocp.T_symbol)
     sol = ocp.solve(options=cli.ipopt_options(args), verbose=args.verbose)
-    sw = float(np.argmax(sol.u[:, 0] < 0)) * sol.T / N if sol.success and np.any(sol.u[:, 0] < 0) else float("nan")
+    neg = np.nonzero(sol.u[:, 0] < 0)[0] if sol.success else np.zeros(0, int)
+    # the switch: between the last positive control point and the first negative one
+    sw = float(0.5 * (sol.t_u[neg[0] - 1] + sol.t_u[neg[0]])) if neg.size and neg[0] > 0 else float("nan")
     lines = [f"T* = 2 sqrt(d/u_max) = {Ts:.12g}; T − T* = {sol.T - Ts:.2e}; the control switches sign at "
              f"t = {sw:.6g} (T*/2 = {Ts / 2:.6g})"]
     return cli.control_outcome("minimum-time move", system, sol, extra={

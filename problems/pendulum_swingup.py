@@ -45,7 +45,7 @@ def run(args):
     bob = ca.vertcat(args.length * ca.sin(th[0]), -args.length * ca.cos(th[0]))
     terms = [ct.Gravity(args.g)] + ([ct.Damping(args.damping)] if args.damping else []) + [ct.Force(u)]
     system = ct.LagrangianSystem(th, ct.Atoms([bob], [args.mass]), terms, names=["theta"])
-    ocp = ct.OptimalControl(system, T=args.T, N=args.n, scheme=args.scheme)
+    ocp = ct.OptimalControl(system, T=args.T, N=args.n, scheme=args.scheme, controls=args.controls)
     ocp.initial(q=[0.0], qd=[0.0])
     ocp.final(q=[ca.pi], qd=[0.0])
     ocp.minimize(running=10 * u ** 2)

@@ -48,7 +48,7 @@ def run(args):
     points = [ct.body_point(q, [0.0, 0.0, 0.0])] + [ct.body_point(q, e) for e in np.eye(3)]
     body = ct.LagrangianSystem(q, ct.RigidBody(q, inertia), [ct.Force(Q)], constraints=[ct.unit_norm(q)],
                                names=["qw", "qx", "qy", "qz"], points_expr=points)
-    ocp = ct.OptimalControl(body, T=args.T, N=args.n, scheme=args.scheme)
+    ocp = ct.OptimalControl(body, T=args.T, N=args.n, scheme=args.scheme, controls=args.controls)
     ocp.initial(q=[1.0, 0.0, 0.0, 0.0], qd=[0.0] * 4)
     ocp.final(q=axis_angle(axis, args.angle).tolist(), qd=[0.0] * 4)
     ocp.minimize(running=ca.sumsqr(tau))

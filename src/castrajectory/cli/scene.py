@@ -110,6 +110,8 @@ def add_control_flags(p: argparse.ArgumentParser, n: int, scheme: str = "midpoin
     from ..discretise.lagrangians import SCHEMES
     p.add_argument("--n", type=int, default=n, help="number of time steps N (>= 2)")
     p.add_argument("--scheme", choices=list(SCHEMES), default=scheme, help="discrete Lagrangian")
+    p.add_argument("--controls", choices=("quadrature", "step"), default="quadrature",
+                   help="controls at the scheme's quadrature nodes (its order) or one per step (order 2)")
     add_plot(p)
     p.add_argument("--animate", metavar="PATH", help="write an animation (.gif, or .mp4 when ffmpeg is present)")
 

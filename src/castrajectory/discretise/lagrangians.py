@@ -78,7 +78,7 @@ class DiscreteMechanics:
       the time dependence's ``−∂L/∂t`` (post-processing: the energy balance).
     """
 
-    def __init__(self, system: LagrangianSystem, scheme_name):
+    def __init__(self, system: LagrangianSystem, scheme_name, control_points: str = "step"):
         self.system = system
         self.scheme = S = scheme(scheme_name)
         n = system.nq
@@ -92,7 +92,12 @@ class DiscreteMechanics:
         # control inputs (optimal control): one vector per step, an input of every forced element after the
         # time; a system without controls builds exactly the elements it had
         self.controls = list(system.controls)
-        self.nu = int(sum(c.size for c in self.controls))
+        #: control values per step: one ("step", constant on the step) or one at each of the scheme's
+        #: quadrature nodes ("quadrature", so that the forces' and the cost's quadrature keep the order)
+        self.control_points = control_points
+        self.nqu = S.nodes.size if control_points == "quadrature" else 1
+        self.nu1 = int(sum(c.size for c in self.controls))
+        self.nu = self.nu1 * self.nqu
         U, Um = ca.SX.sym("u", self.nu), ca.SX.sym("um", self.nu)
         uin = [U] if self.nu else []
         Lf = system.L
@@ -105,7 +110,7 @@ class DiscreteMechanics:
         if self.forced:
             Qf = system.force
             if self.nu:
-                f = S.discrete_forces(lambda q, v, t: Qf(q, v, 0 if t is None else t, U), X, h,
+                f = S.discrete_forces(self.control_at(lambda q, v, t, u: Qf(q, v, 0 if t is None else t, u), U), X, h,
                                       t0 if self.timed else None)
             else:
                 f = S.discrete_forces(lambda q, v, t: Qf(q, v, 0 if t is None else t), X, h,
@@ -175,6 +180,18 @@ class DiscreteMechanics:
                 ca.Function(f"c_stage{j}", [zj, t0, h], [cfun(zj, t0 + float(S.stage_times[j]) * h)[0]])
                 if self.timed else self.constraint_rows for j in range(S.stages)]
 
+    def control_at(self, fn, U):
+        """``fn(q, v, t, u)`` as ``g(q, v, t)`` for a quadrature, the control at its i-th node being ``U``'s
+        i-th block (the quadratures call their integrand once per node, in order; a step's one control
+        serves every node)."""
+        calls = iter(range(10 ** 9))
+        nu1, nqu = self.nu1, self.nqu
+
+        def g(q, v, t):
+            i = next(calls) % nqu
+            return fn(q, v, t, U[i * nu1:(i + 1) * nu1])
+        return g
+
     # --------------------------------------------------------------- helpers
     def node_times(self, N: int, h: float, t0: float = 0.0) -> np.ndarray:
         """``t_k = t0 + k h`` for ``k = 0..N``."""
@@ -241,19 +258,20 @@ def _form(fn: ca.Function) -> str:
     return hashlib.sha256(fn.serialize().encode()).hexdigest()
 
 
-def discrete_mechanics(system: LagrangianSystem, scheme_name) -> DiscreteMechanics:
+def discrete_mechanics(system: LagrangianSystem, scheme_name, control_points: str = "step") -> DiscreteMechanics:
     """:class:`DiscreteMechanics` of ``system`` under ``scheme_name``, its functions shared with an earlier
     system of the same Lagrangian, constraints and forces (found by their serialised forms): every
     ``simulate()`` builds its system afresh, and forming the discrete functions again cost 7 ms of a
     60 ms run (galerkin12, double pendulum) besides the derivatives and compiled code keyed by them.
     The copy is bound to ``system`` (its names, points and terms)."""
     key = (scheme(scheme_name).name, _form(system.L), _form(system.constraint) if system.nc else None,
-           _form(system.force) if system.forced else None, bool(system.time_dependent))
+           _form(system.force) if system.forced else None, bool(system.time_dependent),
+           control_points if system.controls else None)
     hit = _CACHE.get(key)
     if hit is None:
         if len(_CACHE) > 64:
             _CACHE.clear()
-        hit = _CACHE[key] = DiscreteMechanics(system, scheme_name)
+        hit = _CACHE[key] = DiscreteMechanics(system, scheme_name, control_points)
     dm = copy.copy(hit)
     dm.system = system
     return dm

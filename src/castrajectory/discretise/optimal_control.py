@@ -60,7 +60,8 @@ class ControlTranscription:
                 nlp.variable("lam0", m)
             if vN is not None:
                 nlp.variable("lamN", m)
-        lo, hi = u_bounds if u_bounds is not None else (np.full(nu, -np.inf), np.full(nu, np.inf))
+        lo, hi = u_bounds if u_bounds is not None else (np.full(dm.nu1, -np.inf), np.full(dm.nu1, np.inf))
+        lo, hi = np.tile(lo, dm.nqu), np.tile(hi, dm.nqu)           # the same bounds at every control point
         nlp.variable("u", N * nu, lb=np.tile(lo, N), ub=np.tile(hi, N),
                      init=np.tile(np.clip(0.0, lo, hi), N))
         if self.free_time:
@@ -121,7 +122,7 @@ class ControlTranscription:
         for j, (fn, lb, ub) in enumerate(path):
             k = np.arange(N + 1)
             ku = np.minimum(k, N - 1)
-            args = [X(Q[k]), X(Ui[ku]) if nu else np.zeros(0), _node_times(self, k)]
+            args = [X(Q[k]), X(Ui[ku][:, :dm.nu1]) if nu else np.zeros(0), _node_times(self, k)]
             nlp.inequality_elements(f"path{j}", fn, args, lb=np.tile(lb, N + 1), ub=np.tile(ub, N + 1))
         # the cost
         if running is not None:
@@ -141,7 +142,7 @@ class ControlTranscription:
         a, b, Z, h, k = ca.SX.sym("a", n), ca.SX.sym("b", n), ca.SX.sym("Z", s), ca.SX.sym("h"), ca.SX.sym("k")
         u = ca.SX.sym("u", nu)
         Xs = [a] + [Z[j * n:(j + 1) * n] for j in range(dm.scheme.stages)] + [b]
-        val = dm.scheme.discrete_lagrangian(lambda q, v, t: running(q, v, u, t), Xs, h, k * h)
+        val = dm.scheme.discrete_lagrangian(dm.control_at(lambda q, v, t, uu: running(q, v, uu, t), u), Xs, h, k * h)
         return ca.Function("running", [a, Z, b, h, k, u], [val])
 
     def _final_element(self, final: ca.Function) -> ca.Function:

@@ -11,11 +11,11 @@ The public face, in the style of CasADi's ``Opti`` and rockit::
     ocp.subject_to(-2 <= q[0], q[0] <= 2)                             # at every node
     sol = ocp.solve()
 
-The transcription is :mod:`castrajectory.discretise.optimal_control`.  Controls are constant per step:
-the forces' quadrature sees one value per step.  With midpoint that is the scheme's own order (2);
-a higher-order scheme keeps the order of the dynamics' quadrature, but a piecewise-constant control
-limits the cost's and the controls' accuracy to what a piecewise-constant function can be (see
-``docs/derivations.md``).
+The transcription is :mod:`castrajectory.discretise.optimal_control`.  Controls are given at the scheme's
+quadrature nodes (``controls="quadrature"``, the default: each node of the forces' and the cost's
+quadrature has its own value, so the cost converges at the scheme's order -- galerkin4 4, galerkin6 6;
+midpoint has one node, a value per step) or constant per step (``controls="step"``: a piecewise-constant
+control caps every scheme's cost and controls at order 2).  See ``docs/derivations.md``.
 
 Every answer is **certified**: its controls are marched forward, step by step, with the same discrete
 equations (a Newton solve per step), and every step must reproduce the optimal trajectory's next node
@@ -67,6 +67,7 @@ class ControlResult(Result):
     q: np.ndarray
     v: np.ndarray
     u: np.ndarray
+    t_u: Optional[np.ndarray] = None
     controls: Dict[str, np.ndarray] = field(default_factory=dict)
     costates: Optional[np.ndarray] = None
     certificate: float = math.nan
@@ -75,7 +76,7 @@ class ControlResult(Result):
 
     def as_dict(self) -> dict:
         return {**super().as_dict(), "cost": self.cost, "T": self.T, "t": self.t, "q": self.q, "v": self.v,
-                "u": self.u, "controls": self.controls, "costates": self.costates, "certificate": self.certificate,
+                "u": self.u, "t_u": self.t_u, "controls": self.controls, "costates": self.costates, "certificate": self.certificate,
                 "march_distance": self.march_distance,
                 "scheme": self.scheme}
 
@@ -109,7 +110,8 @@ class OptimalControl:
     """An optimal-control problem on the discrete action of ``system`` (see the module docstring).
 
     ``T``: the horizon, or ``(lo, hi)`` for a free final time (``0 < lo <= hi``); ``N`` steps; ``scheme``: any
-    of ``ct.schemes()``.  :attr:`T_symbol` is the final time in a final cost (``minimize(final=ocp.T_symbol)``
+    of ``ct.schemes()``; ``controls``: ``"quadrature"`` (a value at each of the scheme's quadrature nodes:
+    the scheme's order; midpoint has one node) or ``"step"`` (one value per step: order 2 at most).  :attr:`T_symbol` is the final time in a final cost (``minimize(final=ocp.T_symbol)``
     is the minimum-time problem).
 
     A block of unit mass moved by 1 in 1 s at least effort (``J* = 12``; midpoint on N steps: ``12N²/(N²−1)``):
@@ -125,7 +127,7 @@ class OptimalControl:
     (True, True, True)
     """
 
-    def __init__(self, system: LagrangianSystem, T, N: int, scheme: str = "midpoint"):
+    def __init__(self, system: LagrangianSystem, T, N: int, scheme: str = "midpoint", controls: str = "quadrature"):
         if not isinstance(system, LagrangianSystem):
             raise InputError(f"system must be a LagrangianSystem (got {type(system).__name__})")
         if system.contact is not None:
@@ -135,6 +137,7 @@ class OptimalControl:
         self.system = system
         self.N = integer_at_least("N", N, 2)
         self.scheme = one_of("scheme", scheme, tuple(SCHEMES))
+        self.control_points = one_of("controls", controls, ("step", "quadrature"))
         if isinstance(T, (tuple, list)):
             if len(T) != 2:
                 raise InputError(f"a free final time is an interval (lo, hi) (got {T!r})")
@@ -251,7 +254,7 @@ class OptimalControl:
             raise InputError("no cost: call minimize() first")
         s, N = self.system, self.N
         n, nu = s.nq, self._u.numel()
-        dm = discrete_mechanics(s, self.scheme)
+        dm = discrete_mechanics(s, self.scheme, self.control_points)
         q, qd, t, u = s.q, s.qd, s.t, self._u
         running = ca.Function("l", [q, qd, u, t], [self._running]) if self._running is not None else None
         final = ca.Function("phi", [q, self.T_symbol], [self._final]) if self._final is not None else None
@@ -273,7 +276,7 @@ class OptimalControl:
         vals = res.values
         Q = vals["q"].reshape(N + 1, n)
         Z = vals["Z"].reshape(N, dm.s) if dm.s else np.zeros((N, 0))
-        U = vals["u"].reshape(N, nu)
+        U = vals["u"].reshape(N, dm.nu)         # per step: the control at each control point
         h = float(vals["h"][0]) if self._is_free_time() else self.T / N
         T = h * N
         times = h * np.arange(N + 1)
@@ -285,7 +288,9 @@ class OptimalControl:
         cert, marched = _certify(dm, Q, Z, U, h, times, p[0]) if res.success else (math.nan, math.nan)
         out = ControlResult(success=res.success, solver_status=res.solver_status, message=res.message, iterations=res.iterations, build_time_s=res.build_time_s,
                             solve_time_s=wall - res.build_time_s, cost=float(res.objective), T=T, t=times, q=Q,
-                            v=v, u=U, controls=split_controls(U, self._controls, N), costates=costates,
+                            v=v, u=U.reshape(N * dm.nqu, nu), t_u=_control_times(dm, times),
+                            controls=split_controls(U.reshape(N * dm.nqu, nu), self._controls, N * dm.nqu),
+                            costates=costates,
                             certificate=cert, march_distance=marched, scheme=self.scheme)
         if res.success and not (cert <= CERTIFICATE_TOL):
             out.fail("Certificate_Failed", f"the march of the optimal controls departs from the optimal "
@@ -300,7 +305,7 @@ class OptimalControl:
         b = np.where(np.isnan(qN), a, qN)
         w = np.linspace(0.0, 1.0, N + 1)[:, None]
         Q = a[None, :] + w * (b - a)[None, :]
-        U = np.tile(np.clip(0.0, lo, hi), (N, 1))
+        U = np.tile(np.clip(0.0, lo, hi), (N, dm.nqu))
         g = {"q": Q, "u": U}
         if self._is_free_time():
             g["T"] = 0.5 * sum(self.T)
@@ -308,11 +313,22 @@ class OptimalControl:
             g[k] = np.asarray(val, float)
         Q = np.asarray(g["q"], float).reshape(N + 1, n)
         out = {"q": Q.reshape(-1), "u": np.asarray(g["u"], float).reshape(-1)}
+        if out["u"].size != N * dm.nu:
+            raise InputError(f"the guess of u needs {N * dm.nu} values ({N} steps of {dm.nu}), got {out['u'].size}")
         if dm.s:
             out["Z"] = dm.stage_guess(Q[:-1], Q[1:]).reshape(-1)
         if self._is_free_time():
             out["h"] = np.array([float(g["T"]) / N])
         return out
+
+
+def _control_times(dm, times) -> np.ndarray:
+    """The time of each control value: the step's midpoint for a control per step, the quadrature nodes'
+    times otherwise."""
+    t0, h = times[:-1], times[1] - times[0]
+    if dm.nqu == 1:
+        return t0 + 0.5 * h
+    return (t0[:, None] + h * dm.scheme.nodes[None, :]).reshape(-1)
 
 
 def _momenta(dm, Q, Z, U, h, times) -> np.ndarray:
