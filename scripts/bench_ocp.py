@@ -153,18 +153,18 @@ def main(argv=None):
              ("castrajectory DMOC galerkin6", lambda n: dmoc(n, "galerkin6"), [20, 40, 80, 160, 320]),
              ("castrajectory DMOC galerkin8", lambda n: dmoc(n, "galerkin8"), [12, 25, 50, 100, 200]),
              ("Hermite-Simpson (Opti)", hermite_simpson, [25, 50, 100, 200, 400, 800])]
-    try:
-        import rockit  # noqa: F401
+    import importlib.util
+    if importlib.util.find_spec("rockit") is not None:
         plans += [("rockit multiple shooting RK4", lambda n: rockit_run(n, "ms"), [50, 100, 200, 400, 800]),
                   ("rockit collocation Radau 4", lambda n: rockit_run(n, "dc"), [25, 50, 100, 200, 400, 800])]
-    except ImportError:
+    else:
         print("  rockit: skipped (pip install '.[bench]' installs rockit-meco)")
     for label, fn, ns in plans:
         if args.quick:
             ns = ns[:4]
         rows += sweep(label, fn, ns, args.repeats, stop)
     labels = list(dict.fromkeys(r["label"] for r in rows))
-    print(f"\n  time to |J - J*| <= target (interpolated in log-log; 'not reached' within the sweep)")
+    print("\n  time to |J - J*| <= target (interpolated in log-log; 'not reached' within the sweep)")
     print(f"  {'method':34s}" + "".join(f"{t:>24.0e}" for t in TARGETS))
     cost = {}
     for lab in labels:
