@@ -137,6 +137,11 @@ def test_console_list_run_and_report(quick_report):
     assert "gravity" not in carries["double_pendulum_g0"]
     assert "contact: 1 gap" in carries["bouncing_ball"] and "| 0 (0) | equal" not in carries["bouncing_ball"]
     assert "no NLP" in carries["collision_impulse"]
+    # the optimal-control section (#24): every scene against its oracle, the swing-ups animated
+    ocs = summary.split("## Optimal control on the discrete action (DMOC)")[1].split("\n## ")[0]
+    for stem in ("block_move", "min_time", "damped_transfer", "satellite_slew", "cartpole_swingup", "pendulum_swingup"):
+        assert f"({stem}_plot.png)" in ocs and (out / f"{stem}.json").exists()
+    assert (out / "pendulum_swingup.gif").exists() and "status: ok" in ocs and "FAILED" not in ocs
     # the built-in scenes' derivations, generated and linked (sympy is in CI's extras)
     assert "(derivation_double_pendulum.md)" in summary
     assert "## The Euler–Lagrange equations" in (out / "derivation_double_pendulum.md").read_text()

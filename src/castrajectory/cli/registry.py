@@ -164,13 +164,23 @@ SCENES: List[Scene] = [
     Scene("heavy_top", "rigid bodies", report=(
         Entry("heavy_top", ("--reference",), "heavy top: spin 100 rad/s, tilt 0.3 rad, T = 2 s, "
               "against Euler–Poisson (CVODES)", True),)),
-    # optimal control on the discrete action (#24); their report section comes with the rest of the issue
-    Scene("block_move"),
-    Scene("min_time"),
-    Scene("damped_transfer"),
-    Scene("satellite_slew"),
-    Scene("cartpole_swingup"),
-    Scene("pendulum_swingup"),
+    # optimal control on the discrete action (#24)
+    Scene("block_move", "optimal control", report=(
+        Entry("block_move", (), "block move, midpoint, N = 50: the exact discrete optimum J* N²/(N²−1)"),
+        Entry("block_move_galerkin4", ("--scheme", "galerkin4", "--n", "10"),
+              "block move, galerkin4 with controls at its quadrature nodes, N = 10: J* itself"))),
+    Scene("min_time", "optimal control", report=(
+        Entry("min_time", (), "minimum-time move, |u| <= 1: bang-bang, T* = 2"),)),
+    Scene("damped_transfer", "optimal control", report=(
+        Entry("damped_transfer", ("--scheme", "galerkin6", "--n", "20"),
+              "damped transfer, galerkin6, N = 20, against the controllability Gramian"),)),
+    Scene("satellite_slew", "optimal control", report=(
+        Entry("satellite_slew", (), "satellite slew on SO(3), spherical inertia: J* = 12 j² Θ²/T³"),)),
+    Scene("cartpole_swingup", "optimal control", report=(
+        Entry("cartpole_swingup", ("--scheme", "galerkin8", "--n", "50"),
+              "cart-pole swing-up, galerkin8, N = 50, against Kelly's J*", True),)),
+    Scene("pendulum_swingup", "optimal control", report=(
+        Entry("pendulum_swingup", (), "pendulum swing-up, |u| <= 3, midpoint, N = 200", True),)),
 ]
 
 #: The stability table's order of families (a family's cases in the order of its scenes)

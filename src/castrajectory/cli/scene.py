@@ -236,7 +236,8 @@ def control_outcome(title: str, system, sol, extra: Optional[dict] = None, extra
     unames = [f"{c.name}[{i}]" if c.size > 1 else c.name for c in system.controls for i in range(c.size)]
 
     def plot(path):
-        plotting.control_plot(sol.t, sol.q, system.names, sol.u, unames, title=title, exact_u=exact_u).savefig(path)
+        plotting.control_plot(sol.t, sol.q, system.names, sol.u, unames, title=title, exact_u=exact_u,
+                              t_u=sol.t_u).savefig(path)
 
     def animate(path):
         if system.points is None:

@@ -225,11 +225,13 @@ def energy_quantities_plot(t, energies: Dict[str, np.ndarray], quantities: Dict[
 
 
 def control_plot(t, q, names: Sequence[str], u, control_names: Sequence[str], title: Optional[str] = None,
-                 exact_u=None) -> Figure:
-    """An optimal control's answer: the configuration against time, and the controls (constant per step:
-    drawn as steps), with a closed-form control ``exact_u(t)`` dashed where one exists."""
+                 exact_u=None, t_u=None) -> Figure:
+    """An optimal control's answer: the configuration against time, and the controls -- constant per step
+    (one value per step: drawn as steps) or at the control points ``t_u`` (drawn through them) -- with a
+    closed-form control ``exact_u(t)`` dashed where one exists."""
     t = np.asarray(t, float)
-    q, u = np.atleast_2d(np.asarray(q, float)), np.asarray(u, float).reshape(t.size - 1, -1)
+    q, u = np.atleast_2d(np.asarray(q, float)), np.asarray(u, float)
+    u = u.reshape(u.shape[0], -1)
     fig = Figure(figsize=(6.4, 6.0), layout="constrained")
     ax, bx = fig.subplots(2, 1, sharex=True)
     for j in range(q.shape[1]):
@@ -240,7 +242,11 @@ def control_plot(t, q, names: Sequence[str], u, control_names: Sequence[str], ti
         ax.legend(fontsize=8)
     ax.set_title(title or "optimal control", fontsize=10)
     for j in range(u.shape[1]):
-        bx.stairs(u[:, j], t, lw=1.2, label=control_names[j] if j < len(control_names) else f"u{j}")
+        label = control_names[j] if j < len(control_names) else f"u{j}"
+        if u.shape[0] == t.size - 1:
+            bx.stairs(u[:, j], t, lw=1.2, label=label)
+        else:
+            bx.plot(np.asarray(t_u, float), u[:, j], ".-", lw=1.0, ms=3, label=label)
     if exact_u is not None:
         tt = np.linspace(t[0], t[-1], 400)
         bx.plot(tt, exact_u(tt), "k--", lw=0.9, label="closed form")
