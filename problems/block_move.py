@@ -13,8 +13,10 @@ import sys
 import casadi as ca
 import numpy as np
 
-import castrajectory as ct
 from castrajectory import cli
+from castrajectory.models.mechanics import Force, LagrangianSystem, MassMatrix
+from castrajectory.models.control import Control
+from castrajectory.solve.optimal_control import OptimalControl
 from castrajectory.validation import InputError
 
 
@@ -28,11 +30,11 @@ def parser():
 
 
 def problem(d, T, m, n, scheme, controls="quadrature"):
-    u = ct.Control("u", 1)
+    u = Control("u", 1)
     x = ca.SX.sym("x", 1)
-    system = ct.LagrangianSystem(x, ct.MassMatrix(m), [ct.Force(u)], names=["x"],
+    system = LagrangianSystem(x, MassMatrix(m), [Force(u)], names=["x"],
                                  points_expr=[ca.vertcat(x[0], 0)])
-    ocp = ct.OptimalControl(system, T=T, N=n, scheme=scheme, controls=controls)
+    ocp = OptimalControl(system, T=T, N=n, scheme=scheme, controls=controls)
     ocp.initial(q=[0.0], qd=[0.0])
     ocp.final(q=[d], qd=[0.0])
     ocp.minimize(running=u ** 2)

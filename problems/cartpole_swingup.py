@@ -15,8 +15,10 @@ import sys
 import casadi as ca
 import numpy as np
 
-import castrajectory as ct
 from castrajectory import cli
+from castrajectory.models.mechanics import Atoms, Force, Gravity, LagrangianSystem
+from castrajectory.models.control import Control
+from castrajectory.solve.optimal_control import OptimalControl
 from castrajectory.validation import InputError
 
 KELLY = 58.8076674582
@@ -37,13 +39,13 @@ def parser():
 
 
 def problem(m1, m2, l, g, T, target, x_max, u_max, N, scheme="midpoint", controls="quadrature"):
-    u = ct.Control("u", 1, lower=-u_max, upper=u_max)
+    u = Control("u", 1, lower=-u_max, upper=u_max)
     q = ca.SX.sym("q", 2)
     cart = ca.vertcat(q[0], 0)
     bob = ca.vertcat(q[0] + l * ca.sin(q[1]), -l * ca.cos(q[1]))
-    system = ct.LagrangianSystem(q, ct.Atoms([cart, bob], [m1, m2]), [ct.Gravity(g), ct.Force(ca.vertcat(u, 0))],
+    system = LagrangianSystem(q, Atoms([cart, bob], [m1, m2]), [Gravity(g), Force(ca.vertcat(u, 0))],
                                  names=["x", "theta"])
-    ocp = ct.OptimalControl(system, T=T, N=N, scheme=scheme, controls=controls)
+    ocp = OptimalControl(system, T=T, N=N, scheme=scheme, controls=controls)
     ocp.initial(q=[0.0, 0.0], qd=[0.0, 0.0])
     ocp.final(q=[target, ca.pi], qd=[0.0, 0.0])
     ocp.minimize(running=u ** 2)

@@ -14,8 +14,10 @@ import sys
 import casadi as ca
 import numpy as np
 
-import castrajectory as ct
 from castrajectory import cli
+from castrajectory.models.mechanics import Damping, Force, LagrangianSystem, MassMatrix, Potential
+from castrajectory.models.control import Control
+from castrajectory.solve.optimal_control import OptimalControl
 from castrajectory.validation import InputError
 
 
@@ -52,15 +54,15 @@ def run(args):
     if args.damping < 0 or args.stiffness < 0 or args.T <= 0:
         raise InputError("--damping and --stiffness must not be negative, --T must be positive")
     cli.check_animation_path(args.animate)
-    u = ct.Control("u", 1)
+    u = Control("u", 1)
     x = ca.SX.sym("x", 1)
-    terms = [ct.Force(u)]
+    terms = [Force(u)]
     if args.stiffness:
-        terms.insert(0, ct.Potential(0.5 * args.stiffness * x[0] ** 2, "spring"))
+        terms.insert(0, Potential(0.5 * args.stiffness * x[0] ** 2, "spring"))
     if args.damping:
-        terms.insert(-1, ct.Damping(args.damping))
-    system = ct.LagrangianSystem(x, ct.MassMatrix(1.0), terms, names=["x"], points_expr=[ca.vertcat(x[0], 0)])
-    ocp = ct.OptimalControl(system, T=args.T, N=args.n, scheme=args.scheme, controls=args.controls)
+        terms.insert(-1, Damping(args.damping))
+    system = LagrangianSystem(x, MassMatrix(1.0), terms, names=["x"], points_expr=[ca.vertcat(x[0], 0)])
+    ocp = OptimalControl(system, T=args.T, N=args.n, scheme=args.scheme, controls=args.controls)
     ocp.initial(q=[0.0], qd=[0.0])
     ocp.final(q=[args.distance], qd=[0.0])
     ocp.minimize(running=u ** 2)

@@ -13,8 +13,10 @@ import sys
 import casadi as ca
 import numpy as np
 
-import castrajectory as ct
 from castrajectory import cli
+from castrajectory.models.mechanics import Force, LagrangianSystem, MassMatrix
+from castrajectory.models.control import Control
+from castrajectory.solve.optimal_control import OptimalControl
 from castrajectory.validation import InputError
 
 
@@ -32,12 +34,12 @@ def run(args):
         raise InputError("--distance and --u-max must be positive")
     cli.check_animation_path(args.animate)
     d, umax, N = args.distance, args.u_max, args.n
-    u = ct.Control("u", 1, lower=-umax, upper=umax)
+    u = Control("u", 1, lower=-umax, upper=umax)
     x = ca.SX.sym("x", 1)
-    system = ct.LagrangianSystem(x, ct.MassMatrix(1.0), [ct.Force(u)], names=["x"],
+    system = LagrangianSystem(x, MassMatrix(1.0), [Force(u)], names=["x"],
                                  points_expr=[ca.vertcat(x[0], 0)])
     Ts = 2.0 * math.sqrt(d / umax)
-    ocp = ct.OptimalControl(system, T=(0.1 * Ts, 10.0 * Ts), N=N, scheme=args.scheme, controls=args.controls)
+    ocp = OptimalControl(system, T=(0.1 * Ts, 10.0 * Ts), N=N, scheme=args.scheme, controls=args.controls)
     ocp.initial(q=[0.0], qd=[0.0])
     ocp.final(q=[d], qd=[0.0])
     ocp.minimize(final=ocp.T_symbol)

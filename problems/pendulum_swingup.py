@@ -13,8 +13,10 @@ import sys
 import casadi as ca
 import numpy as np
 
-import castrajectory as ct
 from castrajectory import cli
+from castrajectory.models.mechanics import Atoms, Damping, Force, Gravity, LagrangianSystem
+from castrajectory.models.control import Control
+from castrajectory.solve.optimal_control import OptimalControl
 from castrajectory.validation import InputError
 
 REFERENCE = 65.48558
@@ -40,12 +42,12 @@ def run(args):
     if args.damping < 0:
         raise InputError(f"--damping must not be negative (got {args.damping:g})")
     cli.check_animation_path(args.animate)
-    u = ct.Control("u", 1, lower=-args.u_max, upper=args.u_max)
+    u = Control("u", 1, lower=-args.u_max, upper=args.u_max)
     th = ca.SX.sym("theta", 1)
     bob = ca.vertcat(args.length * ca.sin(th[0]), -args.length * ca.cos(th[0]))
-    terms = [ct.Gravity(args.g)] + ([ct.Damping(args.damping)] if args.damping else []) + [ct.Force(u)]
-    system = ct.LagrangianSystem(th, ct.Atoms([bob], [args.mass]), terms, names=["theta"])
-    ocp = ct.OptimalControl(system, T=args.T, N=args.n, scheme=args.scheme, controls=args.controls)
+    terms = [Gravity(args.g)] + ([Damping(args.damping)] if args.damping else []) + [Force(u)]
+    system = LagrangianSystem(th, Atoms([bob], [args.mass]), terms, names=["theta"])
+    ocp = OptimalControl(system, T=args.T, N=args.n, scheme=args.scheme, controls=args.controls)
     ocp.initial(q=[0.0], qd=[0.0])
     ocp.final(q=[ca.pi], qd=[0.0])
     ocp.minimize(running=10 * u ** 2)

@@ -14,9 +14,11 @@ import sys
 import casadi as ca
 import numpy as np
 
-import castrajectory as ct
 from castrajectory import cli
-from castrajectory.models.rigidbody import axis_angle
+from castrajectory.models.mechanics import Force, LagrangianSystem, velocity
+from castrajectory.models.control import Control
+from castrajectory.models.rigidbody import Inertia, RigidBody, angular_velocity, axis_angle, body_point, unit_norm
+from castrajectory.solve.optimal_control import OptimalControl
 from castrajectory.validation import InputError
 
 
@@ -39,16 +41,16 @@ def run(args):
         raise InputError(f"--axis must be a finite, nonzero vector (got {args.axis})")
     if args.T <= 0:
         raise InputError(f"--T must be positive (got {args.T:g})")
-    inertia = ct.Inertia(*args.inertia)
+    inertia = Inertia(*args.inertia)
     cli.check_animation_path(args.animate)
-    tau = ct.Control("tau", 3)
+    tau = Control("tau", 3)
     q = ca.SX.sym("quat", 4)
-    omega = ct.angular_velocity(q, ct.velocity(q))
-    Q = ca.jacobian(ca.dot(tau, omega), ct.velocity(q)).T          # the torque's generalised force
-    points = [ct.body_point(q, [0.0, 0.0, 0.0])] + [ct.body_point(q, e) for e in np.eye(3)]
-    body = ct.LagrangianSystem(q, ct.RigidBody(q, inertia), [ct.Force(Q)], constraints=[ct.unit_norm(q)],
+    omega = angular_velocity(q, velocity(q))
+    Q = ca.jacobian(ca.dot(tau, omega), velocity(q)).T          # the torque's generalised force
+    points = [body_point(q, [0.0, 0.0, 0.0])] + [body_point(q, e) for e in np.eye(3)]
+    body = LagrangianSystem(q, RigidBody(q, inertia), [Force(Q)], constraints=[unit_norm(q)],
                                names=["qw", "qx", "qy", "qz"], points_expr=points)
-    ocp = ct.OptimalControl(body, T=args.T, N=args.n, scheme=args.scheme, controls=args.controls)
+    ocp = OptimalControl(body, T=args.T, N=args.n, scheme=args.scheme, controls=args.controls)
     ocp.initial(q=[1.0, 0.0, 0.0, 0.0], qd=[0.0] * 4)
     ocp.final(q=axis_angle(axis, args.angle).tolist(), qd=[0.0] * 4)
     ocp.minimize(running=ca.sumsqr(tau))
