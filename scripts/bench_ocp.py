@@ -132,7 +132,8 @@ def sweep(label, fn, ns, repeats, stop_time):
             ok, J = fn(n)
             best = min(best, time.perf_counter() - t0)
         err = abs(J - JSTAR) if ok else math.nan
-        rows.append({"label": label, "n": n, "success": ok, "time_s": best, "error": err})
+        rows.append({"label": label, "n": n, "success": ok, "status": "ok" if ok else "failed", "time_s": best,
+                     "error": err})
         print(f"  {label:34s} N = {n:6d}  {'ok' if ok else 'FAILED':6s} {best:8.3f} s  |J - J*| = {err:.2e}")
         if best > stop_time or (ok and err < 1e-9):
             break
