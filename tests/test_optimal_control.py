@@ -295,3 +295,20 @@ def test_an_impossible_swing_up_exits_1_with_ipopts_status():
     p = scene("pendulum_swingup", "--n", "100", "--json")
     d = json.loads(p.stdout)
     assert p.returncode == 0 and abs(d["cost"] - 65.77087593) < 1e-6 and d["certificate"] < 1e-11
+
+
+@pytest.mark.parametrize("scheme,N,tol", [("midpoint", 100, 1e-3), ("galerkin4", 5, 1e-11)])
+def test_a_final_cost_in_the_final_velocity(scheme, N, tol):
+    """min ∫₀¹ u² + 5 v(1)², x: 0 -> 1 from rest, v(1) free: u = a + b t, J* = 8, v(1) = 2/3 (closed form).
+    The final velocity is the last step's discrete Legendre transform. Measured: midpoint N = 100 5.3e-4
+    (order 2), galerkin4 with controls at its nodes 1.5e-14 (the linear u* is in the discrete space)."""
+    system, u = block()
+    v = ct.velocity(system.q)
+    ocp = ct.OptimalControl(system, T=1.0, N=N, scheme=scheme)
+    ocp.initial(q=[0.0], qd=[0.0])
+    ocp.final(q=[1.0])
+    ocp.minimize(running=u ** 2, final=5.0 * v[0] ** 2)
+    sol = ocp.solve()
+    assert sol.success and abs(sol.cost - 8.0) < tol and abs(sol.v[-1, 0] - 2.0 / 3.0) < tol
+    with pytest.raises(InputError, match="final time T"):
+        ocp.minimize(final=ct.time())

@@ -12,7 +12,8 @@ enter through the discrete Legendre transforms.  On a uniform grid ``t_k = k h``
 * rows: the DEL equation at every interior node (the controls of both steps at the node), the stage
   equations, the holonomic constraints, ``p(q_0, q̇_0) = p_0⁺`` when ``q̇_0`` is given and
   ``p_N⁻ = p(q_N, q̇_N)`` when ``q̇_N`` is, the path constraints at the nodes;
-* objective: ``Σ_k h Σ_i w_i ℓ(q(τ_i), q̇(τ_i), u_k, t_i) + φ(q_N, T)``.
+* objective: ``Σ_k h Σ_i w_i ℓ(q(τ_i), q̇(τ_i), u_k, t_i) + φ(q_N, q̇_N, T)``, ``q̇_N`` from the last step's
+  discrete Legendre transform.
 
 The multipliers of the DEL rows are the **discrete costates** (their sign: see
 :class:`castrajectory.result.NLPResult`, ``∂J*/∂rhs``; a DEL row is a force balance divided by ``h``).
@@ -32,7 +33,7 @@ class ControlTranscription:
     """One grid of a DMOC problem (see the module docstring).
 
     ``start``, ``end``: ``(q, q̇)`` pairs of arrays with NaN for a free entry (``q̇`` may be ``None``: free);
-    ``T``: a number, or ``(lo, hi)`` for a free final time; ``running(q, v, u, t)`` and ``final(q, T)``:
+    ``T``: a number, or ``(lo, hi)`` for a free final time; ``running(q, v, u, t)`` and ``final(q, v, T)``:
     CasADi functions of the costs (``None``: none); ``path``: ``[(function(q, u, t), lb, ub)]`` evaluated at
     every node with the control of the step that starts there (the last step's at ``q_N``).
     """
@@ -131,7 +132,9 @@ class ControlTranscription:
                                   [X(Q[k]), zarg(k), X(Q[k + 1]), hh, (np.arange(N) * 1.0)[:, None]]
                                   + ([X(Ui[k])] if nu else [np.zeros((N, 0))]))
         if final is not None:
-            nlp.minimize_elements("final", self._final_element(final), [X(Q[N]), hh])
+            # φ(q_N, q̇_N, T), q̇_N from the last step's discrete Legendre transform p_N⁻
+            nlp.minimize_elements("final", self._final_element(final),
+                                  [X(Q[N - 1]), zarg(N - 1), X(Q[N]), hh] + targ(N - 1) + uarg(N - 1))
         if running is None and final is None:
             nlp.minimize(ca.SX(0))
 
@@ -146,9 +149,28 @@ class ControlTranscription:
         return ca.Function("running", [a, Z, b, h, k, u], [val])
 
     def _final_element(self, final: ca.Function) -> ca.Function:
-        n = self.dm.n
-        q, h = ca.SX.sym("q", n), ca.SX.sym("h")
-        return ca.Function("final", [q, h], [final(q, h * self.N)])
+        """``φ(q_N, q̇_N, T)`` with ``q̇_N`` the inverse Legendre transform of ``p_N⁻`` (the last step's), on the
+        constraints' tangent space: ``[M Cᵀ; C 0] [q̇; μ] = [p − p(q, 0); −∂c/∂t]``."""
+        dm = self.dm
+        n, s, m = dm.n, dm.s, dm.m
+        sysm = dm.system
+        a, Z, q, h = ca.SX.sym("a", n), ca.SX.sym("Z", s), ca.SX.sym("q", n), ca.SX.sym("h")
+        t = ca.SX.sym("t")
+        u = ca.SX.sym("u", dm.nu)
+        tin = [t] if dm.timed else []
+        uin = [u] if dm.nu else []
+        p = dm.p_minus(a, Z, q, h, *tin, *uin)
+        T = h * self.N
+        tN = T if not dm.timed else t + h
+        M = sysm.mass_matrix(q, tN)
+        rhs = p - sysm.momentum(q, ca.SX.zeros(n), tN)
+        if m:
+            C = sysm.constraint(q, tN)[1]
+            K = ca.vertcat(ca.horzcat(M, C.T), ca.horzcat(C, ca.SX.zeros(m, m)))
+            v = ca.solve(K, ca.vertcat(rhs, -sysm.constraint_rate(q, tN)))[:n]
+        else:
+            v = ca.solve(M, rhs)
+        return ca.Function("final", [a, Z, q, h] + tin + uin, [final(q, v, T)])
 
     def bounds(self):
         """Bounds fixing the given entries of ``q_0`` and ``q_N``."""

@@ -7,7 +7,7 @@ The public face, in the style of CasADi's ``Opti`` and rockit::
     ocp = ct.OptimalControl(sys, T=2.0, N=100, scheme="midpoint")     # T=(lo, hi): free final time
     ocp.initial(q=[0, 0], qd=[0, 0])
     ocp.final(q=[1, ca.pi], qd=[0, 0])                                # any entry None: free
-    ocp.minimize(running=u ** 2)                                      # and/or final=..., in q, T
+    ocp.minimize(running=u ** 2)                                      # and/or final=..., in q, qd, T
     ocp.subject_to(-2 <= q[0], q[0] <= 2)                             # at every node
     sol = ocp.solve()
 
@@ -197,7 +197,7 @@ class OptimalControl:
         if e.numel() != 1:
             raise InputError(f"the {what} must be a scalar (it has {e.numel()} entries)")
         s = self.system
-        allowed = {v.element_hash() for v in ca.symvar(ca.vertcat(s.q, s.t))}
+        allowed = {v.element_hash() for v in ca.symvar(s.q if final else ca.vertcat(s.q, s.t))}
         if rates:
             allowed |= {v.element_hash() for v in ca.symvar(s.qd)}
         if final:
@@ -210,18 +210,19 @@ class OptimalControl:
             if is_control_symbol(v):
                 raise InputError(f"the {what} holds the control {v}, which appears in no force of the system")
             raise InputError(f"the {what} depends on the symbol {v}, which is not a coordinate"
-                             + (", its velocity" if rates else "") + (", the final time T" if final else "")
-                             + ("" if final else ", a control") + " or the time")
+                             + (", its velocity" if rates else "") + (" or the final time T (ocp.T_symbol)" if final
+                                                                    else ", a control or the time"))
         return e
 
     def minimize(self, running=None, final=None) -> None:
-        """The cost: ``∫ running(q, q̇, u, t) dt + final(q_N, T)`` (``T``: :attr:`T_symbol`)."""
+        """The cost: ``∫ running(q, q̇, u, t) dt + final(q_N, q̇_N, T)`` (``T``: :attr:`T_symbol`; ``q̇_N`` the final
+        velocity of the discrete motion, its last step's Legendre transform)."""
         if running is None and final is None:
             raise InputError("minimize() needs a running or a final cost")
         if running is not None:
             self._running = self._check_expr(running, "running cost", rates=True)
         if final is not None:
-            self._final = self._check_expr(final, "final cost", rates=False, final=True)
+            self._final = self._check_expr(final, "final cost", rates=True, final=True)
 
     def subject_to(self, *constraints) -> None:
         """Path constraints ``a <= b``, ``a >= b`` or ``a == b`` (CasADi comparisons) in ``q``, the controls and
@@ -257,7 +258,7 @@ class OptimalControl:
         dm = discrete_mechanics(s, self.scheme, self.control_points)
         q, qd, t, u = s.q, s.qd, s.t, self._u
         running = ca.Function("l", [q, qd, u, t], [self._running]) if self._running is not None else None
-        final = ca.Function("phi", [q, self.T_symbol], [self._final]) if self._final is not None else None
+        final = ca.Function("phi", [q, qd, self.T_symbol], [self._final]) if self._final is not None else None
         path = [(ca.Function(f"g{j}", [q, u, t], [g]), lb, ub) for j, (g, lb, ub) in enumerate(self._path)]
         lo = np.concatenate([c.lower for c in self._controls])
         hi = np.concatenate([c.upper for c in self._controls])
