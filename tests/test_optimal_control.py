@@ -312,3 +312,20 @@ def test_a_final_cost_in_the_final_velocity(scheme, N, tol):
     assert sol.success and abs(sol.cost - 8.0) < tol and abs(sol.v[-1, 0] - 2.0 / 3.0) < tol
     with pytest.raises(InputError, match="final time T"):
         ocp.minimize(final=ct.time())
+
+
+def test_a_given_guess_is_used():
+    """Started from its own answer, a block move with a quartic cost (not a QP: 5 Newton iterations from the
+    straight line) takes at most one and lands on the same optimum; a guess of the wrong size is refused.
+    (Only primal values are given: with bounds, the barrier's own iterations remain.)"""
+    system, u = block()
+    ocp = ct.OptimalControl(system, T=1.0, N=30)
+    ocp.initial(q=[0.0], qd=[0.0])
+    ocp.final(q=[1.0], qd=[0.0])
+    ocp.minimize(running=u ** 2 + 0.1 * system.q[0] ** 4)
+    first = ocp.solve()
+    again = ocp.solve(guess={"q": first.q, "u": first.u})
+    assert first.success and again.success and again.iterations <= 1 < first.iterations
+    assert abs(again.cost - first.cost) < 1e-10
+    with pytest.raises(InputError, match="guess of u"):
+        ocp.solve(guess={"u": np.zeros(7)})
