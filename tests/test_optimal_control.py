@@ -315,8 +315,8 @@ def test_a_final_cost_in_the_final_velocity(scheme, N, tol):
 
 
 def test_a_given_guess_is_used():
-    """Started from its own answer, a block move with a quartic cost (not a QP: 5 Newton iterations from the
-    straight line) takes at most one and lands on the same optimum; a guess of the wrong size is refused.
+    """Started from its own answer, a block move with a quartic cost (not a QP: 2 Ipopt iterations from the
+    straight line) takes none (measured) and lands on the same optimum; a guess of the wrong size is refused.
     (Only primal values are given: with bounds, the barrier's own iterations remain.)"""
     system, u = block()
     ocp = ct.OptimalControl(system, T=1.0, N=30)
