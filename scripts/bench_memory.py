@@ -5,7 +5,7 @@ This is a measurement, not a test: it exits 0 (2 for bad flags).  Each run is a 
 interpreter: its peak resident set size is its own), solving one scene at one N with one scheme, and
 the parent reads the child's peak RSS and peak virtual size.  For each (scene, scheme) the slope of
 the peak against N is the memory per step; the table compares it with the estimates the solver uses to
-refuse or stop a grid (``castrajectory.solve.trajectory.bytes_per_step`` for resident memory, times
+refuse or stop a grid (``castrajectory.solve.memory.bytes_per_step`` for resident memory, times
 ``ADDRESS_SPACE_FACTOR`` under an address-space limit), whose ratios measured/estimated must stay below 1.
 
 Scenes: the double pendulum (2 coordinates), the free rigid body on a quaternion (4 coordinates and a
@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import subprocess
 import sys
 
@@ -28,7 +27,7 @@ CHILD = r"""
 import json, resource, sys
 import numpy as np
 scene, scheme, N, mode = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4]
-from castrajectory.solve import simulate, trajectory
+from castrajectory.solve import memory, simulate
 if scene == "double_pendulum":
     from castrajectory.models.pendulum import double_pendulum
     system, q0, qd0, T = double_pendulum(), [1.0, 0.5], [0.0, 0.0], 5.0
@@ -57,8 +56,8 @@ else:
     run = simulate.simulate(system, q0, qd0, T, N, scheme)
 peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024.0
 print(json.dumps({"status": run.status, "peak": peak, "base": base, "vm_peak": vm_peak(),
-                  "estimate_per_step": trajectory.bytes_per_step(system, scheme),
-                  "vm_estimate_per_step": trajectory.bytes_per_step(system, scheme) * trajectory.ADDRESS_SPACE_FACTOR}))
+                  "estimate_per_step": memory.bytes_per_step(system, scheme),
+                  "vm_estimate_per_step": memory.bytes_per_step(system, scheme) * memory.ADDRESS_SPACE_FACTOR}))
 """
 
 

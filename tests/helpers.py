@@ -226,3 +226,22 @@ def energy_growth(dE, fraction: float = 0.1):
     half = dE.size // 2
     k = max(1, int(round(fraction * dE.size)))
     return dE[half:].max() / dE[:half].max(), dE[-k:].max() / dE[:k].max()
+
+
+def run_tutorial_command(command: str, tmp_path, root) -> None:
+    """Run one ``castrajectory …`` command of a tutorial in a scratch folder holding a copy of examples/, and
+    check it exits 0 and writes every picture or document it names."""
+    import os
+    import shlex
+    import shutil
+    import subprocess
+    import sys
+    shutil.copytree(os.path.join(root, "examples"), tmp_path / "examples")
+    argv = shlex.split(command)
+    assert argv[0] == "castrajectory"
+    p = subprocess.run([sys.executable, "-m", "castrajectory.cli", *argv[1:]], capture_output=True, text=True,
+                       cwd=tmp_path, env={**os.environ, "MPLBACKEND": "Agg"}, timeout=600)
+    assert p.returncode == 0, p.stderr
+    for token in argv:
+        if token.endswith((".png", ".gif", ".md")):
+            assert (tmp_path / token).stat().st_size > 0

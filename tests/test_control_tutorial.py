@@ -2,12 +2,9 @@
 tutorial's code is the example's, line for line."""
 import os
 import re
-import shlex
-import shutil
-import subprocess
-import sys
 
 import pytest
+from helpers import run_tutorial_command
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DOC = os.path.join(ROOT, "docs", "optimal-control.md")
@@ -22,15 +19,7 @@ COMMANDS = [line for b in blocks("bash") for line in b.splitlines() if line.stri
 
 @pytest.mark.parametrize("command", COMMANDS)
 def test_tutorial_command_runs(command, tmp_path):
-    shutil.copytree(os.path.join(ROOT, "examples"), tmp_path / "examples")
-    argv = shlex.split(command)
-    assert argv[0] == "castrajectory"
-    p = subprocess.run([sys.executable, "-m", "castrajectory.cli", *argv[1:]], capture_output=True, text=True,
-                       cwd=tmp_path, env={**os.environ, "MPLBACKEND": "Agg"}, timeout=600)
-    assert p.returncode == 0, p.stderr
-    for token in argv:
-        if token.endswith((".png", ".gif")):
-            assert (tmp_path / token).stat().st_size > 0
+    run_tutorial_command(command, tmp_path, ROOT)
 
 
 def test_the_tutorial_code_is_the_example():

@@ -235,7 +235,7 @@ def test_memory_per_step_follows_the_scheme():
     """The estimate grows with the unknowns and Jacobian nonzeros of a step: galerkin4 carries a stage
     and its couplings (2 -> 4 unknowns, 12 -> 32 nonzeros per step of the double pendulum)."""
     from castrajectory.models.pendulum import double_pendulum
-    from castrajectory.solve import trajectory as tr
+    from castrajectory.solve import memory as tr
     a, b = tr.bytes_per_step(double_pendulum(), "midpoint"), tr.bytes_per_step(double_pendulum(), "galerkin4")
     assert a == tr.BYTES_PER_UNKNOWN * 2 + tr.BYTES_PER_NONZERO * 12
     assert b == tr.BYTES_PER_UNKNOWN * 4 + tr.BYTES_PER_NONZERO * 32

@@ -17,9 +17,9 @@ import os
 import sys
 from typing import List, Optional
 
-from ..validation import InputError, integer_at_least, one_of
+from ..validation import integer_at_least, one_of
 from .scene import ArgumentParser, add_plot, check_animation_path, control_outcome, ipopt_options, run_scene
-from .system import load
+from .system import call_user, load
 
 
 def parser() -> ArgumentParser:
@@ -39,18 +39,7 @@ def parser() -> ArgumentParser:
 
 def described(module, path: str):
     from ..solve.optimal_control import OptimalControl
-    fn = getattr(module, "problem", None)
-    if not callable(fn):
-        raise InputError(f"{path} defines no problem() function")
-    try:
-        ocp = fn()
-    except InputError as exc:
-        raise InputError(f"{path}: problem(): {exc}") from None
-    except Exception as exc:  # noqa: BLE001 - whatever the user's file raises is bad input
-        raise InputError(f"{path}: problem() raised {type(exc).__name__}: {exc}".splitlines()[0]) from None
-    if not isinstance(ocp, OptimalControl):
-        raise InputError(f"{path}: problem() returned a {type(ocp).__name__}, not a castrajectory.OptimalControl")
-    return ocp
+    return call_user(module, path, "problem", OptimalControl)
 
 
 def run(args):

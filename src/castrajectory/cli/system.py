@@ -61,21 +61,28 @@ def load(path: str):
     return module
 
 
+def call_user(module, path: str, name: str, kind: type):
+    """The value of the user's ``name()``, which must be a ``kind`` (``InputError`` with one line otherwise: no
+    such function, whatever it raises, or a value of another type)."""
+    fn = getattr(module, name, None)
+    if not callable(fn):
+        raise InputError(f"{path} defines no {name}() function")
+    try:
+        value = fn()
+    except InputError as exc:
+        raise InputError(f"{path}: {name}(): {exc}") from None
+    except Exception as exc:  # noqa: BLE001 - whatever the user's file raises is bad input
+        raise InputError(f"{path}: {name}() raised {type(exc).__name__}: {exc}".splitlines()[0]) from None
+    if not isinstance(value, kind):
+        raise InputError(f"{path}: {name}() returned a {type(value).__name__}, not a castrajectory.{kind.__name__}")
+    return value
+
+
 def described(module, path: str):
     """``(system, q0, qd0)`` from the user's module, checked (see the module docstring)."""
     from ..models.mechanics import LagrangianSystem
 
-    fn = getattr(module, "system", None)
-    if not callable(fn):
-        raise InputError(f"{path} defines no system() function")
-    try:
-        system = fn()
-    except InputError as exc:
-        raise InputError(f"{path}: system(): {exc}") from None
-    except Exception as exc:  # noqa: BLE001
-        raise InputError(f"{path}: system() raised {type(exc).__name__}: {exc}".splitlines()[0]) from None
-    if not isinstance(system, LagrangianSystem):
-        raise InputError(f"{path}: system() returned a {type(system).__name__}, not a castrajectory.LagrangianSystem")
+    system = call_user(module, path, "system", LagrangianSystem)
     from ..solve.trajectory import check_inertia
     vectors = []
     for name in ("q0", "qd0"):

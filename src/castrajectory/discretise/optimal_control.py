@@ -26,7 +26,7 @@ import casadi as ca
 import numpy as np
 
 from .lagrangians import DiscreteMechanics
-from .program import Program, X
+from .program import P, Program, X
 
 
 class ControlTranscription:
@@ -103,12 +103,12 @@ class ControlTranscription:
             nlp.parameter("p0", n, value=np.zeros(n))
             self._p0_fn = sysm.momentum
             nlp.equal_elements("initial", dm.initial_residual,
-                               [X(Q[0]), zarg(0), X(Q[1]), _P(nlp, "p0"),
+                               [X(Q[0]), zarg(0), X(Q[1]), P(nlp.parameter_index("p0")),
                                 X(nlp.index("lam0")) if m else none, hh] + targ(0) + uarg(0))
         if vN is not None:
             nlp.parameter("pN", n, value=np.zeros(n))
             nlp.equal_elements("final", dm.final_residual,
-                               [X(Q[N - 1]), zarg(N - 1), X(Q[N]), _P(nlp, "pN"),
+                               [X(Q[N - 1]), zarg(N - 1), X(Q[N]), P(nlp.parameter_index("pN")),
                                 X(nlp.index("lamN")) if m else none, hh] + targ(N - 1) + uarg(N - 1))
         # holonomic constraints at every node with a free entry, and at the stages
         if m:
@@ -181,11 +181,6 @@ class ControlTranscription:
             given = ~np.isnan(qk)
             qlo[k, given] = qhi[k, given] = qk[given]
         return {"q": (qlo.reshape(-1), qhi.reshape(-1))}
-
-
-def _P(nlp, name):
-    from .program import P
-    return P(nlp.parameter_index(name))
 
 
 def _all_fixed(q) -> bool:

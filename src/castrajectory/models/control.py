@@ -46,6 +46,7 @@ class Control(ca.SX):
         if np.any(self.lower > self.upper):
             raise InputError(f"control {name}: a lower bound is above its upper bound "
                              f"({self.lower.tolist()} > {self.upper.tolist()})")
+        self._order = len(_REGISTRY)  # creation order (controls_in sorts by it)
         for i in range(size):
             _REGISTRY[self[i].element_hash()] = (self, i)
 
@@ -72,8 +73,7 @@ def controls_in(expr) -> List[Control]:
         hit = _REGISTRY.get(v.element_hash())
         if hit is not None:
             found[id(hit[0])] = hit[0]
-    order = {id(c): k for k, (c, _) in enumerate(_REGISTRY.values())}
-    return sorted(found.values(), key=lambda c: order.get(id(c), 0))
+    return sorted(found.values(), key=lambda c: c._order)
 
 
 def is_control_symbol(v) -> bool:

@@ -101,6 +101,15 @@ def _manifold_points(system, rng, count: int, q_ref: np.ndarray) -> np.ndarray:
     return np.array(out)
 
 
+def _tangent_velocity(system, q: np.ndarray, rng) -> np.ndarray:
+    """A random velocity at ``q`` tangent to the holonomic constraints."""
+    if not system.nc:
+        return rng.standard_normal(system.nq)
+    C = np.asarray(system.constraint(q, 0.0)[1], float)
+    _, _, Vt = np.linalg.svd(C)
+    return Vt[system.nc:].T @ rng.standard_normal(system.nq - system.nc)
+
+
 def affine_symmetries(system, q_ref=None, samples: Optional[int] = None, seed: int = 7) -> List[Symmetry]:
     """The affine symmetries of ``system`` (see the module docstring), sampled near ``q_ref`` (default:
     zeros, or the first point of the constraint manifold found); ``[]`` for a system with more than
@@ -130,13 +139,7 @@ def affine_symmetries(system, q_ref=None, samples: Optional[int] = None, seed: i
                      [ca.vec(G) for G in grads])
     rows = []
     for qk in Q:
-        if system.nc:
-            C = np.asarray(system.constraint(qk, 0.0)[1], float)
-            _, sv, Vt = np.linalg.svd(C)
-            T = Vt[system.nc:].T
-            vk = T @ rng.standard_normal(T.shape[1])
-        else:
-            vk = rng.standard_normal(n)
+        vk = _tangent_velocity(system, qk, rng)
         tk = float(rng.uniform(0.0, 1.0))
         outs = fn.call([qk, vk, tk])
         vals = np.asarray(outs[0], float).reshape(-1)
@@ -187,12 +190,7 @@ def conserved_by(system, expr, symmetries: List[Symmetry], q_ref=None, seed: int
     fn = ca.Function("cons", [q, qd, t], [ca.vertcat(ca.SX(expr), *[s.momentum for s in symmetries])])
     rows, rhs = [], []
     for qk in Q:
-        if system.nc:
-            C = np.asarray(system.constraint(qk, 0.0)[1], float)
-            _, _, Vt = np.linalg.svd(C)
-            vk = Vt[system.nc:].T @ rng.standard_normal(n - system.nc)
-        else:
-            vk = rng.standard_normal(n)
+        vk = _tangent_velocity(system, qk, rng)
         vals = np.asarray(fn(qk, vk, float(rng.uniform())), float).reshape(-1)
         rhs.append(vals[0])
         rows.append(np.concatenate([vals[1:], [1.0]]))

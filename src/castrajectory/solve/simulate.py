@@ -12,7 +12,7 @@ from typing import Optional
 import numpy as np
 
 from ..baselines import stepping
-from . import estimate, trajectory
+from . import estimate, memory, trajectory
 from ..discretise.lagrangians import SCHEMES
 from ..models.mechanics import LagrangianSystem
 from ..result import Result
@@ -100,7 +100,7 @@ def _baseline(system, q0, qd0, T, N, scheme, method, rtol, n_max) -> Run:
     T, N = trajectory._validate(system, T, N, scheme)
     rtol = None if rtol is None else positive("rtol", rtol)
     limit = estimate.limit_n(None if n_max is None else integer_at_least("n_max", n_max, N),
-                             trajectory._memory_limit(system, scheme))
+                             memory.limit(system, scheme))
     # (the whole solve checks the state itself)
     trajectory._check_finite_state(system, trajectory._check_state("q0", q0, system.nq, system.names),
                                    trajectory._check_state("qd0", qd0, system.nq, system.names))
