@@ -11,7 +11,8 @@ enter through the discrete Legendre transforms.  On a uniform grid ``t_k = k h``
   ``k``: the force's quadrature sees one value per step), and ``h`` when the final time is free;
 * rows: the DEL equation at every interior node (the controls of both steps at the node), the stage
   equations, the holonomic constraints, ``p(q_0, q̇_0) = p_0⁺`` when ``q̇_0`` is given and
-  ``p_N⁻ = p(q_N, q̇_N)`` when ``q̇_N`` is, the path constraints at the nodes;
+  ``p_N⁻ = p(q_N, q̇_N)`` when ``q̇_N`` is, the path constraints (in ``q``: at the nodes and the steps'
+  interior quadrature nodes; in the controls: at every quadrature node, see ``_path_nodes``);
 * objective: ``Σ_k h Σ_i w_i ℓ(q(τ_i), q̇(τ_i), u_k, t_i) + φ(q_N, q̇_N, T)``, ``q̇_N`` from the last step's
   discrete Legendre transform.
 
@@ -34,8 +35,8 @@ class ControlTranscription:
 
     ``start``, ``end``: ``(q, q̇)`` pairs of arrays with NaN for a free entry (``q̇`` may be ``None``: free);
     ``T``: a number, or ``(lo, hi)`` for a free final time; ``running(q, v, u, t)`` and ``final(q, v, T)``:
-    CasADi functions of the costs (``None``: none); ``path``: ``[(function(q, u, t), lb, ub)]`` evaluated at
-    every node with the control of the step that starts there (the last step's at ``q_N``).
+    CasADi functions of the costs (``None``: none); ``path``: ``[(function(q, u, t), lb, ub)]`` (where they
+    hold: :meth:`_path_nodes`).
     """
 
     program = Program
@@ -119,12 +120,20 @@ class ControlTranscription:
                 for j in range(st):
                     nlp.equal_elements(f"stage_constraint{j}", dm.stage_constraint_rows[j],
                                        [X(Zi[:, j * n:(j + 1) * n])] + (targ(np.arange(N)) + [hh] if dm.timed else []))
-        # path constraints at the nodes
+        # path constraints: see _path_nodes
         for j, (fn, lb, ub) in enumerate(path):
-            k = np.arange(N + 1)
-            ku = np.minimum(k, N - 1)
-            args = [X(Q[k]), X(Ui[ku][:, :dm.nu1]) if nu else np.zeros(0), _node_times(self, k)]
-            nlp.inequality_elements(f"path{j}", fn, args, lb=np.tile(lb, N + 1), ub=np.tile(ub, N + 1))
+            at_nodes, tau = self._path_nodes(fn)
+            if at_nodes:
+                k = np.arange(N + 1)
+                ku = np.minimum(k, N - 1)
+                args = [X(Q[k]), X(Ui[ku][:, :dm.nu1]) if nu else np.zeros(0), _node_times(self, k)]
+                nlp.inequality_elements(f"path{j}", fn, args, lb=np.tile(lb, N + 1), ub=np.tile(ub, N + 1))
+            if tau.size:
+                k = np.arange(N)
+                nlp.inequality_elements(f"path{j}_steps", self._path_element(fn, tau),
+                                        [X(Q[k]), zarg(k), X(Q[k + 1]), _node_times(self, k), hh]
+                                        + ([X(Ui[k])] if nu else [np.zeros((N, 0))]),
+                                        lb=np.tile(lb, N * tau.size), ub=np.tile(ub, N * tau.size))
         # the cost
         if running is not None:
             k = np.arange(N)
@@ -147,6 +156,36 @@ class ControlTranscription:
         Xs = [a] + [Z[j * n:(j + 1) * n] for j in range(dm.scheme.stages)] + [b]
         val = dm.scheme.discrete_lagrangian(dm.control_at(lambda q, v, t, uu: running(q, v, uu, t), u), Xs, h, k * h)
         return ca.Function("running", [a, Z, b, h, k, u], [val])
+
+    def _path_nodes(self, fn: ca.Function):
+        """Where a path constraint ``g(q, u, t)`` holds: ``(at the grid nodes?, the quadrature nodes' indices)``.
+
+        A constraint in ``q`` and ``t`` alone holds at every grid node and at each step's interior quadrature
+        nodes (on the step's polynomial).  One in the controls holds at every quadrature node, with that
+        node's control: a control has values only there (a Lobatto step's end nodes each carry their own),
+        so a grid node is not a point where it is defined.  (Rows at both a grid node and a quadrature node
+        at the same point would be identical, which Ipopt's step does not like when they are active.)"""
+        tau = np.asarray(self.dm.scheme.nodes, float)
+        in_u = self.dm.nu1 > 0 and fn.jac_sparsity(0, 1).nnz() > 0
+        if in_u:
+            return False, np.arange(tau.size)
+        return True, np.flatnonzero((tau > 1e-12) & (tau < 1 - 1e-12))
+
+    def _path_element(self, fn: ca.Function, nodes: np.ndarray) -> ca.Function:
+        """A path constraint ``g(q(τ_i), u_i, t_k + τ_i h)`` at a step's quadrature nodes ``τ_i`` (``nodes``):
+        the configuration of the step's polynomial there, and the control of that node (the step's one
+        control when the controls are constant per step)."""
+        dm = self.dm
+        n, s, nu = dm.n, dm.s, dm.nu
+        a, b, Z, h, t = ca.SX.sym("a", n), ca.SX.sym("b", n), ca.SX.sym("Z", s), ca.SX.sym("h"), ca.SX.sym("t")
+        u = ca.SX.sym("u", nu)
+        qs, _ = dm.scheme.path([a] + [Z[j * n:(j + 1) * n] for j in range(dm.scheme.stages)] + [b], h)
+        tau = np.asarray(dm.scheme.nodes, float)
+        rows = []
+        for i in nodes:
+            ui = u[(i % dm.nqu) * dm.nu1:(i % dm.nqu + 1) * dm.nu1] if nu else ca.SX(0, 1)
+            rows.append(fn(qs[i], ui, t + tau[i] * h))
+        return ca.Function("path_steps", [a, Z, b, t, h, u], [ca.vertcat(*rows)])
 
     def _final_element(self, final: ca.Function) -> ca.Function:
         """``φ(q_N, q̇_N, T)`` with ``q̇_N`` the inverse Legendre transform of ``p_N⁻`` (the last step's), on the

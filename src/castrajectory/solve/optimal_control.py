@@ -8,7 +8,7 @@ The public face, in the style of CasADi's ``Opti`` and rockit::
     ocp.initial(q=[0, 0], qd=[0, 0])
     ocp.final(q=[1, ca.pi], qd=[0, 0])                                # any entry None: free
     ocp.minimize(running=u ** 2)                                      # and/or final=..., in q, qd, T
-    ocp.subject_to(-2 <= q[0], q[0] <= 2)                             # at every node
+    ocp.subject_to(-2 <= q[0], q[0] <= 2)                             # at nodes and quadrature nodes
     sol = ocp.solve()
 
 The transcription is :mod:`castrajectory.discretise.optimal_control`.  Controls are given at the scheme's
@@ -25,6 +25,7 @@ along it at its own rate, which no answer can avoid.
 """
 from __future__ import annotations
 
+import copy
 import math
 import time as _time
 from dataclasses import dataclass, field
@@ -44,6 +45,8 @@ from .nlp import NLP
 OCP_IPOPT = {"tol": 1e-10, "max_iter": 3000, "mumps_pivtol": 1e-8, "bound_relax_factor": 0.0}
 #: The march of the certificate must reproduce the optimal configurations to this, relative to their scale.
 CERTIFICATE_TOL = 1e-7
+#: A grid of more steps than this starts from the answer of a grid half as fine (see OptimalControl.solve).
+LADDER_MAX = 64
 
 
 class _Transcription(ControlTranscription):
@@ -59,7 +62,9 @@ class ControlResult(Result):
     an impulse ``ι`` is the right-hand side ``−ι/h`` of the row, a momentum balance per unit time), which
     converge to the continuous costates of the momenta; the ``certificate``: the largest distance of a
     step of the controls' march, taken from the optimal nodes, from the next optimal node (relative to the
-    motion's scale), and ``march_distance``: the same for the whole march (see :func:`_certify`)."""
+    motion's scale), and ``march_distance``: the same for the whole march (see :func:`_certify`); ``grids``:
+    the grids solved (see :meth:`OptimalControl.solve`); ``q_stages``: a higher-order scheme's stage
+    configurations, ``(N, stages, n)``, at the times ``t_k + c_j h`` of its ``stage_times`` c."""
 
     cost: float
     T: float
@@ -73,11 +78,13 @@ class ControlResult(Result):
     certificate: float = math.nan
     march_distance: float = math.nan
     scheme: str = "midpoint"
+    grids: List[int] = field(default_factory=list)
+    q_stages: Optional[np.ndarray] = None
 
     def as_dict(self) -> dict:
         return {**super().as_dict(), "cost": self.cost, "T": self.T, "t": self.t, "q": self.q, "v": self.v,
                 "u": self.u, "t_u": self.t_u, "controls": self.controls, "costates": self.costates, "certificate": self.certificate,
-                "march_distance": self.march_distance,
+                "march_distance": self.march_distance, "grids": self.grids,
                 "scheme": self.scheme}
 
 
@@ -226,7 +233,8 @@ class OptimalControl:
 
     def subject_to(self, *constraints) -> None:
         """Path constraints ``a <= b``, ``a >= b`` or ``a == b`` (CasADi comparisons) in ``q``, the controls and
-        the time, imposed at every node."""
+        the time: one in ``q`` and ``t`` holds at every node and at each step's interior quadrature nodes, one in
+        the controls at every quadrature node with that node's control (see ``docs/derivations.md``, DMOC §3)."""
         for con in constraints:
             e = ca.SX(con)
             for i in range(e.numel()):
@@ -250,7 +258,44 @@ class OptimalControl:
               verbose: bool = False) -> ControlResult:
         """Solve the whole DMOC program with Ipopt from ``guess`` (``{"q": (N+1, n), "u": (N, nu), "T": …}``,
         any part; the rest: the boundary conditions interpolated, zero controls clipped to their bounds),
-        then certify the answer (see the module docstring)."""
+        then certify the answer (see the module docstring).
+
+        Without a guess, a grid of more than LADDER_MAX steps starts from the answer of the same problem on a
+        grid half as fine (recursively; its nodes and controls interpolated in t/T): a ladder of grids, the
+        usual mesh continuation.  Every grid then lands on the local optimum of the coarsest, so a refinement
+        study follows one optimum (the cart-pole from the straight-line guess lands on two different local
+        optima at N = 100 and N = 200 without it), and the fine grid needs a few iterations (7-9 instead of
+        39-289 on the cart-pole).  A rung that fails is dropped: the grid then starts from the boundary
+        conditions.  ``grids`` lists the grids solved."""
+        rungs: List[int] = []
+        if guess is None and self.N > LADDER_MAX:
+            coarse = copy.copy(self)
+            coarse.N = (self.N + 1) // 2
+            t0 = _time.perf_counter()
+            prior = coarse.solve(options=options)
+            spent = _time.perf_counter() - t0
+            if prior.success:
+                guess, rungs = self._interpolated(prior), prior.grids
+        out = self._solve_grid(guess, options, verbose)
+        out.grids = rungs + [self.N]
+        if rungs:
+            out.solve_time_s += spent
+        return out
+
+    def _interpolated(self, prior: "ControlResult") -> Dict[str, np.ndarray]:
+        """A coarser answer on this grid: nodes and controls interpolated linearly in ``t/T``."""
+        N, dm = self.N, discrete_mechanics(self.system, self.scheme, self.control_points)
+        s = np.linspace(0.0, 1.0, N + 1)
+        su = _control_times(dm, s)
+        sq, squ = prior.t / prior.T, prior.t_u / prior.T
+        Q = np.column_stack([np.interp(s, sq, prior.q[:, j]) for j in range(prior.q.shape[1])])
+        U = np.column_stack([np.interp(su, squ, prior.u[:, j]) for j in range(prior.u.shape[1])])
+        g = {"q": Q, "u": U.reshape(N, -1)}
+        if self._is_free_time():
+            g["T"] = prior.T
+        return g
+
+    def _solve_grid(self, guess, options, verbose) -> "ControlResult":
         if self._running is None and self._final is None:
             raise InputError("no cost: call minimize() first")
         s, N = self.system, self.N
@@ -292,7 +337,8 @@ class OptimalControl:
                             v=v, u=U.reshape(N * dm.nqu, nu), t_u=_control_times(dm, times),
                             controls=split_controls(U.reshape(N * dm.nqu, nu), self._controls, N * dm.nqu),
                             costates=costates,
-                            certificate=cert, march_distance=marched, scheme=self.scheme)
+                            certificate=cert, march_distance=marched, scheme=self.scheme,
+                            q_stages=Z.reshape(N, dm.scheme.stages, n) if dm.s else None)
         if res.success and not (cert <= CERTIFICATE_TOL):
             out.fail("Certificate_Failed", f"the march of the optimal controls departs from the optimal "
                                            f"trajectory by {cert:.3g} (relative): not a motion of the system")
