@@ -277,7 +277,8 @@ def test_derivation_finds_the_rotation_symmetry_of_kepler(tmp_path):
 
 
 def test_every_contact_of_a_simultaneous_impact_is_listed(tmp_path):
-    """A dumbbell dropped level from 1 m: both ends land at t = sqrt(2/g) together, with equal impulses."""
+    """A dumbbell dropped level from 1 m: both ends land at t = sqrt(2/g) together, with equal impulses, and the
+    answer warns that a simultaneous impact's outcome depends on the impact law."""
     import json
     f = tmp_path / "dumbbell.py"
     f.write_text("import casadi as ca, castrajectory as ct\nq0 = [0.0, 1.0, 1.0, 1.0]\nqd0 = [0.0] * 4\nT, n = 0.6, 300\n"
@@ -287,7 +288,9 @@ def test_every_contact_of_a_simultaneous_impact_is_listed(tmp_path):
                  "        contact=ct.Contact([a[1], b[1]], restitution=0.5, names=['left', 'right']))\n")
     p = _cli("system", str(f), "--json")
     assert p.returncode == 0, p.stderr
-    imp = json.loads(p.stdout)["impacts"]
+    out = json.loads(p.stdout)
+    imp = out["impacts"]
+    assert any("simultaneous impact" in w and "left, right" in w for w in out["warnings"])
     first = [i for i in imp if abs(i["t"] - math.sqrt(2 / G)) < 1e-9]
     assert sorted(i["name"] for i in first) == ["left", "right"]
     assert abs(first[0]["impulse"] - first[1]["impulse"]) < 1e-9 * first[0]["impulse"]

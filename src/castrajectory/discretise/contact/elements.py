@@ -61,18 +61,17 @@ class ContactMechanics:
         # (the multipliers are inputs only where there are constraints: a contact scene without them
         # keeps the element functions it had)
         xl, xls = ([lam], [lams]) if m else ([], [])
-        self.initial = ca.Function("c_initial", [q0, qs, b, p0, nu, h] + xl,
-                                   [(p0 + D1(q0, qs, a * h)) / h + ca.mtimes(J(q0).T, nu) - ca.mtimes(C(q0).T, lam)])
-        hp = sym("hp")
-        self.node = ca.Function("c_node", [qsm, bm, qk, qs, b, nu, hp, h] + xl,
-                                [(D2(qsm, qk, (1 - am) * hp) + D1(qk, qs, a * h)) / h + ca.mtimes(J(qk).T, nu)
-                                 - ca.mtimes(C(qk).T, lam)])
         self._kinematics = kin = lambda xp, x, xn, tau_m, tau_p: _sub_node_kinematics(  # noqa: E731
             D1, D2, J, Mf, C, e, xp, x, xn, tau_m, tau_p)
-        self._C = C
-        pm, pp, r = kin(qk, qs, qk1, a * h, (1 - a) * h)
-        self.sub = ca.Function("c_sub", [qk, qs, qk1, b, mu, h] + xls,
-                               [(pm - pp + ca.mtimes(J(qs).T, mu)) / h - ca.mtimes(C(qs).T, lams)])
+        self._C, self._D1, self._J = C, D1, J
+        # every node and sub-node row of the program, the held step and the march is node_row or sub_row
+        self.initial = ca.Function("c_initial", [q0, qs, b, p0, nu, h] + xl, [self.node_row(p0, q0, qs, b, nu, lam, h)])
+        hp = sym("hp")
+        self.node = ca.Function("c_node", [qsm, bm, qk, qs, b, nu, hp, h] + xl,
+                                [self.node_row(D2(qsm, qk, (1 - am) * hp), qk, qs, b, nu, lam, h)])
+        sub_row, r = self.sub_row(qk, qs, qk1, b, mu, lams, h)
+        pm, pp, _ = kin(qk, qs, qk1, a * h, (1 - a) * h)
+        self.sub = ca.Function("c_sub", [qk, qs, qk1, b, mu, h] + xls, [sub_row])
         # Newton's law on the normal velocity at the sub-node, weighted by W = φ(q_{k+1})/δ: the law
         # holds unless the contact is closed again at the next node, where the body is caught (the
         # accumulation point of Zeno bouncing, where no step-resolved flight is left, or a body at
@@ -101,8 +100,9 @@ class ContactMechanics:
         # constraints (docs/derivations.md, "Contact trajectories", §5, "Held contacts")
         mask = sym("mask", c)
         xh = ca.vertcat(qs, qk1, nu, mu)
-        Rh = ca.vertcat((p0 + D1(qk, qs, 0.5 * h)) / h + ca.mtimes(J(qk).T, nu * mask),
-                        self.sub(qk, qs, qk1, 0.0, mu * mask, h, *([ca.SX.zeros(m)] if m else [])),
+        zm = ca.SX.zeros(m)
+        Rh = ca.vertcat(self.node_row(p0, qk, qs, 0.0, nu * mask, zm, h),
+                        self.sub_row(qk, qs, qk1, 0.0, mu * mask, zm, h)[0],
                         mask * phi(qs) + (1 - mask) * mu, mask * phi(qk1) + (1 - mask) * nu)
         self.held_step = ca.Function("held_step", [xh, qk, p0, mask, h], [Rh, ca.jacobian(Rh, xh)])
         # free sub-node (no impact, α = ½): Newton function for the guess
@@ -117,11 +117,29 @@ class ContactMechanics:
             x = rk4_step(f, x, dt)
         self.flow = ca.Function("flow", [qk, v, tau], [x[:n], x[n:], phi(x[:n])])
         self._flights: Dict[int, ca.Function] = {}
-        self._march_function(D1, D2, J, phi)
+        self._march_function(phi)
         self.acc_normal = ca.Function("acc_normal", [qk, v], [ca.mtimes(J(qk), acc(qk, v))])
 
 
-    def _march_function(self, D1, D2, J, phi):
+    # ------------------------------------------------------------------ the rows, built once
+    def node_row(self, p_in, qk, qs, b, nu, lam, h):
+        """The momentum balance at a node ``q_k`` with the incoming momentum ``p_in`` (``p_0`` at the start,
+        ``D₂L_d`` of the previous sub-interval elsewhere): ``(p_in + D₁L_d(q_k, q̃_k, αh))/h + ∇φ(q_k)ᵀν
+        − ∇c(q_k)ᵀλ``, α = ½ + β; ``ν`` the contact forces (weighted by the step), ``λ`` the constraint
+        multipliers (no entries without constraints).  The transcription's initial and node rows, the
+        held step and the march step are all this row."""
+        row = (p_in + self._D1(qk, qs, (0.5 + b) * h)) / h + ca.mtimes(self._J(qk).T, nu)
+        return row - ca.mtimes(self._C(qk).T, lam)
+
+    def sub_row(self, qk, qs, qn, b, mu, lams, h):
+        """The momentum balance at the sub-node ``q̃_k`` between ``q_k`` and ``q_{k+1}``, with the impulses
+        ``μ``: ``(p̃⁻ − p̃⁺ + ∇φ(q̃)ᵀμ)/h − ∇c(q̃)ᵀλ̃``; and Newton's law residual ``r`` there (see
+        :func:`_sub_node_kinematics`).  Returns ``(row, r)``."""
+        a = 0.5 + b
+        pm, pp, r = self._kinematics(qk, qs, qn, a * h, (1 - a) * h)
+        return (pm - pp + ca.mtimes(self._J(qs).T, mu)) / h - ca.mtimes(self._C(qs).T, lams), r
+
+    def _march_function(self, phi):
         """One step of the transcription's own rows, each contact in a mode given by masks (the march).
 
         Unknowns ``x = (q̃, q_{k+1}, β, ν, μ, λ_k, λ̃_k)`` (the multipliers of the holonomic constraints,
@@ -130,11 +148,10 @@ class ContactMechanics:
         ``t`` (the contact that times the sub-node: ``φ_t(q̃) = 0`` replaces ``β = β_fix``),
         ``held`` (``φ(q̃) = 0`` replaces ``ν = 0``), ``closed`` (``φ(q_{k+1}) = 0`` replaces
         ``μ = 0``) and ``law`` (Newton's law ``r = 0`` replaces ``μ = 0``).  The rows are the node
-        and sub-node rows of the transcription, so a point solved step by step satisfies the whole
+        and sub-node rows of the transcription (:meth:`node_row`, :meth:`sub_row`), so a point solved step by step satisfies the whole
         program's rows (``docs/derivations.md``, "Contact trajectories", "The march").
         """
         n, c, m, sym = self.n, self.c, self.m, ca.SX.sym
-        C = self._C
         x = sym("x", 2 * n + 1 + 2 * c + 2 * m)
         qs, qn, b = x[:n], x[n:2 * n], x[2 * n]
         o = 2 * n + 1
@@ -143,12 +160,10 @@ class ContactMechanics:
         qk, p, h, ell = sym("q", n), sym("p", n), sym("h"), sym("ell")
         snu, smu, vref, bfix = sym("snu"), sym("smu"), sym("vref"), sym("bfix")
         t, held, closed, law = sym("t", c), sym("held", c), sym("closed", c), sym("law", c)
-        a = 0.5 + b
-        pm, pp, r = self._kinematics(qk, qs, qn, a * h, (1 - a) * h)
+        sub_row, r = self.sub_row(qk, qs, qn, b, mu, lams, h)
         free = 1 - held
         other = 1 - closed - law
-        R = ca.vertcat((p + D1(qk, qs, a * h)) / h + ca.mtimes(J(qk).T, nu) - ca.mtimes(C(qk).T, lam),
-                       (pm - pp + ca.mtimes(J(qs).T, mu)) / h - ca.mtimes(C(qs).T, lams),
+        R = ca.vertcat(self.node_row(p, qk, qs, b, nu, lam, h), sub_row,
                        (1 - ca.sum1(t)) * (b - bfix) + ca.dot(t, phi(qs)) / ell,
                        held * phi(qs) / ell + free * nu / snu,
                        closed * phi(qn) / ell + law * r / vref + other * mu / smu,

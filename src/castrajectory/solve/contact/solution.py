@@ -133,6 +133,7 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
             vn_b, vn_a = float(Jj @ vb), float(Jj @ va)
             impacts.append(SubNodeImpact(int(k), tk, int(j), muk, np.array(x, float).copy(), vb, va,
                                   caught=bool(abs(vn_a + cm.e * vn_b) > CAUGHT_LAW * abs(vn_b))))
+    impacts, simultaneous = _simultaneous(cm, tn, impacts, MU, q, S, B, H)
     # Impulse per node: Λ_k = h ν_k + (1 − α_k) μ_k + α_{k−1} μ_{k−1}, each sub-node impulse shared
     # between its two nodes by linear (hat-function) interpolation of its time; node N takes the
     # look-ahead step's node force and sub-node share (its dual cell reaches past T).  For a body
@@ -144,7 +145,7 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     lam[1:] += alpha_full[:N, None] * mu_full[:N]
     nu = nu_full[:N + 1].copy()
     total_iter = sum(a["iterations"] for a in attempts)
-    warnings = _elastic_loss_warning(cm, energy, impacts, H[:N])
+    warnings = simultaneous + _elastic_loss_warning(cm, energy, impacts, H[:N])
     return ContactTrajectory(
         warnings=warnings,
         t=t, q=q, p=p, v=v, energy=energy, t_sub=t_sub, q_sub=S, mu=MU, nu=nu, gap=gap, gap_sub=gap_sub,
@@ -155,6 +156,46 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
         solve_time_s=float(guess_time + sum(a["solve_time_s"] for a in attempts)),
         scheme=cm.dm.scheme.name, homotopy=list(res.homotopy), attempts=attempts, n=int(round(float(t[-1]) / h)),
         program={"terms": sysm.terms(), "steps": int(tn.L), **tn.nlp.anatomy()})
+
+
+def _simultaneous(cm: ContactMechanics, tn, impacts, MU, q, S, B, H):
+    """Every contact that takes part in an impact, and a warning for each simultaneous one.
+
+    An impact at a sub-node may be carried on through contacts that were already closed (a ball resting
+    against the next one in Newton's cradle: no approach, yet an impulse).  A contact with an impulse at
+    an impact's sub-node takes part when that impulse alone would change its normal velocity by more
+    than a step's worth of its normal acceleration (the scale that separates an impact from resting
+    contact, :data:`IMPACT_SPEED_STEPS`).  Two or more contacts in one impact make it simultaneous: its
+    outcome depends on the impact law, which the answer says (the simultaneous Newton law here)."""
+    sysm = cm.system
+    names = sysm.contact.names
+    by_step: dict = {}
+    for imp in impacts:
+        by_step.setdefault(imp.step, []).append(imp)
+    out, warnings = list(impacts), []
+    for k, imps in sorted(by_step.items()):
+        listed = {i.contact for i in imps}
+        x = S[k]
+        pm = np.asarray(cm.p_minus(q[k], S[k], B[k], H[k])).reshape(-1)
+        pl = np.asarray(cm.p_plus(S[k], q[k + 1], B[k], H[k])).reshape(-1)
+        vb, va = cm.dm.velocities(np.array([x, x]), np.array([pm, pl]))
+        Jx = np.asarray(sysm.gap(x)[1])
+        an = np.abs(np.asarray(cm.acc_normal(x, vb)).reshape(-1))
+        for j in np.flatnonzero(MU[k] > IMPULSE_TOL * tn.scales_p / tn.scales_ell):
+            if j in listed:
+                continue
+            w = float(Jx[j] @ cm.dm.velocities(np.array([x]), np.array([Jx[j]]))[0])
+            if MU[k, j] * w > IMPACT_SPEED_STEPS * an[j] * H[k]:
+                vn_b, vn_a = float(Jx[j] @ vb), float(Jx[j] @ va)
+                out.append(SubNodeImpact(int(k), imps[0].t, int(j), float(MU[k, j]), np.array(x, float).copy(),
+                                         vb, va, caught=bool(abs(vn_a + cm.e * vn_b) > CAUGHT_LAW * max(abs(vn_b), 1e-300))))
+                listed.add(int(j))
+        if len(listed) > 1:
+            warnings.append(f"a simultaneous impact at t = {imps[0].t:.6g}: {', '.join(names[j] for j in sorted(listed))} "
+                            f"take impulses in one step; its outcome depends on the impact law (here the "
+                            f"simultaneous Newton law, each contact's normal velocity reversed by e)")
+    out.sort(key=lambda i: (i.step, i.contact))
+    return out, warnings
 
 
 #: An elastic scene (e = 1) whose energy falls by more than this fraction is reported with a warning.
