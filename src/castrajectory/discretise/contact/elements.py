@@ -118,6 +118,7 @@ class ContactMechanics:
         self.flow = ca.Function("flow", [qk, v, tau], [x[:n], x[n:], phi(x[:n])])
         self._flights: Dict[int, ca.Function] = {}
         self._march_function(phi)
+        self.node_law_fn = ca.Function("c_node_law", [p0, qk, qs, b, h], [self.node_law(p0, qk, qs, b, h)])
         self.acc_normal = ca.Function("acc_normal", [qk, v], [ca.mtimes(J(qk), acc(qk, v))])
 
 
@@ -139,6 +140,20 @@ class ContactMechanics:
         pm, pp, r = self._kinematics(qk, qs, qn, a * h, (1 - a) * h)
         return (pm - pp + ca.mtimes(self._J(qs).T, mu)) / h - ca.mtimes(self._C(qs).T, lams), r
 
+    def node_law(self, p_in, qk, qs, b, h):
+        """Newton's law at the node ``q_k`` itself: ``∇φ(q_k) Π(q_k) (p_k⁺ + e p_in)`` with ``p_k⁺ =
+        −D₁L_d(q_k, q̃_k, αh)`` (the node row makes ``p_k⁺ − p_in`` the node's impulse ``h∇φᵀν``).  A flight
+        that lands exactly on a node (to rounding) has its impact there: the sub-nodes, strictly inside
+        their steps, cannot time it, and the node's force ``ν`` would otherwise stop the arrival plastically."""
+        pp = -self._D1(qk, qs, (0.5 + b) * h)
+        M = self.system.mass_matrix(qk)
+        v = ca.solve(M, pp + self.e * p_in)
+        Cx = self._C(qk)
+        if Cx.size1():
+            MiCt = ca.solve(M, Cx.T)
+            v = v - ca.mtimes(MiCt, ca.solve(ca.mtimes(Cx, MiCt), ca.mtimes(Cx, v)))
+        return ca.mtimes(self._J(qk), v)
+
     def _march_function(self, phi):
         """One step of the transcription's own rows, each contact in a mode given by masks (the march).
 
@@ -147,7 +162,8 @@ class ContactMechanics:
         ``p_k⁻``, ``h``, the length ``ℓ`` and the scales of ν and μ, and per contact the masks
         ``t`` (the contact that times the sub-node: ``φ_t(q̃) = 0`` replaces ``β = β_fix``),
         ``held`` (``φ(q̃) = 0`` replaces ``ν = 0``), ``closed`` (``φ(q_{k+1}) = 0`` replaces
-        ``μ = 0``) and ``law`` (Newton's law ``r = 0`` replaces ``μ = 0``).  The rows are the node
+        ``μ = 0``), ``law`` (Newton's law ``r = 0`` replaces ``μ = 0``) and ``node`` (an impact at the node
+        ``q_k`` itself, Newton's law there, :meth:`node_law`, replaces ``ν = 0``).  The rows are the node
         and sub-node rows of the transcription (:meth:`node_row`, :meth:`sub_row`), so a point solved step by step satisfies the whole
         program's rows (``docs/derivations.md``, "Contact trajectories", "The march").
         """
@@ -160,15 +176,16 @@ class ContactMechanics:
         qk, p, h, ell = sym("q", n), sym("p", n), sym("h"), sym("ell")
         snu, smu, vref, bfix = sym("snu"), sym("smu"), sym("vref"), sym("bfix")
         t, held, closed, law = sym("t", c), sym("held", c), sym("closed", c), sym("law", c)
+        node = sym("node", c)
         sub_row, r = self.sub_row(qk, qs, qn, b, mu, lams, h)
-        free = 1 - held
+        free = 1 - held - node
         other = 1 - closed - law
         R = ca.vertcat(self.node_row(p, qk, qs, b, nu, lam, h), sub_row,
                        (1 - ca.sum1(t)) * (b - bfix) + ca.dot(t, phi(qs)) / ell,
-                       held * phi(qs) / ell + free * nu / snu,
+                       held * phi(qs) / ell + node * self.node_law(p, qk, qs, b, h) / vref + free * nu / snu,
                        closed * phi(qn) / ell + law * r / vref + other * mu / smu,
                        con(qs), con(qn))
-        self.march_step = ca.Function("march_step", [x, qk, p, h, ell, snu, smu, vref, bfix, t, held, closed, law],
+        self.march_step = ca.Function("march_step", [x, qk, p, h, ell, snu, smu, vref, bfix, t, held, closed, law, node],
                                       [R, ca.jacobian(R, x)])
 
     def flights(self, K: int) -> ca.Function:

@@ -217,8 +217,8 @@ class ContactTranscription:
         return out
 
     def _raw_law(self, values):
-        """Unweighted Newton law ``μ r`` per step and contact (one-sub-node form), and where the body
-        leaves after the impulse: one of the next two nodes open by more than the hop of a resting
+        """Unweighted Newton law ``μ r`` per step and contact (one-sub-node form; at a node with an
+        impact, ``h ν`` times the node's law), and where the body leaves after the impulse: one of the next two nodes open by more than the hop of a resting
         body, a h²/8.  Its check holds an impact late in its step (small next-node gap, small
         weight) to the same tolerance, and rejects a "catch" that lifts off again."""
         cm, L, H, c = self.cm, self.L, self.H, self.cm.c
@@ -239,6 +239,19 @@ class ContactTranscription:
                 J = np.asarray(cm.system.gap(S[k])[1])
                 vn = J @ np.linalg.solve(np.asarray(cm.system.mass_matrix(S[k])), pm[i])
                 leaves[k] &= -vn > self.v_zeno
+        # Newton's law at the nodes (the march's mode N): a node impulse h ν on an arrival faster than v_z
+        # after which the contact leaves is an impact at the node, and its law is checked the same way
+        NU = values["nu"].reshape(L, c)
+        for k, j in zip(*np.where(NU[1:L] > 0.0)):
+            k += 1
+            if not (nxt[k, j] > self.open_gap or nxt2[k, j] > self.open_gap):
+                continue
+            p_in = np.asarray(cm.p_node_minus(S[k - 1], B[k - 1], Q[k], H[k - 1])).reshape(-1)
+            J = np.asarray(cm.system.gap(Q[k])[1])[j]
+            if -(J @ np.linalg.solve(np.asarray(cm.system.mass_matrix(Q[k])), p_in)) > self.v_zeno:
+                r = float(np.asarray(cm.node_law_fn(p_in, Q[k], S[k], B[k], H[k])).reshape(-1)[j])
+                raw[k, j] = max(abs(raw[k, j]), abs(H[k] * NU[k, j] * r))
+                leaves[k, j] = True
         return raw, leaves
 
     def residual(self, values) -> float:

@@ -14,6 +14,9 @@ its pairs that the whole program's solution has.  Each contact is in one of thes
   its impulse ``μ ≥ 0``;
 * ``C``, caught from flight: ``φ(q̃) = 0`` and ``φ(q_{k+1}) = 0`` (the law waived: the bounce would
   not clear the next node, the grid does not resolve its flight).
+* ``N``, an impact at the node ``q_k`` itself (a flight that landed on it, to within ``ALPHA_MIN`` of the
+  step, arriving faster than two steps' worth of its normal acceleration): Newton's law at the node fixes
+  the node's impulse ``h ν ≥ 0``, ``μ = 0``.
 
 A step starts from the modes the previous step ended in (held contacts held, the others open) and
 changes one contact's mode per Newton solve, the one whose gap or multiplier is most violated, until

@@ -60,6 +60,8 @@ class ContactNLP(ContactTranscription):
         held = np.isin(modes, ("H", "R"))
         closes = np.isin(modes, ("H", "C"))
         law = (modes == "I") & np.asarray(point["bounced"], bool).reshape(L, c)
+        node = (modes == "N").reshape(-1)
+        nu_march = np.asarray(point["nu"], float).reshape(-1)
         zero = np.zeros(L * c)
         untimed = ~np.any(timed, axis=1)
         blo = np.where(untimed, 0.0, ALPHA_MIN - 0.5)
@@ -67,7 +69,8 @@ class ContactNLP(ContactTranscription):
         bounds = {
             "q": self._q_bounds(q0),
             "beta": (blo, bhi),
-            "nu": (zero, np.where(held.reshape(-1), np.inf, 0.0)),
+            # an impact at a node (mode N): its force is the march's, which Newton's law at the node fixed
+            "nu": (np.where(node, nu_march, 0.0), np.where(held.reshape(-1), np.inf, np.where(node, nu_march, 0.0))),
             "mu": (zero, np.where(np.isin(modes, ("H", "I", "C")).reshape(-1), np.inf, 0.0)),
             "s_plus": (zero, zero), "s_minus": (zero, zero),
             "node_gap": (zero, np.where(closes.reshape(-1), 0.0, np.inf)),

@@ -34,10 +34,14 @@ class SubNodeImpact:
     #: the contact is closed again at the next node: the body is caught (plastic, Newton's law
     #: waived; the accumulation of Zeno bouncing or rocking), not a bounce
     caught: bool = False
+    #: at the node ``step`` itself (a flight that landed on a node: Newton's law at the node, its impulse
+    #: the node's h ν), not at a sub-node
+    at_node: bool = False
 
     def as_dict(self) -> dict:
         return {"step": self.step, "t": self.t, "contact": self.contact, "mu": self.mu,
-                "q": self.q, "v_before": self.v_before, "v_after": self.v_after, "caught": self.caught}
+                "q": self.q, "v_before": self.v_before, "v_after": self.v_after, "caught": self.caught,
+                "at_node": self.at_node}
 
 
 @dataclass(kw_only=True)
@@ -108,6 +112,10 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     pN = np.asarray(cm.p_node_minus(S[-1], B[-1], q[-1], H[N - 1])).reshape(1, -1)
     p = np.vstack([pp - half[:N], pN + half[N:]])
     p[0] = p0
+    # impacts at nodes: the node's momentum is the one after the impact (p_k⁺), not the mean
+    node_impacts = _node_impacts(cm, tn, q, pp, 2 * half, nu_full, closed, H, N)
+    for imp in node_impacts:
+        p[imp.step] = pp[imp.step]
     # velocities M⁻¹p, tangent to the holonomic constraints where there are any
     v = cm.dm.velocities(q, p)
     energy = sysm.energies(q, v)
@@ -133,7 +141,7 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
             vn_b, vn_a = float(Jj @ vb), float(Jj @ va)
             impacts.append(SubNodeImpact(int(k), tk, int(j), muk, np.array(x, float).copy(), vb, va,
                                   caught=bool(abs(vn_a + cm.e * vn_b) > CAUGHT_LAW * abs(vn_b))))
-    impacts, simultaneous = _simultaneous(cm, tn, impacts, MU, q, S, B, H)
+    impacts, simultaneous = _simultaneous(cm, tn, impacts + node_impacts, MU, q, S, B, H)
     # Impulse per node: Λ_k = h ν_k + (1 − α_k) μ_k + α_{k−1} μ_{k−1}, each sub-node impulse shared
     # between its two nodes by linear (hat-function) interpolation of its time; node N takes the
     # look-ahead step's node force and sub-node share (its dual cell reaches past T).  For a body
@@ -171,10 +179,14 @@ def _simultaneous(cm: ContactMechanics, tn, impacts, MU, q, S, B, H):
     names = sysm.contact.names
     by_step: dict = {}
     for imp in impacts:
-        by_step.setdefault(imp.step, []).append(imp)
+        by_step.setdefault((imp.step, imp.at_node), []).append(imp)
     out, warnings = list(impacts), []
-    for k, imps in sorted(by_step.items()):
+    for (k, at_node), imps in sorted(by_step.items()):
         listed = {i.contact for i in imps}
+        if at_node:
+            if len(listed) > 1:
+                warnings.append(_simultaneous_warning(imps[0].t, [names[j] for j in sorted(listed)]))
+            continue
         x = S[k]
         pm = np.asarray(cm.p_minus(q[k], S[k], B[k], H[k])).reshape(-1)
         pl = np.asarray(cm.p_plus(S[k], q[k + 1], B[k], H[k])).reshape(-1)
@@ -191,11 +203,43 @@ def _simultaneous(cm: ContactMechanics, tn, impacts, MU, q, S, B, H):
                                          vb, va, caught=bool(abs(vn_a + cm.e * vn_b) > CAUGHT_LAW * max(abs(vn_b), 1e-300))))
                 listed.add(int(j))
         if len(listed) > 1:
-            warnings.append(f"a simultaneous impact at t = {imps[0].t:.6g}: {', '.join(names[j] for j in sorted(listed))} "
-                            f"take impulses in one step; its outcome depends on the impact law (here the "
-                            f"simultaneous Newton law, each contact's normal velocity reversed by e)")
-    out.sort(key=lambda i: (i.step, i.contact))
+            warnings.append(_simultaneous_warning(imps[0].t, [names[j] for j in sorted(listed)]))
+    out.sort(key=lambda i: (i.t, i.contact))
     return out, warnings
+
+
+def _simultaneous_warning(t: float, names) -> str:
+    return (f"a simultaneous impact at t = {t:.6g}: {', '.join(names)} take impulses in one step; its outcome "
+            f"depends on the impact law (here the simultaneous Newton law, each contact's normal velocity "
+            f"reversed by e)")
+
+
+def _node_impacts(cm: ContactMechanics, tn, q, pp, jump, nu_full, closed, H, N) -> List[SubNodeImpact]:
+    """Impacts at interior nodes: a closed contact whose node impulse ``h ν`` meets an arrival faster than
+    a step's worth of its normal acceleration (the march's mode N: a flight that landed on the node).
+    ``jump``: ``p_k⁺ − p_k⁻`` per node."""
+    sysm = cm.system
+    out: List[SubNodeImpact] = []
+    t = N * H[0] * np.linspace(0.0, 1.0, N + 1) if np.all(H[:N] == H[0]) else np.concatenate([[0.0], np.cumsum(H[:N])])
+    pushed = closed[1:N] & (nu_full[1:N] > IMPULSE_TOL * tn.scales_p / tn.scales_ell)
+    for k in np.where(np.any(pushed, axis=1))[0] + 1:
+        x = q[k]
+        vb, va = cm.dm.velocities(np.array([x, x]), np.array([pp[k] - jump[k], pp[k]]))
+        Jx = np.asarray(sysm.gap(x)[1])
+        an = np.abs(np.asarray(cm.acc_normal(x, vb)).reshape(-1))
+        js = np.where(pushed[k - 1])[0]
+        arrivals = [j for j in js if -float(Jx[j] @ vb) > IMPACT_SPEED_STEPS * an[j] * H[k]]
+        if not arrivals:
+            continue
+        # and the closed contacts that carry the impact on (as at a sub-node, see _simultaneous)
+        w = {j: float(Jx[j] @ cm.dm.velocities(np.array([x]), np.array([Jx[j]]))[0]) for j in js}
+        for j in js:
+            if j in arrivals or nu_full[k, j] * w[j] > IMPACT_SPEED_STEPS * an[j] * H[k]:
+                vn_b, vn_a = float(Jx[j] @ vb), float(Jx[j] @ va)
+                out.append(SubNodeImpact(int(k), float(t[k]), int(j), float(nu_full[k, j]), np.array(x, float).copy(),
+                                         vb, va, caught=bool(abs(vn_a + cm.e * vn_b) > CAUGHT_LAW * max(abs(vn_b), 1e-300)),
+                                         at_node=True))
+    return out
 
 
 #: An elastic scene (e = 1) whose energy falls by more than this fraction is reported with a warning.

@@ -21,7 +21,11 @@ MODE_ROUNDS = 12
 #: that impact (a flat landing: one simultaneous impact).
 SIMULTANEOUS_GAP = 1e-9
 
-O, H, R, I, C = "O", "H", "R", "I", "C"
+O, H, R, I, C, N = "O", "H", "R", "I", "C", "N"
+#: A contact that touches at a step's first node while approaching faster than this many steps' worth of
+#: its normal acceleration arrives with an impact at that node (mode N; resting contact approaches at about
+#: ½ step's worth).
+ARRIVAL_SPEED_STEPS = 2.0
 
 
 #: Newton steps of each step of a chunk (:meth:`_Step.chunk`).
@@ -57,10 +61,10 @@ class _Step:
             v = ca.solve(cm.system.mass_matrix(qs), ps)
             x = ca.vertcat(qs + 0.5 * hs * v, qs + hs * v, ca.DM.zeros(1 + 2 * c + 2 * m))
             for _ in range(CHUNK_NEWTON):
-                r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero)
+                r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero, zero)
                 x = x - ca.solve(J, r)
             # the size of one more Newton step: the rows' residual in units of the unknowns
-            r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero)
+            r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero, zero)
             res = ca.mmax(ca.fabs(ca.solve(J, r)))
             qn, qt = x[n:2 * n], x[:n]
             one = ca.Function("chunk_step", [qs, ps, hs, hm] + sc,
@@ -71,30 +75,31 @@ class _Step:
 
     def masks(self, modes):
         c = self.c
-        t, held, closed, law = (np.zeros(c) for _ in range(4))
+        t, held, closed, law, node = (np.zeros(c) for _ in range(5))
         for j, m in enumerate(modes):
             t[j] = m in (I, C)
             held[j] = m in (H, R)
             closed[j] = m in (H, C)
             law[j] = m == I
+            node[j] = m == N
         # simultaneous impacts share one timing row: only the first timing contact times the sub-node
         timing = np.where(t > 0)[0]
         if timing.size > 1:
             t[timing[1:]] = 0.0
-        return t, held, closed, law
+        return t, held, closed, law, node
 
     def solve(self, x, q, p, h, modes, bfix=None):
         """Newton on the step's rows in the given modes (with ``bfix``: the sub-node's ``β`` fixed
         there instead of timed by a contact); ``(x, ok)``."""
         n, c = self.n, self.c
         self.snu, self.smu = self.pref / h, self.pref
-        t, held, closed, law = self.masks(modes)
+        t, held, closed, law, node = self.masks(modes)
         if bfix is not None:
             t = np.zeros(c)
             x = x.copy()
             x[2 * n] = bfix
         args = (q, p, h, self.ell, self.snu, self.smu, self.vref, 0.0 if bfix is None else bfix,
-                t, held, closed, law)
+                t, held, closed, law, node)
         small = 0
         for _ in range(NEWTON_ITER):
             r, Jr = self.fn(x, *args)
@@ -193,7 +198,10 @@ def _march_step(step: _Step, q, p, h, g_q, held_prev, tol, finest: bool):
     touch = g_q <= tol
     v = np.linalg.solve(np.asarray(step.cm.system.mass_matrix(q)), p)
     x0 = np.concatenate([q + 0.5 * h * v, q + h * v, [0.0], np.zeros(2 * c + 2 * step.m)])
-    modes0 = [H if (touch[j] and held_prev[j]) else O for j in range(c)]
+    # a flight that landed on this node (to rounding) arrives with its impact here: Newton's law at the node
+    an = np.abs(np.asarray(step.cm.acc_normal(q, v)).reshape(-1))
+    arriving = touch & ~held_prev & (-(np.asarray(step.cm.system.gap(q)[1]) @ v) > ARRIVAL_SPEED_STEPS * an * h)
+    modes0 = [N if arriving[j] else H if (touch[j] and held_prev[j]) else O for j in range(c)]
     modes, tried, crossed = list(modes0), set(), set()
     x, frac, why = x0, None, "rounds"
     for _ in range(MODE_ROUNDS):
@@ -261,7 +269,7 @@ def _enumerate(step: _Step, q, p, h, g_q, touch, modes0, crossed, x0, pen, tol, 
     crossing (O, I or C; at most one timed) -- fewest changes from ``modes0`` first; the first whose
     solve meets every condition, or None."""
     cand = sorted(set(np.where(touch)[0].tolist()) | set(crossed))
-    opts = [(H, R, O) if touch[j] else (O, I, C) for j in cand]
+    opts = [((N, H, R, O) if modes0[j] == N else (H, R, O)) if touch[j] else (O, I, C) for j in cand]
     combos = []
     for choice in product(*opts):
         if sum(1 for j, mj in zip(cand, choice) if not touch[j] and mj in (I, C)) > 1:
@@ -294,7 +302,7 @@ def _next_modes(modes, touch, g0, gs, gn, nu, mu, b, pen, tol, step, finest):
     worst, pick = 0.0, None
     # multipliers of free contacts (scaled)
     for j, m in enumerate(modes):
-        if m in (H, R) and nu[j] < 0.0:
+        if m in (H, R, N) and nu[j] < 0.0:
             viol = -nu[j] / step.snu
             if viol > worst:
                 worst, pick = viol, (j, O)
@@ -313,7 +321,12 @@ def _next_modes(modes, touch, g0, gs, gn, nu, mu, b, pen, tol, step, finest):
     worst, pick = pen, None
     crossing = []
     for j, m in enumerate(modes):
-        if m == O and (gs[j] < -pen or gn[j] < -pen):
+        if m == N and (gs[j] < -pen or gn[j] < -pen):
+            # the node's impact does not send it off (e = 0, or a slow arrival): held from the node on
+            viol = -min(gs[j], gn[j])
+            if viol > worst:
+                worst, pick = viol, (j, H)
+        elif m == O and (gs[j] < -pen or gn[j] < -pen):
             if touch[j]:
                 cand = R if gs[j] < -pen and gn[j] >= -pen else H
                 viol = -min(gs[j], gn[j])
@@ -341,6 +354,10 @@ def _next_modes(modes, touch, g0, gs, gn, nu, mu, b, pen, tol, step, finest):
     if crossing:
         timed = [j for j, m in enumerate(modes) if m in (I, C)]
         fr = {j: _crossing_fraction(g0[j], gs[j], gn[j], alpha) for j in crossing}
+        # a crossing closer to the next node than a sub-node may sit (1 − ALPHA_MIN of the step): the flight
+        # lands on the node, whose impact the next step takes (mode N)
+        crossing = [j for j in crossing if fr[j] < 1.0 - ALPHA_MIN]
+    if crossing:
         first = min(crossing, key=lambda j: fr[j])
         if timed:
             # a crossing after the sub-node's impact: simultaneous with it, or a second impact
