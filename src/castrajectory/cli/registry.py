@@ -121,6 +121,10 @@ SCENES: List[Scene] = [
              contact_check((("impact_time_error", 1e-12), ("apex_error", 1e-12), ("resting_impulse_error", 1e-12)),
                            "bounce times (s), apexes (m), then m g h per node")),
     )),
+    Scene("newtons_cradle", "contact", report=(
+        Entry("newtons_cradle", ("--balls", "4", "--n", "300"),
+              "Newton's cradle, 4 touching balls, the sequential law (the last leaves, the others stop)", True),
+    )),
     Scene("rectangle_drop", "contact", report=(
         Entry("rectangle_drop", (), "rectangle drop, θ₀ = 0.3, e = 1", True),
     ), stability=(

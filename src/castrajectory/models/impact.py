@@ -7,7 +7,10 @@ One law for the whole package (the guesses, the oracles, the checks of a solutio
   approaches (``J v⁻ < 0``), ``μ = 0`` otherwise; ``J v⁺ = −e J v⁻``, and for ``e = 1`` the kinetic
   energy is kept (``ΔK = μ (J v⁻ + ½ μ J M⁻¹ Jᵀ)`` vanishes at that ``μ``);
 * several contacts at the same instant (:func:`simultaneous_impact`): ``J v⁺ + e J v⁻ ≥ 0 ⟂ μ ≥ 0``,
-  ``v⁺ = v⁻ + M⁻¹Jᵀμ``, by projected Gauss–Seidel.
+  ``v⁺ = v⁻ + M⁻¹Jᵀμ``, by projected Gauss–Seidel;
+* several contacts one after the other (:func:`sequential_impact`): the cascade, each firing the one-contact
+  law on the contact approaching fastest at that moment, until none approaches -- the limit of vanishing
+  gaps between the contacts (Newton's cradle: the last ball leaves, the others stop).
 
 The derivation is in ``docs/derivations.md`` (Collisions, §3).
 """
@@ -128,3 +131,25 @@ def simultaneous_impact(M, J, v, e, sweeps: int = 200):
             r = J[i] @ (v + MiJt @ mu) - target[i]
             mu[i] = max(0.0, mu[i] - r / W[i, i])
     return mu, v + MiJt @ mu
+
+
+def sequential_impact(W: np.ndarray, vn: np.ndarray, e: float, max_firings: int = 100000):
+    """The cascade of one-contact impacts, in the contacts' normal velocities: ``W = J Π Jᵀ`` (the
+    inverse effective mass, ``Π = M⁻¹`` or its restriction to the constraints), ``vn = J v⁻``.  While some
+    contact approaches (``vn_i < 0``, beyond rounding), the fastest one fires ``Newton's law`` on its own,
+    ``δμ_i = −(1 + e) vn_i / W_ii`` and ``vn += W[:, i] δμ_i``.  Returns ``(μ, vn⁺)``.
+
+    For ``e = 1`` each firing keeps the kinetic energy, for ``e < 1`` loses some, so the cascade ends;
+    equal balls in a row, the first at speed V: ``vn⁺`` sends the last off at V and stops the others."""
+    vn = np.asarray(vn, float).copy()
+    mu = np.zeros(vn.size)
+    floor = 1e-14 * max(float(np.max(np.abs(vn))), 1e-300)
+    for _ in range(max_firings):
+        i = int(np.argmin(vn))
+        if vn[i] >= -floor:
+            return mu, vn
+        d = -(1.0 + e) * vn[i] / W[i, i]
+        mu[i] += d
+        vn += W[:, i] * d
+    raise RuntimeError(f"the impact cascade did not end within {max_firings} firings")
+

@@ -343,7 +343,8 @@ class Contact:
 
     An impact of contact ``j`` reverses its normal velocity ``∇φ_j q̇`` by the
     factor ``e`` (``e = 1``: elastic, the default); impulses act along
-    ``M⁻¹∇φ_jᵀ`` with ``μ_j ≥ 0``.  ``names`` label the contact points in output.
+    ``M⁻¹∇φ_jᵀ`` with ``μ_j ≥ 0``.  ``names`` label the contact points in output.  ``law`` says how
+    an impact at several contacts at once is resolved (simultaneous or sequential; see the field).
     A ball dropped from 1 m bounces at ``t = √(2/g)``:
 
     >>> import casadi as ca, castrajectory as ct
@@ -358,8 +359,14 @@ class Contact:
     gaps: Sequence[object]
     restitution: float = 1.0
     names: Optional[Sequence[str]] = None
+    #: how an impact at several contacts at once is resolved: ``"simultaneous"`` (Newton's law at every
+    #: contact together, ``J v⁺ + e J v⁻ ≥ 0 ⟂ μ ≥ 0``) or ``"sequential"`` (a cascade of one-contact
+    #: impacts, the fastest approach first: the limit of vanishing gaps, the textbook Newton's cradle)
+    law: str = "simultaneous"
 
     def __post_init__(self):
+        if self.law not in ("simultaneous", "sequential"):
+            raise InputError(f"the impact law must be 'simultaneous' or 'sequential' (got {self.law!r})")
         e = finite("restitution", self.restitution)
         if not 0.0 <= e <= 1.0:
             raise InputError(f"restitution must be between 0 and 1 (got {self.restitution})")

@@ -163,7 +163,9 @@ class ContactMechanics:
         ``t`` (the contact that times the sub-node: ``φ_t(q̃) = 0`` replaces ``β = β_fix``),
         ``held`` (``φ(q̃) = 0`` replaces ``ν = 0``), ``closed`` (``φ(q_{k+1}) = 0`` replaces
         ``μ = 0``), ``law`` (Newton's law ``r = 0`` replaces ``μ = 0``) and ``node`` (an impact at the node
-        ``q_k`` itself, Newton's law there, :meth:`node_law`, replaces ``ν = 0``).  The rows are the node
+        ``q_k`` itself, Newton's law there, :meth:`node_law`, replaces ``ν = 0``); ``fixed`` with ``mufix``
+        (``μ = mufix`` replaces ``μ = 0``: an impulse decided outside the step, the sequential law's cascade)
+        and ``nfixed`` (``ν = mufix`` replaces ``ν = 0``: the same at the node).  The rows are the node
         and sub-node rows of the transcription (:meth:`node_row`, :meth:`sub_row`), so a point solved step by step satisfies the whole
         program's rows (``docs/derivations.md``, "Contact trajectories", "The march").
         """
@@ -176,16 +178,18 @@ class ContactMechanics:
         qk, p, h, ell = sym("q", n), sym("p", n), sym("h"), sym("ell")
         snu, smu, vref, bfix = sym("snu"), sym("smu"), sym("vref"), sym("bfix")
         t, held, closed, law = sym("t", c), sym("held", c), sym("closed", c), sym("law", c)
-        node = sym("node", c)
+        node, fixed, mufix, nfixed = sym("node", c), sym("fixed", c), sym("mufix", c), sym("nfixed", c)
         sub_row, r = self.sub_row(qk, qs, qn, b, mu, lams, h)
-        free = 1 - held - node
-        other = 1 - closed - law
+        free = 1 - held - node - nfixed
+        other = 1 - closed - law - fixed
         R = ca.vertcat(self.node_row(p, qk, qs, b, nu, lam, h), sub_row,
                        (1 - ca.sum1(t)) * (b - bfix) + ca.dot(t, phi(qs)) / ell,
-                       held * phi(qs) / ell + node * self.node_law(p, qk, qs, b, h) / vref + free * nu / snu,
-                       closed * phi(qn) / ell + law * r / vref + other * mu / smu,
+                       held * phi(qs) / ell + node * self.node_law(p, qk, qs, b, h) / vref
+                       + nfixed * (nu - mufix) / snu + free * nu / snu,
+                       closed * phi(qn) / ell + law * r / vref + fixed * (mu - mufix) / smu + other * mu / smu,
                        con(qs), con(qn))
-        self.march_step = ca.Function("march_step", [x, qk, p, h, ell, snu, smu, vref, bfix, t, held, closed, law, node],
+        self.march_step = ca.Function("march_step", [x, qk, p, h, ell, snu, smu, vref, bfix, t, held, closed, law, node,
+                                                      fixed, mufix, nfixed],
                                       [R, ca.jacobian(R, x)])
 
     def flights(self, K: int) -> ca.Function:

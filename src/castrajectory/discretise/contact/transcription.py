@@ -126,6 +126,9 @@ class ContactTranscription:
         self.scales_ell = ell
         self.scales_law = pref * vref
         self.v_zeno = _v_zeno(cm, h, scales)
+        #: impulses decided by another law (the sequential cascade of the march, steps × contacts): their
+        #: sub-nodes are exempt from the one-contact Newton law in :meth:`residual`
+        self.law_exempt = np.zeros((L, cm.c), dtype=bool)
         # weight length of the law where the guess has no bounce: W = φ(q_{k+1})/δ with δ = ℓ
         # (law_lengths sets a shorter δ at the guess's bounces)
         self.delta = ell
@@ -269,6 +272,8 @@ class ContactTranscription:
                                               self._law_length.T)).reshape(c, L).T
         # Newton's law of every impact after which the body leaves, unweighted (_raw_law)
         raw, leaves = self._raw_law(values)
+        law = np.where(self.law_exempt, 0.0, law)
+        leaves &= ~self.law_exempt
         raw_max = float(np.max(np.abs(raw[leaves]))) if np.any(leaves) else 0.0
         g_end = np.asarray(cm.gap_row(Q[L])).reshape(-1)
         return float(max(np.max(np.abs(gq * NU * H[:, None])) / self.scales_p, np.max(np.abs(gs * MU)) / self.scales_p,

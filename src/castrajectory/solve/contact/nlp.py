@@ -54,13 +54,16 @@ class ContactNLP(ContactTranscription):
         multipliers."""
         c, L = self.cm.c, self.L
         modes = np.asarray(point["modes"]).reshape(L, c)
-        timed = np.isin(modes, ("I", "C"))
+        timed = np.isin(modes, ("I", "C", "T"))
         # the first timed contact of a step fixes its sub-node (simultaneous ones share it)
         first = timed & (np.cumsum(timed, axis=1) == 1)
         held = np.isin(modes, ("H", "R"))
         closes = np.isin(modes, ("H", "C"))
         law = (modes == "I") & np.asarray(point["bounced"], bool).reshape(L, c)
-        node = (modes == "N").reshape(-1)
+        node = np.isin(modes, ("N", "P")).reshape(-1)
+        fixed = np.isin(modes, ("F", "T")).reshape(-1)
+        self.law_exempt = np.isin(modes, ("F", "T", "P"))
+        mu_march = np.asarray(point["mu"], float).reshape(-1)
         nu_march = np.asarray(point["nu"], float).reshape(-1)
         zero = np.zeros(L * c)
         untimed = ~np.any(timed, axis=1)
@@ -71,7 +74,9 @@ class ContactNLP(ContactTranscription):
             "beta": (blo, bhi),
             # an impact at a node (mode N): its force is the march's, which Newton's law at the node fixed
             "nu": (np.where(node, nu_march, 0.0), np.where(held.reshape(-1), np.inf, np.where(node, nu_march, 0.0))),
-            "mu": (zero, np.where(np.isin(modes, ("H", "I", "C")).reshape(-1), np.inf, 0.0)),
+            # the sequential law's impulses (modes F and T) are the march's cascade
+            "mu": (np.where(fixed, mu_march, 0.0),
+                   np.where(np.isin(modes, ("H", "I", "C")).reshape(-1), np.inf, np.where(fixed, mu_march, 0.0))),
             "s_plus": (zero, zero), "s_minus": (zero, zero),
             "node_gap": (zero, np.where(closes.reshape(-1), 0.0, np.inf)),
             "sub_gap": (zero, np.where((held | first).reshape(-1), 0.0, np.inf)),

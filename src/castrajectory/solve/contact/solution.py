@@ -176,7 +176,7 @@ def _simultaneous(cm: ContactMechanics, tn, impacts, MU, q, S, B, H):
     contact, :data:`IMPACT_SPEED_STEPS`).  Two or more contacts in one impact make it simultaneous: its
     outcome depends on the impact law, which the answer says (the simultaneous Newton law here)."""
     sysm = cm.system
-    names = sysm.contact.names
+    names, law = sysm.contact.names, sysm.contact.law
     by_step: dict = {}
     for imp in impacts:
         by_step.setdefault((imp.step, imp.at_node), []).append(imp)
@@ -185,7 +185,7 @@ def _simultaneous(cm: ContactMechanics, tn, impacts, MU, q, S, B, H):
         listed = {i.contact for i in imps}
         if at_node:
             if len(listed) > 1:
-                warnings.append(_simultaneous_warning(imps[0].t, [names[j] for j in sorted(listed)]))
+                warnings.append(_simultaneous_warning(imps[0].t, [names[j] for j in sorted(listed)], law))
             continue
         x = S[k]
         pm = np.asarray(cm.p_minus(q[k], S[k], B[k], H[k])).reshape(-1)
@@ -203,15 +203,16 @@ def _simultaneous(cm: ContactMechanics, tn, impacts, MU, q, S, B, H):
                                          vb, va, caught=bool(abs(vn_a + cm.e * vn_b) > CAUGHT_LAW * max(abs(vn_b), 1e-300))))
                 listed.add(int(j))
         if len(listed) > 1:
-            warnings.append(_simultaneous_warning(imps[0].t, [names[j] for j in sorted(listed)]))
+            warnings.append(_simultaneous_warning(imps[0].t, [names[j] for j in sorted(listed)], law))
     out.sort(key=lambda i: (i.t, i.contact))
     return out, warnings
 
 
-def _simultaneous_warning(t: float, names) -> str:
+def _simultaneous_warning(t: float, names, law: str) -> str:
+    how = ("the simultaneous Newton law, each contact's normal velocity reversed by e" if law == "simultaneous"
+           else "the sequential law, one contact after the other, the fastest approach first")
     return (f"a simultaneous impact at t = {t:.6g}: {', '.join(names)} take impulses in one step; its outcome "
-            f"depends on the impact law (here the simultaneous Newton law, each contact's normal velocity "
-            f"reversed by e)")
+            f"depends on the impact law (here {how}; Contact(law=...))")
 
 
 def _node_impacts(cm: ContactMechanics, tn, q, pp, jump, nu_full, closed, H, N) -> List[SubNodeImpact]:

@@ -9,6 +9,7 @@ import numpy as np
 
 from ...discretise.contact.elements import ContactMechanics
 from ...discretise.contact.transcription import ALPHA_MIN
+from ...models.impact import sequential_impact
 from .. import jit
 
 #: Newton iterations of one step solve, and the largest row residual accepted (each row divided by
@@ -21,7 +22,7 @@ MODE_ROUNDS = 12
 #: that impact (a flat landing: one simultaneous impact).
 SIMULTANEOUS_GAP = 1e-9
 
-O, H, R, I, C, N = "O", "H", "R", "I", "C", "N"
+O, H, R, I, C, N, F, T, P = "O", "H", "R", "I", "C", "N", "F", "T", "P"
 #: A contact that touches at a step's first node while approaching faster than this many steps' worth of
 #: its normal acceleration arrives with an impact at that node (mode N; resting contact approaches at about
 #: ½ step's worth).
@@ -61,10 +62,10 @@ class _Step:
             v = ca.solve(cm.system.mass_matrix(qs), ps)
             x = ca.vertcat(qs + 0.5 * hs * v, qs + hs * v, ca.DM.zeros(1 + 2 * c + 2 * m))
             for _ in range(CHUNK_NEWTON):
-                r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero, zero)
+                r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero, zero, zero, zero, zero)
                 x = x - ca.solve(J, r)
             # the size of one more Newton step: the rows' residual in units of the unknowns
-            r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero, zero)
+            r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero, zero, zero, zero, zero)
             res = ca.mmax(ca.fabs(ca.solve(J, r)))
             qn, qt = x[n:2 * n], x[:n]
             one = ca.Function("chunk_step", [qs, ps, hs, hm] + sc,
@@ -75,31 +76,34 @@ class _Step:
 
     def masks(self, modes):
         c = self.c
-        t, held, closed, law, node = (np.zeros(c) for _ in range(5))
+        t, held, closed, law, node, fixed, nfixed = (np.zeros(c) for _ in range(7))
         for j, m in enumerate(modes):
-            t[j] = m in (I, C)
+            nfixed[j] = m == P
+            t[j] = m in (I, C, T)
             held[j] = m in (H, R)
             closed[j] = m in (H, C)
             law[j] = m == I
             node[j] = m == N
+            fixed[j] = m in (F, T)
         # simultaneous impacts share one timing row: only the first timing contact times the sub-node
         timing = np.where(t > 0)[0]
         if timing.size > 1:
             t[timing[1:]] = 0.0
-        return t, held, closed, law, node
+        return t, held, closed, law, node, fixed, nfixed
 
-    def solve(self, x, q, p, h, modes, bfix=None):
+    def solve(self, x, q, p, h, modes, bfix=None, mufix=None):
         """Newton on the step's rows in the given modes (with ``bfix``: the sub-node's ``β`` fixed
-        there instead of timed by a contact); ``(x, ok)``."""
+        there instead of timed by a contact; ``mufix``: the impulses of the contacts in modes F and T);
+        ``(x, ok)``."""
         n, c = self.n, self.c
         self.snu, self.smu = self.pref / h, self.pref
-        t, held, closed, law, node = self.masks(modes)
+        t, held, closed, law, node, fixed, nfixed = self.masks(modes)
         if bfix is not None:
             t = np.zeros(c)
             x = x.copy()
             x[2 * n] = bfix
         args = (q, p, h, self.ell, self.snu, self.smu, self.vref, 0.0 if bfix is None else bfix,
-                t, held, closed, law, node)
+                t, held, closed, law, node, fixed, np.zeros(c) if mufix is None else mufix, nfixed)
         small = 0
         for _ in range(NEWTON_ITER):
             r, Jr = self.fn(x, *args)
@@ -218,7 +222,7 @@ def _march_step(step: _Step, q, p, h, g_q, held_prev, tol, finest: bool):
         crossed |= set(np.where((gs < -pen) | (gn < -pen))[0].tolist())
         change = _next_modes(modes, touch, g_q, gs, gn, nu, mu, b, pen, tol, step, finest)
         if change is None:
-            return _result(step, x, modes, gn)
+            return _sequential(step, q, p, h, x, modes, mu, pen) or _result(step, x, modes, gn)
         if change == "split":
             return "split" if not finest else ("split at the finest step", key)
         modes, frac = change
@@ -291,8 +295,63 @@ def _enumerate(step: _Step, q, p, h, g_q, touch, modes0, crossed, x0, pen, tol, 
             continue
         x, gs, gn, nu, mu, b = got
         if _next_modes(modes, touch, g_q, gs, gn, nu, mu, b, pen, tol, step, finest) is None:
-            return _result(step, x, modes, gn)
+            return _sequential(step, q, p, h, x, modes, mu, pen) or _result(step, x, modes, gn)
     return None
+
+
+def _sequential(step: _Step, q, p, h, x, modes, mu, pen):
+    """Under the sequential law (``Contact.law``), an impact that several contacts take at one sub-node is
+    re-solved with the impulses of the cascade (:func:`castrajectory.models.impact.sequential_impact`) on
+    the sub-node's state: the sub-node (its time and place) and the momentum before it do not depend on
+    the impulses, so the step keeps them and only its end moves.  The contacts then are in modes T (the
+    one timing the sub-node) and F, their impulses fixed; at a node's impact (mode N), P (the node's).  ``None`` where the law does not change the step
+    (the simultaneous law, one contact, no impact); a step whose cascade leaves a contact below the
+    surface at its end is ``None`` too (the simultaneous answer stands, with its warning)."""
+    cm = step.cm
+    if cm.system.contact.law != "sequential":
+        return None
+    n, c = step.n, step.c
+    o = 2 * n + 1
+    nu = x[o:o + c]
+    at_node = any(m == N for m in modes)
+    if at_node:
+        # an impact at the node q_k: its impulses h ν, the momentum before it the incoming p
+        involved = [j for j, m in enumerate(modes) if (m == N or m in (H, R)) and nu[j] > 0.0]
+        if len(involved) < 2:
+            return None
+        qs, pm = q, p
+    else:
+        involved = [j for j, m in enumerate(modes) if m in (I, C, H, R) and mu[j] > 0.0]
+        if len(involved) < 2 or not any(modes[j] in (I, C) for j in involved):
+            return None
+        qs, b = x[:n], float(x[2 * n])
+        pm = np.asarray(cm.p_minus(q, qs, b, h)).reshape(-1)
+    M = np.asarray(cm.system.mass_matrix(qs))
+    Jx = np.asarray(cm.system.gap(qs)[1])[involved]
+    PiJt = np.linalg.solve(M, Jx.T)
+    if cm.m:
+        Cq = np.asarray(cm.system.constraint(qs)[1])
+        MiCt = np.linalg.solve(M, Cq.T)
+        PiJt = PiJt - MiCt @ np.linalg.solve(Cq @ MiCt, Cq @ PiJt)
+    v = np.linalg.solve(M, pm)
+    if cm.m:
+        v = v - MiCt @ np.linalg.solve(Cq @ MiCt, Cq @ v)
+    cascade, _ = sequential_impact(Jx @ PiJt, Jx @ v, cm.e)
+    mufix = np.zeros(c)
+    if at_node:
+        mufix[involved] = cascade / h                  # the node's force: impulse per step
+        seq = [P if j in involved else m for j, m in enumerate(modes)]
+    else:
+        mufix[involved] = cascade
+        timing = next(j for j, m in enumerate(modes) if m in (I, C))
+        seq = [T if j == timing else F if j in involved else m for j, m in enumerate(modes)]
+    xs, ok = step.solve(x, q, p, h, seq, mufix=mufix)
+    if not ok:
+        return None
+    gn = np.asarray(cm.system.gap(xs[n:2 * n])[0]).reshape(-1)
+    if np.any(gn < -pen):
+        return None
+    return _result(step, xs, seq, gn)
 
 
 def _next_modes(modes, touch, g0, gs, gn, nu, mu, b, pen, tol, step, finest):

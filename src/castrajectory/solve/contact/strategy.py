@@ -152,6 +152,10 @@ def _solve_once(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str
     if not res.success:
         res = whole.solve(q0, p0, guess, co.penalties, options, verbose)
         attempts.append(_attempt("penalty", res))
+    if system.contact.law == "sequential" and res.success:
+        # the fallback's program holds the simultaneous law only: its answer is not one of this law
+        res.fail("Sequential_Law_Needs_The_March", "the sequential impact law is resolved by the discrete march, "
+                 "which failed on this problem; the fallback's answer (simultaneous law) is not reported as one")
     return _finish(cm, whole, res, N, h, attempts, guess_time, p0)
 
 
