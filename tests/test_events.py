@@ -125,3 +125,24 @@ def test_refuses_constrained_systems_without_closed_form_flight():
                             contact=ct.Contact([0.5 - x[0]]))
     with pytest.raises(InputError, match="holonomic"):
         event_driven(s, [0.0, -1.0], [1.0, 0.0], 1.0)
+
+
+def test_a_double_pendulum_against_a_wall():
+    """Issue #25's second scene: unit double pendulum from (−1, −0.5) at rest, the second bob meets the wall
+    x = 1.2 (e = 0.8): midpoint's impact time converges to the reference at order 2 (measured 1.47e-6,
+    3.67e-7 s at N = 1000, 2000)."""
+    import casadi as ca
+    import castrajectory as ct
+    th = ca.SX.sym("th", 2)
+    p1 = ca.vertcat(ca.sin(th[0]), -ca.cos(th[0]))
+    p2 = p1 + ca.vertcat(ca.sin(th[1]), -ca.cos(th[1]))
+    s = ct.LagrangianSystem(th, ct.Atoms([p1, p2], [1.0, 1.0]), [ct.Gravity(G)], names=["th1", "th2"],
+                            contact=ct.Contact([1.2 - p2[0]], restitution=0.8, names=["wall"]))
+    ref = event_driven(s, [-1.0, -0.5], [0.0, 0.0], 3.0)
+    assert ref.reason == "horizon" and len(ref.events) == 1
+    errs = []
+    for N in (1000, 2000):
+        run = ct.simulate(s, [-1.0, -0.5], [0.0, 0.0], 3.0, N)
+        (imp,) = run.detail.impacts
+        errs.append(abs(imp.t - ref.times[0]))
+    assert abs(np.log2(errs[0] / errs[1]) - 2.0) < 0.05 and errs[-1] < 4e-7
