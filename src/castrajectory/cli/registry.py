@@ -121,6 +121,10 @@ SCENES: List[Scene] = [
              contact_check((("impact_time_error", 1e-12), ("apex_error", 1e-12), ("resting_impulse_error", 1e-12)),
                            "bounce times (s), apexes (m), then m g h per node")),
     )),
+    Scene("sliding_block", "contact", report=(
+        Entry("sliding_block", ("--incline", "0.3", "--v0", "2"),
+              "sliding block launched up a 0.3 rad incline, μ = 0.5: it stops and sticks (Coulomb friction)", True),
+    )),
     Scene("newtons_cradle", "contact", report=(
         Entry("newtons_cradle", ("--balls", "4", "--n", "300"),
               "Newton's cradle, 4 touching balls, the sequential law (the last leaves, the others stop)", True),

@@ -169,7 +169,17 @@ class ControlTranscription:
         in_u = self.dm.nu1 > 0 and fn.jac_sparsity(0, 1).nnz() > 0
         if in_u:
             return False, np.arange(tau.size)
-        return True, np.flatnonzero((tau > 1e-12) & (tau < 1 - 1e-12))
+        inner = np.flatnonzero((tau > 1e-12) & (tau < 1 - 1e-12))
+        # a constraint affine in q at a point that is a convex combination of the step's end nodes alone
+        # (midpoint's q(½) = ½(q_k + q_{k+1})) is implied by the nodes' rows: it is not added (the redundant
+        # rows stalled Ipopt at Solved_To_Acceptable_Level on the cart-pole at N = 6400)
+        qs = ca.SX.sym("q", self.dm.n)
+        g = fn(qs, ca.SX.zeros(fn.size1_in(1), fn.size2_in(1)), ca.SX.zeros(fn.size1_in(2), fn.size2_in(2)))
+        if not ca.depends_on(ca.jacobian(g, qs), qs):
+            basis = np.asarray(self.dm.scheme.basis, float)
+            implied = [i for i in inner if np.all(basis[i, 1:-1] == 0) and basis[i, 0] >= 0 and basis[i, -1] >= 0]
+            inner = np.array([i for i in inner if i not in implied], dtype=int)
+        return True, inner
 
     def _path_element(self, fn: ca.Function, nodes: np.ndarray) -> ca.Function:
         """A path constraint ``g(q(τ_i), u_i, t_k + τ_i h)`` at a step's quadrature nodes ``τ_i`` (``nodes``):

@@ -363,10 +363,33 @@ class Contact:
     #: contact together, ``J v⁺ + e J v⁻ ≥ 0 ⟂ μ ≥ 0``) or ``"sequential"`` (a cascade of one-contact
     #: impacts, the fastest approach first: the limit of vanishing gaps, the textbook Newton's cradle)
     law: str = "simultaneous"
+    #: Coulomb friction coefficients, one number for every contact or one per contact (0: frictionless,
+    #: the rows of a frictionless contact exactly)
+    friction: object = 0.0
+    #: each contact's slip velocity, the tangential velocity of its contact point: an expression linear in
+    #: the velocity (``ct.velocity(q)``), needed where the friction is positive (2-D: one number per contact)
+    slip: Optional[Sequence[object]] = None
 
     def __post_init__(self):
         if self.law not in ("simultaneous", "sequential"):
             raise InputError(f"the impact law must be 'simultaneous' or 'sequential' (got {self.law!r})")
+        count = len(self.gaps)
+        try:
+            fr = np.broadcast_to(np.asarray(self.friction, dtype=float), (count,)).copy()
+        except (TypeError, ValueError):
+            raise InputError(f"friction must be a number or one number per contact ({count}); got "
+                             f"{self.friction!r}") from None
+        if not np.all(np.isfinite(fr)) or np.any(fr < 0):
+            raise InputError(f"friction coefficients must be finite and >= 0 (got {self.friction!r})")
+        self.friction = fr
+        if np.any(fr > 0):
+            if self.slip is None or len(self.slip) != count:
+                raise InputError(f"friction needs each contact's slip velocity: Contact(..., slip=[...]) with "
+                                 f"{count} expression{'s' if count > 1 else ''} in the velocity")
+            self.slip = [ca.SX(v) if not isinstance(v, ca.SX) else v for v in self.slip]
+            if any(v.numel() != 1 for v in self.slip):
+                raise InputError("a slip velocity is one number per contact (planar friction); a tangent "
+                                 "plane in 3-D is not supported yet")
         e = finite("restitution", self.restitution)
         if not 0.0 <= e <= 1.0:
             raise InputError(f"restitution must be between 0 and 1 (got {self.restitution})")
@@ -497,6 +520,14 @@ class LagrangianSystem:
         for k, c in enumerate(self.constraints):
             check(c, f"constraint {k}")
         if self.contact is not None:
+            for k, v in enumerate(self.contact.slip or []):
+                name = self.contact.names[k]
+                check(v, f"the slip velocity of {name!r}", rates=True)
+                D = ca.jacobian(v, self.qd)
+                rest = ca.substitute(v, self.qd, ca.SX.zeros(self.nq))
+                if ca.depends_on(D, self.qd) or ca.depends_on(D, self.t) or not rest.is_zero():
+                    raise InputError(f"the slip velocity of {name!r} must be linear in the velocity, D(q) q̇ "
+                                     "(no other term, no time)")
             for k, g in enumerate(self.contact.gaps):
                 check(g, f"the gap of {self.contact.names[k]!r}")
                 if ca.depends_on(g, self.t):
@@ -580,7 +611,11 @@ class LagrangianSystem:
         if self.nc:
             out.append(f"{self.nc} holonomic constraint{'s' if self.nc > 1 else ''}")
         if self.contact is not None:
-            out.append(f"contact: {self.ncontact} gap{'s' if self.ncontact > 1 else ''}, e = {self.contact.restitution:g}")
+            fr = self.contact.friction
+            friction = "" if not np.any(fr > 0) else (f", μ = {fr[0]:g}" if np.all(fr == fr[0]) else
+                                                        ", μ = " + "/".join(f"{x:g}" for x in fr))
+            out.append(f"contact: {self.ncontact} gap{'s' if self.ncontact > 1 else ''}, e = {self.contact.restitution:g}"
+                       f"{friction}")
         return out
 
     # -- symbolic pieces (expressions in self.q, self.qd)
@@ -704,6 +739,19 @@ class LagrangianSystem:
             phi = ca.vertcat(*self.contact.gaps)
             return ca.Function("gap", [self.q], [phi, ca.densify(ca.jacobian(phi, self.q))])
         return self._get("gap", build)
+
+    @property
+    def tangent(self) -> ca.Function:
+        """The slip Jacobian ``D(q)`` (contacts × coordinates), ``slip = D(q) q̇`` (a :class:`Contact` with
+        friction; rows of zeros for a contact without a slip expression)."""
+        if self.contact is None:
+            raise ValueError("this system has no contact term")
+
+        def build():
+            rows = [ca.jacobian(v, self.qd) for v in self.contact.slip] if self.contact.slip else \
+                [ca.SX(1, self.nq) for _ in self.contact.gaps]
+            return ca.Function("tangent", [self.q], [ca.densify(ca.vertcat(*rows))])
+        return self._get("tangent", build)
 
     @property
     def acceleration(self) -> ca.Function:

@@ -11,6 +11,7 @@ from __future__ import annotations
 from typing import Dict
 
 import casadi as ca
+import numpy as np
 
 from ...models.mechanics import LagrangianSystem
 from ...validation import InputError
@@ -64,14 +65,29 @@ class ContactMechanics:
         self._kinematics = kin = lambda xp, x, xn, tau_m, tau_p: _sub_node_kinematics(  # noqa: E731
             D1, D2, J, Mf, C, e, xp, x, xn, tau_m, tau_p)
         self._C, self._D1, self._J = C, D1, J
+        # Coulomb friction (only where a coefficient is positive: a frictionless system keeps its rows and
+        # element functions exactly): the tangential force is ρ times the normal one, at the node (ρ ν) and
+        # at the sub-node (ρ μ), one ratio ρ_j per step and contact, |ρ_j| ≤ μ_f,j; see node_row
+        self.mu_f = np.asarray(system.contact.friction, float)
+        self.friction = bool(np.any(self.mu_f > 0))
+        self._D = system.tangent if self.friction else None
+        # two ratios per contact and step, [ρ_node; ρ_sub]: the node's force ν and the sub-node's impulse μ
+        # each carry their own friction, against the slip of their own part of the step (slip)
+        rho = sym("rho", 2 * c)
+        xr = [rho] if self.friction else []
+        frn, frs = (rho[:c], rho[c:]) if self.friction else (None, None)
         # every node and sub-node row of the program, the held step and the march is node_row or sub_row
-        self.initial = ca.Function("c_initial", [q0, qs, b, p0, nu, h] + xl, [self.node_row(p0, q0, qs, b, nu, lam, h)])
+        self.initial = ca.Function("c_initial", [q0, qs, b, p0, nu, h] + xl + xr,
+                                   [self.node_row(p0, q0, qs, b, nu, lam, h, frn)])
         hp = sym("hp")
-        self.node = ca.Function("c_node", [qsm, bm, qk, qs, b, nu, hp, h] + xl,
-                                [self.node_row(D2(qsm, qk, (1 - am) * hp), qk, qs, b, nu, lam, h)])
-        sub_row, r = self.sub_row(qk, qs, qk1, b, mu, lams, h)
+        self.node = ca.Function("c_node", [qsm, bm, qk, qs, b, nu, hp, h] + xl + xr,
+                                [self.node_row(D2(qsm, qk, (1 - am) * hp), qk, qs, b, nu, lam, h, frn)])
+        sub_row, r = self.sub_row(qk, qs, qk1, b, mu, lams, h, frs)
         pm, pp, _ = kin(qk, qs, qk1, a * h, (1 - a) * h)
-        self.sub = ca.Function("c_sub", [qk, qs, qk1, b, mu, h] + xls, [sub_row])
+        self.sub = ca.Function("c_sub", [qk, qs, qk1, b, mu, h] + xls + xr, [sub_row])
+        if self.friction:
+            #: the slip velocities the friction opposes, [node part; sub-node part] (see slip)
+            self.slip_row = ca.Function("c_slip", [qk, qs, qk1, b, h], [self.slip(qk, qs, qk1, b, h)])
         # Newton's law on the normal velocity at the sub-node, weighted by W = φ(q_{k+1})/δ: the law
         # holds unless the contact is closed again at the next node, where the body is caught (the
         # accumulation point of Zeno bouncing, where no step-resolved flight is left, or a body at
@@ -123,22 +139,34 @@ class ContactMechanics:
 
 
     # ------------------------------------------------------------------ the rows, built once
-    def node_row(self, p_in, qk, qs, b, nu, lam, h):
+    def slip(self, qk, qs, qn, b, h):
+        """The slip velocities per contact that the step's friction opposes (maximal dissipation: the friction
+        force opposes its slip, or the slip vanishes): for the node's force, the first part of the step,
+        ``D(q_k)(q̃_k − q_k)/(αh)``; for the sub-node's impulse, the whole step around it,
+        ``D(q̃_k)(q_{k+1} − q_k)/h``.  Sticking on both holds the contact point still through the step."""
+        return ca.vertcat(ca.mtimes(self._D(qk), qs - qk) / ((0.5 + b) * h), ca.mtimes(self._D(qs), qn - qk) / h)
+
+    def node_row(self, p_in, qk, qs, b, nu, lam, h, rho=None):
         """The momentum balance at a node ``q_k`` with the incoming momentum ``p_in`` (``p_0`` at the start,
         ``D₂L_d`` of the previous sub-interval elsewhere): ``(p_in + D₁L_d(q_k, q̃_k, αh))/h + ∇φ(q_k)ᵀν
         − ∇c(q_k)ᵀλ``, α = ½ + β; ``ν`` the contact forces (weighted by the step), ``λ`` the constraint
         multipliers (no entries without constraints).  The transcription's initial and node rows, the
         held step and the march step are all this row."""
         row = (p_in + self._D1(qk, qs, (0.5 + b) * h)) / h + ca.mtimes(self._J(qk).T, nu)
+        if rho is not None:   # friction: the tangential force ρ ν along the slip directions D(q_k)
+            row = row + ca.mtimes(self._D(qk).T, rho * nu)
         return row - ca.mtimes(self._C(qk).T, lam)
 
-    def sub_row(self, qk, qs, qn, b, mu, lams, h):
+    def sub_row(self, qk, qs, qn, b, mu, lams, h, rho=None):
         """The momentum balance at the sub-node ``q̃_k`` between ``q_k`` and ``q_{k+1}``, with the impulses
         ``μ``: ``(p̃⁻ − p̃⁺ + ∇φ(q̃)ᵀμ)/h − ∇c(q̃)ᵀλ̃``; and Newton's law residual ``r`` there (see
         :func:`_sub_node_kinematics`).  Returns ``(row, r)``."""
         a = 0.5 + b
         pm, pp, r = self._kinematics(qk, qs, qn, a * h, (1 - a) * h)
-        return (pm - pp + ca.mtimes(self._J(qs).T, mu)) / h - ca.mtimes(self._C(qs).T, lams), r
+        row = pm - pp + ca.mtimes(self._J(qs).T, mu)
+        if rho is not None:   # friction: the tangential impulse ρ μ
+            row = row + ca.mtimes(self._D(qs).T, rho * mu)
+        return row / h - ca.mtimes(self._C(qs).T, lams), r
 
     def node_law(self, p_in, qk, qs, b, h):
         """Newton's law at the node ``q_k`` itself: ``∇φ(q_k) Π(q_k) (p_k⁺ + e p_in)`` with ``p_k⁺ =
@@ -170,26 +198,39 @@ class ContactMechanics:
         program's rows (``docs/derivations.md``, "Contact trajectories", "The march").
         """
         n, c, m, sym = self.n, self.c, self.m, ca.SX.sym
-        x = sym("x", 2 * n + 1 + 2 * c + 2 * m)
+        nf = 2 * c if self.friction else 0
+        x = sym("x", 2 * n + 1 + 2 * c + 2 * m + nf)
         qs, qn, b = x[:n], x[n:2 * n], x[2 * n]
         o = 2 * n + 1
-        nu, mu, lam, lams = x[o:o + c], x[o + c:o + 2 * c], x[o + 2 * c:o + 2 * c + m], x[o + 2 * c + m:]
+        nu, mu, lam, lams = x[o:o + c], x[o + c:o + 2 * c], x[o + 2 * c:o + 2 * c + m], x[o + 2 * c + m:o + 2 * c + 2 * m]
+        rho = x[o + 2 * c + 2 * m:] if self.friction else None
+        rho_n, rho_s = (rho[:c], rho[c:]) if self.friction else (None, None)
         con = self.constraint_row
         qk, p, h, ell = sym("q", n), sym("p", n), sym("h"), sym("ell")
         snu, smu, vref, bfix = sym("snu"), sym("smu"), sym("vref"), sym("bfix")
         t, held, closed, law = sym("t", c), sym("held", c), sym("closed", c), sym("law", c)
         node, fixed, mufix, nfixed = sym("node", c), sym("fixed", c), sym("mufix", c), sym("nfixed", c)
-        sub_row, r = self.sub_row(qk, qs, qn, b, mu, lams, h)
+        sub_row, r = self.sub_row(qk, qs, qn, b, mu, lams, h, rho_s)
         free = 1 - held - node - nfixed
         other = 1 - closed - law - fixed
-        R = ca.vertcat(self.node_row(p, qk, qs, b, nu, lam, h), sub_row,
+        R = ca.vertcat(self.node_row(p, qk, qs, b, nu, lam, h, rho_n), sub_row,
                        (1 - ca.sum1(t)) * (b - bfix) + ca.dot(t, phi(qs)) / ell,
                        held * phi(qs) / ell + node * self.node_law(p, qk, qs, b, h) / vref
                        + nfixed * (nu - mufix) / snu + free * nu / snu,
                        closed * phi(qn) / ell + law * r / vref + fixed * (mu - mufix) / smu + other * mu / smu,
                        con(qs), con(qn))
+        extra = []
+        if self.friction:
+            # per contact: stick (the slip vanishes), slide (ρ = −sgn μ_f, sgn the slip's sign), or no
+            # friction force (ρ = 0: an open contact, or a frictionless one)
+            stick, sgn = sym("stick", 2 * c), sym("sgn", 2 * c)
+            slide = sgn * sgn
+            muf = ca.DM(np.concatenate([self.mu_f, self.mu_f]))
+            R = ca.vertcat(R, stick * self.slip(qk, qs, qn, b, h) / vref + slide * (rho + sgn * muf)
+                           + (1 - stick - slide) * rho)
+            extra = [stick, sgn]
         self.march_step = ca.Function("march_step", [x, qk, p, h, ell, snu, smu, vref, bfix, t, held, closed, law, node,
-                                                      fixed, mufix, nfixed],
+                                                      fixed, mufix, nfixed] + extra,
                                       [R, ca.jacobian(R, x)])
 
     def flights(self, K: int) -> ca.Function:

@@ -141,6 +141,11 @@ class ContactTranscription:
         nlp.variable("nu", L * c, lb=0.0)
         nlp.variable("s_plus", L * c, lb=0.0)
         nlp.variable("s_minus", L * c, lb=0.0)
+        # Coulomb friction: the ratio ρ of tangential to normal force per step and contact, |ρ| ≤ μ_f
+        # (only with friction: a frictionless system builds no friction variable)
+        if cm.friction:
+            muf2 = np.concatenate([cm.mu_f, cm.mu_f])
+            nlp.variable("fratio", L * 2 * c, lb=np.tile(-muf2, L), ub=np.tile(muf2, L))
         # multipliers of the holonomic constraints at the nodes 0..L-1 and the sub-nodes (none without)
         m = cm.m
         if m:
@@ -162,16 +167,22 @@ class ContactTranscription:
         # the constraint multipliers' arguments (none without constraints)
         LAM = (lambda i: [X(nlp.index("lam").reshape(L, m)[i])]) if m else (lambda i: [])  # noqa: E731
         LAMS = (lambda i: [X(nlp.index("lam_sub").reshape(L, m)[i])]) if m else (lambda i: [])  # noqa: E731
+        RHO = (lambda i: [X(nlp.index("fratio").reshape(L, 2 * c)[i])]) if cm.friction else (lambda i: [])  # noqa: E731
         Hc = self.H.reshape(-1, 1)
         k = np.arange(L)
         rho = P(nlp.parameter_index("rho"))
         nlp.equal_elements("initial", cm.initial,
-                           [X(Q[0]), X(S[0]), X(B[0]), P(nlp.parameter_index("p0")), X(NU[0]), Hc[0]] + LAM(0))
+                           [X(Q[0]), X(S[0]), X(B[0]), P(nlp.parameter_index("p0")), X(NU[0]), Hc[0]] + LAM(0)
+                           + RHO(0))
         if L > 1:
             i = np.arange(1, L)
             nlp.equal_elements("node", cm.node, [X(S[i - 1]), X(B[i - 1]), X(Q[i]), X(S[i]), X(B[i]),
-                                                 X(NU[i]), Hc[i - 1], Hc[i]] + LAM(i))
-        nlp.equal_elements("sub", cm.sub, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), Hc] + LAMS(k))
+                                                 X(NU[i]), Hc[i - 1], Hc[i]] + LAM(i) + RHO(i))
+        nlp.equal_elements("sub", cm.sub, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), Hc] + LAMS(k) + RHO(k))
+        if cm.friction:
+            # the step's slip velocity: its bounds are the friction's modes (ContactNLP.solve_modes)
+            nlp.inequality_elements("slip", cm.slip_row, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), Hc],
+                                    lb=-np.inf, ub=np.inf)
         if m:
             nlp.equal_elements("node_constraint", cm.constraint_row, [X(Q[1:])])
             nlp.equal_elements("sub_constraint", cm.constraint_row, [X(S)])

@@ -34,7 +34,7 @@ import numpy as np
 
 from ...discretise.contact.elements import ContactMechanics
 from ...discretise.contact.transcription import TOUCH_TOL
-from .step import C, H, I, O, _march_step, _Step
+from .step import FREE, C, H, I, O, _march_step, _Step
 
 #: Steps that keep their modes (open or held) marched in one call (step.CHUNK_NEWTON Newton steps
 #: each; its rows are those of the march step, each checked after).
@@ -56,6 +56,7 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
     (the step lengths) and ``base`` (the index of each step's base step); ``None`` where a step's mode
     search fails."""
     step = _Step(cm, scales)
+    c = cm.c
     ell = scales[0]
     tol = TOUCH_TOL * ell          # touching: gap within this
     gapf = cm.system.gap
@@ -67,7 +68,7 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
     k, span = 0, 8
     while k < L:
         touch = g_q <= tol
-        if L - k >= 2 and np.all(~touch | held_prev):
+        if L - k >= 2 and np.all(~touch | held_prev) and not (cm.friction and np.any(touch & held_prev)):
             # steps that keep their modes (open contacts stay open, held ones held: free flight, a body
             # resting or sliding), many in one call: the march's step with those modes (the same rows,
             # Newton to rounding), accepted up to the first step that touches or crosses with an open
@@ -90,7 +91,9 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
                 modes = [H if hj else O for hj in held]
                 for j in range(i):
                     _record(rows, Qn[:, j], X[:n, j], 0.0, NU[:, j], MU[:, j], X[o + 2 * c:o + 2 * c + m, j],
-                            X[o + 2 * c + m:, j], np.zeros(c, bool), h, k + j, modes)
+                            X[o + 2 * c + m:o + 2 * c + 2 * m, j], np.zeros(c, bool), h, k + j, modes,
+                            np.zeros(2 * c), [FREE] * (2 * c))
+                step.fprev = [FREE] * (2 * c)
                 q, p, g_q = Qn[:, i - 1].copy(), Pn[:, i - 1].copy(), Gn[:, i - 1].copy()
                 held_prev = held.copy()
                 k += i
@@ -106,26 +109,30 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
                 if trace is not None:
                     trace.append((k, hk) + out + (q, p, g_q, held_prev))
                 return None
-            qs, qn, b, nu, mu, lam, lams, modes, gn = out
-            _record(rows, qn, qs, b, nu, mu, lam, lams, np.array([m == I for m in modes]) & (gn > tol), hk, k, modes)
+            qs, qn, b, nu, mu, lam, lams, modes, gn, rho, fmodes = out
+            _record(rows, qn, qs, b, nu, mu, lam, lams, np.array([m == I for m in modes]) & (gn > tol), hk, k, modes,
+                    rho if cm.friction else np.zeros(2 * c), fmodes)
+            step.fprev = list(fmodes)
             p = np.asarray(cm.p_node_minus(qs, b, qn, hk)).reshape(-1)
             held_prev = np.array([m in (H, C) for m in modes])
             q, g_q = qn, gn
         k += 1
     out = {key: np.asarray(val) for key, val in rows.items()}
-    for key in ("q", "qs", "mu", "nu", "lam", "lam_sub"):
+    for key in ("q", "qs", "mu", "nu", "lam", "lam_sub", "fratio"):
         out[key] = out[key].reshape(-1)
     if not cm.m:
         del out["lam"], out["lam_sub"]
+    if not cm.friction:
+        del out["fratio"], out["fmodes"]
     return out
 
 
 #: The per-step records of the march (``q`` is the step's end node).
-_ROWS = ("q", "qs", "beta", "nu", "mu", "lam", "lam_sub", "bounced", "steps", "base", "modes")
+_ROWS = ("q", "qs", "beta", "nu", "mu", "lam", "lam_sub", "bounced", "steps", "base", "modes", "fratio", "fmodes")
 
 
 def _record(rows, *values) -> None:
     """Append one step's values, in the order of :data:`_ROWS`."""
     for key, val in zip(_ROWS, values):
-        rows[key].append(np.array(val) if key == "modes" else val)
+        rows[key].append(np.array(val) if key in ("modes", "fmodes") else val)
 

@@ -82,6 +82,17 @@ class ContactNLP(ContactTranscription):
             "sub_gap": (zero, np.where((held | first).reshape(-1), 0.0, np.inf)),
             "impact_law": (np.where(law.reshape(-1), 0.0, -np.inf), np.where(law.reshape(-1), 0.0, np.inf)),
         }
+        if self.cm.friction:
+            # the friction's modes: sticking, the slip row vanishes (ρ within the cone); sliding, ρ = ∓μ_f and
+            # the slip has the matching sign; no friction force, ρ = 0
+            fm = np.asarray(point["fmodes"]).reshape(L, 2 * c)
+            muf = np.tile(np.concatenate([self.cm.mu_f, self.cm.mu_f]), L).reshape(L, 2 * c)
+            rlo = np.select([fm == "S", fm == "U", fm == "D"], [-muf, -muf, muf], 0.0)
+            rhi = np.select([fm == "S", fm == "U", fm == "D"], [muf, -muf, muf], 0.0)
+            slo = np.select([fm == "S", fm == "U"], [0.0, 0.0], -np.inf)
+            shi = np.select([fm == "S", fm == "D"], [0.0, 0.0], np.inf)
+            bounds["fratio"] = (rlo.reshape(-1), rhi.reshape(-1))
+            bounds["slip"] = (slo.reshape(-1), shi.reshape(-1))
         init = self._start(q0, p0, point)
         opts = {**CONTACT_IPOPT, **BRANCH_IPOPT, **(options or {})}
         opts["max_iter"] = min(int(opts["max_iter"]), max_iter)

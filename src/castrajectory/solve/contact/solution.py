@@ -107,7 +107,13 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     # only closed contacts (gap within TOUCH_TOL): on an open one ν is interior-point noise below the
     # complementarity tolerance, left on p⁺ as before
     closed = np.asarray(sysm.gap.map(N + 1)(q.T)[0]).reshape(c, N + 1).T <= TOUCH_TOL * tn.scales_ell
-    half = 0.5 * np.einsum("kcn,kc->kn", Jn, np.where(closed, nu_full[:N + 1], 0.0))
+    force = np.where(closed, nu_full[:N + 1], 0.0)
+    half = 0.5 * np.einsum("kcn,kc->kn", Jn, force)
+    if cm.friction:
+        # the friction force at the node, ρ h ν along the slip directions D(q_k), splits the momenta too
+        RHO = res.values["fratio"][:NL * 2 * c].reshape(NL, 2 * c)[:, :c]      # the node forces' ratios
+        Dn = np.asarray(sysm.tangent.map(N + 1)(q.T)).reshape(c, N + 1, n).transpose(1, 0, 2)
+        half += 0.5 * np.einsum("kcn,kc->kn", Dn, RHO[:N + 1] * force)
     pp = np.asarray(cm.p_node_plus.map(N)(q[:-1].T, S.T, B, hv)).T
     pN = np.asarray(cm.p_node_minus(S[-1], B[-1], q[-1], H[N - 1])).reshape(1, -1)
     p = np.vstack([pp - half[:N], pN + half[N:]])

@@ -23,6 +23,9 @@ MODE_ROUNDS = 12
 SIMULTANEOUS_GAP = 1e-9
 
 O, H, R, I, C, N, F, T, P = "O", "H", "R", "I", "C", "N", "F", "T", "P"
+#: friction modes of a contact in a step: no friction force, sticking, sliding with a positive slip
+#: velocity (ρ = −μ_f), sliding with a negative one (ρ = μ_f)
+FREE, STICK, UP, DOWN = "-", "S", "U", "D"
 #: A contact that touches at a step's first node while approaching faster than this many steps' worth of
 #: its normal acceleration arrives with an impact at that node (mode N; resting contact approaches at about
 #: ½ step's worth).
@@ -48,6 +51,10 @@ class _Step:
         self._chunks = cm._chunk_fns
         self.ell, self.pref, self.vref = scales[0], scales[1], scales[2]
         self.n, self.c, self.m = cm.n, cm.c, cm.m
+        # friction: one ratio ρ per contact at the end of the unknowns, and the friction modes of the
+        # previous step (the march sets them: a contact that stuck starts its next step sticking)
+        self.nf = 2 * cm.c if cm.friction else 0
+        self.fprev = [FREE] * (2 * cm.c)
 
     def chunk(self, K: int, q, p, h, held):
         """``K`` steps from ``(q, p)`` in one call, the ``held`` contacts held (mode H) and the others
@@ -59,13 +66,14 @@ class _Step:
             qs, ps, hs, hm = ca.MX.sym("q", n), ca.MX.sym("p", n), ca.MX.sym("h"), ca.MX.sym("held", c)
             sc = [ca.MX.sym(name) for name in ("ell", "snu", "smu", "vref")]
             zero = ca.DM.zeros(c)
+            fz = [zero, zero] if self.nf else []        # chunks carry no friction force (free flight only)
             v = ca.solve(cm.system.mass_matrix(qs), ps)
-            x = ca.vertcat(qs + 0.5 * hs * v, qs + hs * v, ca.DM.zeros(1 + 2 * c + 2 * m))
+            x = ca.vertcat(qs + 0.5 * hs * v, qs + hs * v, ca.DM.zeros(1 + 2 * c + 2 * m + self.nf))
             for _ in range(CHUNK_NEWTON):
-                r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero, zero, zero, zero, zero)
+                r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero, zero, zero, zero, zero, *fz)
                 x = x - ca.solve(J, r)
             # the size of one more Newton step: the rows' residual in units of the unknowns
-            r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero, zero, zero, zero, zero)
+            r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero, zero, zero, zero, zero, *fz)
             res = ca.mmax(ca.fabs(ca.solve(J, r)))
             qn, qt = x[n:2 * n], x[:n]
             one = ca.Function("chunk_step", [qs, ps, hs, hm] + sc,
@@ -91,7 +99,7 @@ class _Step:
             t[timing[1:]] = 0.0
         return t, held, closed, law, node, fixed, nfixed
 
-    def solve(self, x, q, p, h, modes, bfix=None, mufix=None):
+    def solve(self, x, q, p, h, modes, bfix=None, mufix=None, fmodes=None):
         """Newton on the step's rows in the given modes (with ``bfix``: the sub-node's ``β`` fixed
         there instead of timed by a contact; ``mufix``: the impulses of the contacts in modes F and T);
         ``(x, ok)``."""
@@ -104,6 +112,10 @@ class _Step:
             x[2 * n] = bfix
         args = (q, p, h, self.ell, self.snu, self.smu, self.vref, 0.0 if bfix is None else bfix,
                 t, held, closed, law, node, fixed, np.zeros(c) if mufix is None else mufix, nfixed)
+        if self.nf:
+            fm = fmodes or [FREE] * (2 * c)
+            args = args + (np.array([f == STICK for f in fm], float),
+                           np.array([1.0 if f == UP else -1.0 if f == DOWN else 0.0 for f in fm]))
         small = 0
         for _ in range(NEWTON_ITER):
             r, Jr = self.fn(x, *args)
@@ -201,7 +213,7 @@ def _march_step(step: _Step, q, p, h, g_q, held_prev, tol, finest: bool):
     pen = 1e-12 * step.ell
     touch = g_q <= tol
     v = np.linalg.solve(np.asarray(step.cm.system.mass_matrix(q)), p)
-    x0 = np.concatenate([q + 0.5 * h * v, q + h * v, [0.0], np.zeros(2 * c + 2 * step.m)])
+    x0 = np.concatenate([q + 0.5 * h * v, q + h * v, [0.0], np.zeros(2 * c + 2 * step.m + step.nf)])
     # a flight that landed on this node (to rounding) arrives with its impact here: Newton's law at the node
     an = np.abs(np.asarray(step.cm.acc_normal(q, v)).reshape(-1))
     arriving = touch & ~held_prev & (-(np.asarray(step.cm.system.gap(q)[1]) @ v) > ARRIVAL_SPEED_STEPS * an * h)
@@ -222,7 +234,7 @@ def _march_step(step: _Step, q, p, h, g_q, held_prev, tol, finest: bool):
         crossed |= set(np.where((gs < -pen) | (gn < -pen))[0].tolist())
         change = _next_modes(modes, touch, g_q, gs, gn, nu, mu, b, pen, tol, step, finest)
         if change is None:
-            return _sequential(step, q, p, h, x, modes, mu, pen) or _result(step, x, modes, gn)
+            return _sequential(step, q, p, h, x, modes, mu, pen) or _result(step, x, modes, gn, step.last_fmodes)
         if change == "split":
             return "split" if not finest else ("split at the finest step", key)
         modes, frac = change
@@ -252,16 +264,76 @@ def _try(step: _Step, q, p, h, modes, x0, x, frac):
         xn, ok = step.solve(x0.copy(), q, p, h, modes)
         if not ok:
             return None
+    xn = _friction(step, q, p, h, modes, xn)
+    if xn is None:
+        return None
     o = 2 * n + 1
     return (xn, np.asarray(gapf(xn[:n])[0]).reshape(-1), np.asarray(gapf(xn[n:2 * n])[0]).reshape(-1),
             xn[o:o + c], xn[o + c:o + 2 * c], float(xn[2 * n]))
 
 
-def _result(step: _Step, x, modes, gn):
+#: Friction-mode changes tried per solve of a step's normal modes.
+FRICTION_ROUNDS = 8
+
+
+def _friction(step: _Step, q, p, h, modes, x):
+    """The step's friction modes (Coulomb, maximal dissipation) for its normal modes, by the same greedy
+    search: a contact held on the surface (H or R) with a positive coefficient starts as it ended the
+    previous step (sticking if it was free); sticking fails where the ratio |ρ| exceeds μ_f (it then slides
+    against ρ), sliding fails where the slip velocity has the wrong sign (it then sticks).  The slip velocity
+    grows with ρ, so one of the three holds: stick ``s = 0, |ρ| ≤ μ_f``, slide ``ρ = −μ_f, s ≥ 0`` or
+    ``ρ = μ_f, s ≤ 0``.  The modes found are ``step.last_fmodes``; the point, or None."""
+    c = step.c
+    step.last_fmodes = [FREE] * (2 * c)
+    if not step.nf:
+        return x
+    cm = step.cm
+    n, m = step.n, step.m
+    o = 2 * n + 1
+    # slots: the node's force of each contact (held or released: ν free), then its sub-node impulse (held)
+    active = [mj in (H, R) and cm.mu_f[j] > 0 for j, mj in enumerate(modes)] + \
+        [mj == H and cm.mu_f[j] > 0 for j, mj in enumerate(modes)]
+    muf = np.concatenate([cm.mu_f, cm.mu_f])
+    fm = [(step.fprev[i] if step.fprev[i] != FREE else STICK) if active[i] else FREE for i in range(2 * c)]
+    tol = 1e-12 * step.vref
+    seen = set()
+    for _ in range(FRICTION_ROUNDS):
+        key = tuple(fm)
+        if key in seen:
+            return None
+        seen.add(key)
+        xf, ok = step.solve(x, q, p, h, modes, fmodes=fm)
+        if not ok:
+            return None
+        rho = xf[o + 2 * c + 2 * m:]
+        slip = np.asarray(cm.slip_row(q, xf[:n], xf[n:2 * n], xf[2 * n], h)).reshape(-1)
+        worst, pick = 0.0, None
+        for j, f in enumerate(fm):
+            if f == STICK and abs(rho[j]) > muf[j] * (1 + 1e-10):
+                viol, new = abs(rho[j]) - muf[j], (DOWN if rho[j] > 0 else UP)
+            elif f == UP and slip[j] < -tol:
+                viol, new = -slip[j] / step.vref, STICK
+            elif f == DOWN and slip[j] > tol:
+                viol, new = slip[j] / step.vref, STICK
+            else:
+                continue
+            if viol > worst:
+                worst, pick = viol, (j, new)
+        if pick is None:
+            step.last_fmodes = fm
+            return xf
+        fm = list(fm)
+        fm[pick[0]] = pick[1]
+        x = xf
+    return None
+
+
+def _result(step: _Step, x, modes, gn, fmodes=None):
     n, c, m = step.n, step.c, step.m
     o = 2 * n + 1
     return (x[:n], x[n:2 * n], float(x[2 * n]), x[o:o + c], x[o + c:o + 2 * c], x[o + 2 * c:o + 2 * c + m],
-            x[o + 2 * c + m:], list(modes), gn)
+            x[o + 2 * c + m:o + 2 * c + 2 * m], list(modes), gn, x[o + 2 * c + 2 * m:],
+            list(fmodes) if fmodes is not None else [FREE] * (2 * c))
 
 
 #: Combinations of modes tried at most when the greedy search fails.
@@ -295,7 +367,7 @@ def _enumerate(step: _Step, q, p, h, g_q, touch, modes0, crossed, x0, pen, tol, 
             continue
         x, gs, gn, nu, mu, b = got
         if _next_modes(modes, touch, g_q, gs, gn, nu, mu, b, pen, tol, step, finest) is None:
-            return _sequential(step, q, p, h, x, modes, mu, pen) or _result(step, x, modes, gn)
+            return _sequential(step, q, p, h, x, modes, mu, pen) or _result(step, x, modes, gn, step.last_fmodes)
     return None
 
 
@@ -345,13 +417,13 @@ def _sequential(step: _Step, q, p, h, x, modes, mu, pen):
         mufix[involved] = cascade
         timing = next(j for j, m in enumerate(modes) if m in (I, C))
         seq = [T if j == timing else F if j in involved else m for j, m in enumerate(modes)]
-    xs, ok = step.solve(x, q, p, h, seq, mufix=mufix)
+    xs, ok = step.solve(x, q, p, h, seq, mufix=mufix, fmodes=step.last_fmodes)
     if not ok:
         return None
     gn = np.asarray(cm.system.gap(xs[n:2 * n])[0]).reshape(-1)
     if np.any(gn < -pen):
         return None
-    return _result(step, xs, seq, gn)
+    return _result(step, xs, seq, gn, step.last_fmodes)
 
 
 def _next_modes(modes, touch, g0, gs, gn, nu, mu, b, pen, tol, step, finest):

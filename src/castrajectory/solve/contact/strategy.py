@@ -152,7 +152,11 @@ def _solve_once(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str
     if not res.success:
         res = whole.solve(q0, p0, guess, co.penalties, options, verbose)
         attempts.append(_attempt("penalty", res))
-    if system.contact.law == "sequential" and res.success:
+    if cm.friction and res.success:
+        # the fallback's program has no friction modes (its complementarity is not written): not an answer
+        res.fail("Friction_Needs_The_March", "Coulomb friction is resolved by the discrete march, which failed on "
+                 "this problem; the fallback's answer is not reported as one")
+    elif system.contact.law == "sequential" and res.success:
         # the fallback's program holds the simultaneous law only: its answer is not one of this law
         res.fail("Sequential_Law_Needs_The_March", "the sequential impact law is resolved by the discrete march, "
                  "which failed on this problem; the fallback's answer (simultaneous law) is not reported as one")
