@@ -122,12 +122,12 @@ SCENES: List[Scene] = [
                            "bounce times (s), apexes (m), then m g h per node")),
     )),
     Scene("sliding_block", "contact", report=(
-        Entry("sliding_block", ("--incline", "0.3", "--v0", "2"),
+        Entry("sliding_block", ("--incline", "0.3", "--v0", "2", "--n", "200"),
               "sliding block launched up a 0.3 rad incline, μ = 0.5: it stops and sticks (Coulomb friction)", True),
     )),
     Scene("newtons_cradle", "contact", report=(
-        Entry("newtons_cradle", ("--balls", "4", "--n", "300"),
-              "Newton's cradle, 4 touching balls, the sequential law (the last leaves, the others stop)", True),
+        Entry("newtons_cradle", ("--balls", "3", "--n", "200"),
+              "Newton's cradle, 3 touching balls, the sequential law (the last leaves, the others stop)", True),
     )),
     Scene("rectangle_drop", "contact", report=(
         Entry("rectangle_drop", (), "rectangle drop, θ₀ = 0.3, e = 1", True),
