@@ -146,3 +146,23 @@ def test_a_double_pendulum_against_a_wall():
         (imp,) = run.detail.impacts
         errs.append(abs(imp.t - ref.times[0]))
     assert abs(np.log2(errs[0] / errs[1]) - 2.0) < 0.05 and errs[-1] < 4e-7
+
+
+def test_a_damped_ball_bounces_with_its_forces():
+    """Contact with a Rayleigh damping force (the discrete Lagrange–d'Alembert momenta stand in the contact
+    rows): a ball from 1 m, c = 0.3, e = 0.8; its impact times converge at order 2 to the reference
+    (measured 9.9e-7, 2.5e-7 s at N = 500, 1000)."""
+    import casadi as ca
+    import castrajectory as ct
+    y = ca.SX.sym("y", 1)
+    s = ct.LagrangianSystem(y, ct.Atoms([ca.vertcat(0, y[0])], [1.0]), [ct.Gravity(G), ct.Damping(0.3)], names=["y"],
+                            contact=ct.Contact([y[0]], restitution=0.8))
+    ref = event_driven(s, [1.0], [0.0], 2.0)
+    assert ref.flight is not None and len(ref.events) == 3
+    errs = []
+    for N in (500, 1000):
+        run = ct.simulate(s, [1.0], [0.0], 2.0, N)
+        ts = np.sort([i.t for i in run.detail.impacts])
+        assert run.success and ts.size == 3
+        errs.append(np.max(np.abs(ts - ref.times)))
+    assert abs(np.log2(errs[0] / errs[1]) - 2.0) < 0.05 and errs[-1] < 5e-7

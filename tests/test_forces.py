@@ -187,9 +187,12 @@ def test_bad_input_is_refused_with_one_line():
     assert ok.forced and ok.time_dependent
 
 
-def test_contact_refuses_forces_for_now():
+def test_contact_refuses_a_time_dependent_system_for_now():
+    """Forces (Force, Damping) now enter the contact rows (tests/test_events.py: a damped ball against the
+    reference); the time does not yet."""
     y = ca.SX.sym("y", 1)
-    ball = ct.LagrangianSystem(y, ct.Atoms([ca.vertcat(0, y)], [1.0]), [ct.Gravity(9.81), ct.Damping(0.1)],
+    ball = ct.LagrangianSystem(y, ct.Atoms([ca.vertcat(0, y)], [1.0]), [ct.Gravity(9.81),
+                                                                        ct.Force(ca.sin(ct.time()) * ca.SX.ones(1))],
                                contact=ct.Contact([y[0]]))
     with pytest.raises(InputError, match="not supported yet"):
         ct.simulate(ball, [1.0], [0.0], 1.0, 100)

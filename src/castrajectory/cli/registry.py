@@ -125,6 +125,14 @@ SCENES: List[Scene] = [
         Entry("sliding_block", ("--incline", "0.3", "--v0", "2", "--n", "200"),
               "sliding block launched up a 0.3 rad incline, μ = 0.5: it stops and sticks (Coulomb friction)", True),
     )),
+    Scene("rolling_ball", "contact", report=(
+        Entry("rolling_ball", ("--n", "200"), "a sphere launched sliding at 2 m/s without spin, μ = 0.3: it rolls "
+              "from 2v₀/(7μg) on at 5v₀/7", True),
+    )),
+    Scene("pushed_box", "contact", report=(
+        Entry("pushed_box", ("--mu", "0.8", "--force", "5.2"),
+              "a box pushed at half its height, μ = 0.8: it tips about its front corner (statics: above 4.905 N)"),
+    )),
     Scene("newtons_cradle", "contact", report=(
         Entry("newtons_cradle", ("--balls", "3", "--n", "200"),
               "Newton's cradle, 3 touching balls, the sequential law (the last leaves, the others stop)", True),

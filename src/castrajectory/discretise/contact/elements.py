@@ -30,9 +30,11 @@ class ContactMechanics:
     def __init__(self, system: LagrangianSystem, scheme: str):
         if system.contact is None:
             raise ValueError("the system has no contact term")
-        if system.forced or system.time_dependent:
-            raise InputError("contact with non-conservative forces or a time-dependent system is not supported yet; "
-                             "remove the Force/Damping terms and the time from the contact scene")
+        if system.time_dependent:
+            raise InputError("contact with a time-dependent system is not supported yet; remove the time from the "
+                             "contact scene")
+        if system.controls:
+            raise InputError("contact with controls is optimal control through contact, not supported yet")
         dm = DiscreteMechanics(system, scheme)
         if dm.s:
             raise InputError(f"contact trajectories need a two-point scheme (midpoint or trapezoid), not {scheme}")
@@ -45,8 +47,14 @@ class ContactMechanics:
         qc = ca.SX.sym("qc", n)
         self.constraint_row = ca.Function("c_con", [qc], [cfun(qc)[0] if m else ca.SX(0, 1)])
         z = ca.SX(0, 1)
-        D1 = lambda a, b, tau: dm.D1(a, z, b, tau)  # noqa: E731
-        D2 = lambda a, b, tau: dm.D2(a, z, b, tau)  # noqa: E731
+        if system.forced:
+            # forces (Force, Damping; no time): the discrete Lagrange–d'Alembert momenta over each part of a
+            # step, p⁺ = −D₁L_d − f⁻ and p⁻ = D₂L_d + f⁺, stand where D₁L_d and D₂L_d stand without them
+            D1 = lambda a, b, tau: -dm.p_plus(a, z, b, tau)  # noqa: E731
+            D2 = lambda a, b, tau: dm.p_minus(a, z, b, tau)  # noqa: E731
+        else:
+            D1 = lambda a, b, tau: dm.D1(a, z, b, tau)  # noqa: E731
+            D2 = lambda a, b, tau: dm.D2(a, z, b, tau)  # noqa: E731
         gapf = system.gap
         Mf = system.mass_matrix
         sym = ca.SX.sym

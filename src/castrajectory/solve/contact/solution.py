@@ -257,7 +257,7 @@ def _elastic_loss_warning(cm: ContactMechanics, energy, impacts, H) -> List[str]
     """For e = 1: the fraction of the energy lost, if above :data:`ELASTIC_LOSS_TOL`.  Elastic impacts
     conserve the energy exactly (docs, contact §3); a loss means arrivals were caught, i.e. bounces the
     grid does not resolve -- a step longer than the flights (the answer is the grid's, not the physics')."""
-    if cm.e != 1.0 or energy.size < 2 or not np.all(np.isfinite(energy)):
+    if cm.e != 1.0 or cm.system.forced or energy.size < 2 or not np.all(np.isfinite(energy)):
         return []
     E0 = float(energy[0])
     loss = (E0 - float(np.min(energy))) / max(abs(E0), 1e-300)
