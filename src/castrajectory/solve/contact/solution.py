@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import List
+from typing import List, Optional
 
 import numpy as np
 
@@ -71,6 +71,11 @@ class ContactTrajectory(Result):
     n: int = 0
     #: what the answer's NLP carries (see :attr:`castrajectory.solve.trajectory.Trajectory.program`)
     program: dict = field(default_factory=dict)
+    #: Coulomb friction (a contact with a positive coefficient): per step and contact the ratio of the
+    #: tangential to the normal force, (N, contacts, 2) for [node force, sub-node impulse], and the slip
+    #: velocities each opposes (same shape: D(q_k)(q̃_k − q_k)/(αh), D(q̃_k)(q_{k+1} − q_k)/h); None without
+    friction_ratio: Optional[np.ndarray] = None
+    slip: Optional[np.ndarray] = None
 
     def as_dict(self) -> dict:
         return {**super().as_dict(), "solver_status": self.solver_status,
@@ -79,6 +84,7 @@ class ContactTrajectory(Result):
                 "node_impulse": self.node_impulse,
                 "gap": self.gap, "complementarity_residual": self.complementarity_residual,
                 "impacts": [i.as_dict() for i in self.impacts],
+                "friction_ratio": self.friction_ratio, "slip": self.slip,
                 # JSON keys of the earlier second sub-node per step, kept for existing readers: a step
                 # now holds one sub-node (the grid is halved instead), so they are always empty
                 "steps_sub2": [], "t_sub2": [], "mu_sub2": [],
@@ -159,6 +165,11 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     lam[1:] += alpha_full[:N, None] * mu_full[:N]
     nu = nu_full[:N + 1].copy()
     total_iter = sum(a["iterations"] for a in attempts)
+    fratio = slip = None
+    if cm.friction:
+        fratio = res.values["fratio"][:N * 2 * c].reshape(N, 2, c).transpose(0, 2, 1)
+        slip = np.asarray(cm.slip_row.map(N)(q[:-1].T, S.T, q[1:].T, B, hv)).reshape(2 * c, N).T
+        slip = slip.reshape(N, 2, c).transpose(0, 2, 1)
     warnings = simultaneous + _elastic_loss_warning(cm, energy, impacts, H[:N])
     return ContactTrajectory(
         warnings=warnings,
@@ -169,6 +180,7 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
         build_time_s=float(sum(a["build_time_s"] for a in attempts)),
         solve_time_s=float(guess_time + sum(a["solve_time_s"] for a in attempts)),
         scheme=cm.dm.scheme.name, homotopy=list(res.homotopy), attempts=attempts, n=int(round(float(t[-1]) / h)),
+        friction_ratio=fratio, slip=slip,
         program={"terms": sysm.terms(), "steps": int(tn.L), **tn.nlp.anatomy()})
 
 
