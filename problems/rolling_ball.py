@@ -17,16 +17,16 @@ is not modelled yet).
 """
 import sys
 
-import casadi as ca
 import numpy as np
 
 from castrajectory import cli
 from castrajectory.inspect import plotting
-from castrajectory.models.mechanics import Contact, LagrangianSystem, MassMatrix, Potential, velocity
+from castrajectory.models import collision
+from castrajectory.models.mechanics import LagrangianSystem
 from castrajectory.solve import trajectory
 from castrajectory.validation import InputError
 
-SHAPES = {"disk": 0.5, "sphere": 0.4}     # I / (m R²)
+SHAPES = collision.ROLLING_SHAPES     # I / (m R²)
 
 
 def parser():
@@ -47,23 +47,11 @@ def parser():
 
 
 def ball(shape, m, R, mu, g) -> LagrangianSystem:
-    q = ca.SX.sym("q", 3)
-    k = SHAPES[shape]
-    qd = velocity(q)
-    rim = [ca.vertcat(q[0] + R * ca.cos(q[2] + a), q[1] + R * ca.sin(q[2] + a)) for a in np.linspace(0, 2 * np.pi, 9)[:-1]]
-    return LagrangianSystem(q, MassMatrix(ca.diag(ca.vertcat(m, m, k * m * R * R))), [Potential(m * g * q[1], "gravity")],
-                            names=["x", "y", "theta"], points_expr=rim,
-                            contact=Contact([q[1] - R], restitution=0.0, friction=mu, slip=[qd[0] + R * qd[2]],
-                                            names=["floor"]))
+    return collision.rolling_body(shape, m, R, mu, g)
 
 
 def oracle(shape, v0, w0, R, mu, g):
-    """Rolling time and final speed (slip u0 = v0 − R ω0, ω clockwise)."""
-    k = SHAPES[shape]
-    u0 = v0 - R * w0
-    t_roll = abs(u0) * k / ((1 + k) * mu * g)
-    v_final = (v0 + k * R * w0) / (1 + k)
-    return t_roll, v_final
+    return collision.rolling_oracle(shape, v0, w0, R, mu, g)
 
 
 def run(args):

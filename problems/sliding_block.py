@@ -18,12 +18,12 @@ which the block stays at rest (a resolution of one step: a stop inside a step is
 import math
 import sys
 
-import casadi as ca
 import numpy as np
 
 from castrajectory import cli
 from castrajectory.inspect import plotting
-from castrajectory.models.mechanics import Atoms, Contact, Gravity, LagrangianSystem, velocity
+from castrajectory.models import collision
+from castrajectory.models.mechanics import LagrangianSystem
 from castrajectory.solve import trajectory
 from castrajectory.validation import InputError
 
@@ -44,34 +44,11 @@ def parser():
 
 
 def block(mass, mu, alpha, g) -> LagrangianSystem:
-    q = ca.SX.sym("q", 2)
-    return LagrangianSystem(q, Atoms([q], [mass]), [Gravity(g, direction=(-math.sin(alpha), -math.cos(alpha)))],
-                            names=["s", "y"], points_expr=[q],
-                            contact=Contact([q[1]], restitution=0.0, friction=mu, slip=[velocity(q)[0]],
-                                            names=["floor"]))
+    return collision.sliding_block(mass, mu, alpha, g)
 
 
 def exact(v0, mu, alpha, g, t):
-    """The closed-form s(t) and the stop time (None if it never comes to rest)."""
-    sa, ca_ = math.sin(alpha), math.cos(alpha)
-    down = g * (sa - mu * ca_)                      # the acceleration down the slope while sliding down
-    t = np.asarray(t, float)
-    if v0 > 0:
-        dec = g * (sa + mu * ca_)
-        t1 = v0 / dec
-        up = v0 * t - 0.5 * dec * t * t
-        top = v0 * v0 / (2 * dec)
-        if down <= 0:
-            return np.where(t < t1, up, top), t1
-        return np.where(t < t1, up, top - 0.5 * down * (t - t1) ** 2), None
-    if v0 < 0:   # launched downhill: s̈ = −down while it slides down
-        if down < 0:
-            t1 = v0 / down
-            return np.where(t < t1, v0 * t - 0.5 * down * t * t, v0 * t1 - 0.5 * down * t1 * t1), t1
-        return v0 * t - 0.5 * down * t * t, None
-    if down <= 0:
-        return np.zeros_like(t), 0.0
-    return -0.5 * down * t * t, None
+    return collision.sliding_block_oracle(v0, mu, alpha, g, t)
 
 
 def run(args):

@@ -27,6 +27,13 @@ complementarity ≤ 1e-8, impact law ≤ 1e-6, no catch the grid resolves, and f
     python scripts/contact_battery.py --workers 2     # two at a time (times then disturb each other)
     python scripts/contact_battery.py --dask-scheduler tcp://host:8786   # on a Dask cluster
 
+With ``--friction`` the friction families instead (issue #25): the block on an incline around tan α = μ and
+the planar rolling disk or sphere, μ in [0.1, 1.5], each checked for the cone (|ρ| <= μ), maximal
+dissipation (ρ s <= 0), sticking (no slip inside the cone) and its closed form (the incline's path within
+four steps' worth of its speed, a stop or a turn inside a step being first order; the rolling speed to 1e-9).
+
+    python scripts/contact_battery.py --friction      # 30 scenes and their twins
+
 Exit status 0 when it ran (the goals are printed as PASS/MISS lines), 2 for bad flags.
 """
 from __future__ import annotations
@@ -48,7 +55,7 @@ import numpy as np  # noqa: E402
 from castrajectory.cli import sweeps  # noqa: E402
 from castrajectory.inspect import study  # noqa: E402
 from castrajectory.inspect.battery import (  # noqa: E402  (the scenes, their solve and their checks)
-    COMP_TOL, ENERGY_TOL, GAP_TOL, LAW_TOL, battery_task, draw_scenes)
+    COMP_TOL, ENERGY_TOL, GAP_TOL, LAW_TOL, battery_task, draw_friction_scenes, draw_scenes)
 
 
 def run_all(scenes, timeout: float, log, executor=None, bar=None, quiet=False):
@@ -62,7 +69,7 @@ def run_all(scenes, timeout: float, log, executor=None, bar=None, quiet=False):
 # ----------------------------------------------------------------------------- report
 FIELDS = ["id", "family", "N", "e", "status", "solved", "checks", "iterations", "time_s", "min_gap",
           "complementarity", "impact_law", "energy_change", "impacts", "caught", "resolvable_catches", "oracle_impacts",
-          "impact_time_error", "twin_of", "command"]
+          "impact_time_error", "mu", "cone", "dissipation", "stick", "oracle_error", "twin_of", "command"]
 
 
 def _fmt(v):
@@ -77,29 +84,57 @@ def write_atomic(path: Path, text: str):
     os.replace(tmp, path)
 
 
-def summarise(rows, seconds):
-    solved = [r for r in rows if r.get("solved")]
-    times = np.array([r.get("time_s", math.nan) for r in rows], float)
-    lines = ["# Contact battery\n",
-             f"{len(rows)} scenes, {len(solved)} solved with every residual check "
-             f"({100 * len(solved) / len(rows):.1f} %); wall time of the battery {seconds:.0f} s.\n",
-             f"Solve time: median {np.nanmedian(times):.2f} s, worst {np.nanmax(times):.2f} s; "
-             f"{int(np.sum(times > 15))} scenes over 15 s.\n",
-             "| family | scenes | solved | median s | worst s | worst gap | worst compl. | worst law | worst dE (e=1) | worst t-error |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
-    for fam in ("ball", "rectangle", "bowl"):
+def _family_rows(rows, families, columns):
+    """One table row per family: scenes, solved, median and worst time, then each column's worst value
+    (``(key, min or max)``) over the family's successful scenes."""
+    out = []
+    for fam in families:
         rs = [r for r in rows if r["family"] == fam]
         if not rs:
             continue
         ok = [r for r in rs if r.get("success")]
-
-        def worst(key, fn=max):
+        cells = []
+        for key, fn in columns:
             vals = [r[key] for r in ok if isinstance(r.get(key), float) and not math.isnan(r[key])]
-            return f"{fn(vals):.2g}" if vals else "-"
+            cells.append(f"{fn(vals):.2g}" if vals else "-")
         ts = [r.get("time_s", math.nan) for r in rs]
-        lines.append(f"| {fam} | {len(rs)} | {sum(1 for r in rs if r.get('solved'))} | {np.nanmedian(ts):.2f} | "
-                     f"{np.nanmax(ts):.2f} | {worst('min_gap', min)} | {worst('complementarity')} | "
-                     f"{worst('impact_law')} | {worst('energy_change')} | {worst('impact_time_error')} |")
+        out.append(f"| {fam} | {len(rs)} | {sum(1 for r in rs if r.get('solved'))} | {np.nanmedian(ts):.2f} | "
+                   f"{np.nanmax(ts):.2f} | " + " | ".join(cells) + " |")
+    return out
+
+
+def summarise_friction(rows, seconds):
+    """The friction families' summary: per family the worst cone, dissipation, stick and oracle errors."""
+    lines = _head("# Contact battery: friction", rows, seconds) + [
+        "| family | scenes | solved | median s | worst s | worst cone | worst ρ·s | worst stick slip | worst oracle error |",
+        "|---|---|---|---|---|---|---|---|---|"]
+    lines += _family_rows(rows, ("incline", "rolling"), (("cone", max), ("dissipation", max), ("stick", max),
+                                                          ("oracle_error", max)))
+    fails = [r for r in rows if not r.get("solved")]
+    if fails:
+        lines += ["", "## Not solved", ""]
+        lines += [f"* {r['id']} ({r['family']}, μ = {r.get('mu')}, N = {r['N']}): {r['status']}\n  `{r['command']}`"
+                  for r in fails]
+    return "\n".join(lines) + "\n"
+
+
+def _head(title, rows, seconds):
+    solved = [r for r in rows if r.get("solved")]
+    times = np.array([r.get("time_s", math.nan) for r in rows], float)
+    return [title + "\n",
+            f"{len(rows)} scenes, {len(solved)} solved with every residual check "
+            f"({100 * len(solved) / len(rows):.1f} %); wall time of the battery {seconds:.0f} s.\n",
+            f"Solve time: median {np.nanmedian(times):.2f} s, worst {np.nanmax(times):.2f} s; "
+            f"{int(np.sum(times > 15))} scenes over 15 s.\n"]
+
+
+def summarise(rows, seconds):
+    lines = _head("# Contact battery", rows, seconds) + [
+             "| family | scenes | solved | median s | worst s | worst gap | worst compl. | worst law | worst dE (e=1) | worst t-error |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    lines += _family_rows(rows, ("ball", "rectangle", "bowl"), (("min_gap", min), ("complementarity", max),
+                                                                 ("impact_law", max), ("energy_change", max),
+                                                                 ("impact_time_error", max)))
     fails = [r for r in rows if not r.get("solved")]
     if fails:
         lines += ["", "## Not solved", ""]
@@ -127,7 +162,9 @@ def main(argv=None):
     p.add_argument("--count", type=int, default=60, help="scenes drawn (every tenth is also run at 2N)")
     p.add_argument("--timeout", type=float, default=120.0, help="seconds per scene before it is stopped")
     p.add_argument("--out", default="battery", help="folder for battery.csv and summary.md")
-    p.add_argument("--family", choices=["ball", "rectangle", "bowl"], help="only this family")
+    p.add_argument("--family", choices=["ball", "rectangle", "bowl", "incline", "rolling"], help="only this family")
+    p.add_argument("--friction", action="store_true",
+                   help="the friction families instead (block on an incline, rolling disk or sphere; seed 17)")
     sweeps.add_sweep_flags(p, workers_aliases=("--jobs",))
     args = p.parse_args(argv)
     if args.count < 1 or (args.workers is not None and args.workers < 1) or not args.timeout > 0:
@@ -136,12 +173,18 @@ def main(argv=None):
     executor = sweeps.executor(args, "contact_battery")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    scenes = draw_scenes(args.seed, args.count)
+    scenes = draw_friction_scenes(17 if args.seed == 13 else args.seed, args.count) if args.friction else \
+        draw_scenes(args.seed, args.count)
     if args.family:
         scenes = [s for s in scenes if s["family"] == args.family]
 
     def log(r):
         if args.quiet:
+            return
+        if args.friction:
+            print(f"{r['id']:>6s} {r['family']:8s} N={r['N']:5d} mu={r['mu']:<6g} {str(r.get('status'))[:28]:28s} "
+                  f"solved={str(r.get('solved')):5s} {r.get('time_s', math.nan):7.2f} s cone {r.get('cone', math.nan):.1e} "
+                  f"work {r.get('dissipation', math.nan):.1e} oracle {r.get('oracle_error', math.nan):.1e}", flush=True)
             return
         print(f"{r['id']:>6s} {r['family']:9s} N={r['N']:5d} e={r['e']:<5g} {str(r.get('status'))[:28]:28s} "
               f"solved={str(r.get('solved')):5s} {r.get('iterations', 0) or 0:5d} it {r.get('time_s', math.nan):7.2f} s "
@@ -157,7 +200,7 @@ def main(argv=None):
     for r in rows:
         w.writerow({k: _fmt(r.get(k)) for k in FIELDS})
     write_atomic(out / "battery.csv", sio.getvalue())
-    summary = summarise(rows, seconds)
+    summary = (summarise_friction if args.friction else summarise)(rows, seconds)
     write_atomic(out / "summary.md", summary)
     print()
     print(summary)

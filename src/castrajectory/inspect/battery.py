@@ -73,6 +73,85 @@ def draw_scenes(seed: int, count: int):
     return scenes
 
 
+def draw_friction_scenes(seed: int, count: int):
+    """The friction families (issue #25): the block on an incline around tan α = μ (μ in [0.1, 1.5], α within
+    20 % of arctan μ, launched up, down or at rest), and the planar disk or sphere launched sliding with a spin
+    (μ in [0.1, 1.5]); N in {200, 400, 800}, every tenth again at 2N."""
+    rng = np.random.default_rng(seed)
+    scenes = []
+    for i in range(count):
+        mu = float(np.round(rng.uniform(0.1, 1.5), 3))
+        N = int(rng.choice((200, 400, 800)))
+        T = float(np.round(rng.uniform(0.5, 2.0), 2))
+        if i % 2 == 0:
+            alpha = float(np.round(min(math.atan(mu) * rng.uniform(0.8, 1.2), 1.45), 4))
+            v0 = float(np.round(rng.choice([0.0, rng.uniform(-2, 3)]), 3))
+            sc = dict(family="incline", e=0.0, mu=mu, alpha=alpha, v0=v0, T=T)
+        else:
+            sc = dict(family="rolling", e=0.0, mu=mu, body=str(rng.choice(["disk", "sphere"])),
+                      v0=float(np.round(rng.uniform(0.5, 3.0), 3)), spin=float(np.round(rng.uniform(-30, 30), 2)),
+                      T=T)
+        sc["N"] = N
+        sc["id"] = f"f{i:03d}"
+        scenes.append(sc)
+        if i % 10 == 9:
+            scenes.append(dict(sc, N=2 * N, id=f"f{i:03d}x2", twin_of=sc["id"]))
+    return scenes
+
+
+def coulomb_residuals(tr, mu_f: float):
+    """The friction's worst violations over every step, contact and part: the cone ``|ρ| − μ``, maximal
+    dissipation ``ρ s`` (the friction never along its slip) and sticking (``|s|`` where ``|ρ| < μ`` with a
+    normal force)."""
+    rho, slip = np.asarray(tr.friction_ratio, float), np.asarray(tr.slip, float)
+    normal = np.stack([np.asarray(tr.nu, float)[:rho.shape[0]], np.asarray(tr.mu, float)], axis=2)
+    inside = (np.abs(rho) < mu_f * (1 - 1e-6)) & (normal > 1e-12 * max(float(np.max(normal)), 1e-300))
+    return (float(np.max(np.abs(rho) - mu_f)), float(np.max(rho * slip)),
+            float(np.max(np.abs(slip[inside]))) if np.any(inside) else 0.0)
+
+
+#: the friction family's tolerances: the cone and the work to rounding; a stop or a turn inside a step is
+#: first order, so the path's error against the closed form is held to FRICTION_PATH_STEPS steps' worth
+FRICTION_TOL, FRICTION_PATH_STEPS = 1e-12, 4.0
+
+
+def run_friction_scene(sc) -> dict:
+    from ..models import collision as col
+    from ..solve import trajectory
+
+    h = sc["T"] / sc["N"]
+    t0 = time.perf_counter()
+    if sc["family"] == "incline":
+        system = col.sliding_block(1.0, sc["mu"], sc["alpha"], G)
+        tr = trajectory.solve_initial_value(system, [0.0, 0.0], [sc["v0"], 0.0], sc["T"], sc["N"])
+    else:
+        system = col.rolling_body(sc["body"], 1.0, 0.1, sc["mu"], G)
+        tr = trajectory.solve_initial_value(system, [0.0, 0.1, 0.0], [sc["v0"], 0.0, -sc["spin"]], sc["T"], sc["N"])
+    wall = time.perf_counter() - t0
+    out = {"status": tr.status, "success": bool(tr.success), "iterations": int(tr.iterations), "time_s": wall}
+    if not tr.success:
+        out.update(checks=False, solved=False)
+        return out
+    out["min_gap"] = float(min(np.min(tr.gap), np.min(tr.gap_sub)))
+    cone, work, stick = coulomb_residuals(tr, sc["mu"])
+    out.update(cone=cone, dissipation=work, stick=stick)
+    if sc["family"] == "incline":
+        s_ex, _ = col.sliding_block_oracle(sc["v0"], sc["mu"], sc["alpha"], G, tr.t)
+        err = float(np.max(np.abs(tr.q[:, 0] - s_ex)))
+        scale = FRICTION_PATH_STEPS * h * (abs(sc["v0"]) + G * sc["T"])
+    else:
+        t_roll, v_ex = col.rolling_oracle(sc["body"], sc["v0"], sc["spin"], 0.1, sc["mu"], G)
+        err = abs(float(tr.v[-1, 0]) - v_ex) if t_roll < sc["T"] - 3 * h else 0.0
+        scale = 1e-9 * max(abs(sc["v0"]), 1.0)
+    out["oracle_error"] = err
+    vref = max(abs(sc["v0"]), math.sqrt(G), 0.1 * abs(sc.get("spin", 0.0)))
+    checks = (out["min_gap"] >= -GAP_TOL and cone <= FRICTION_TOL and work <= FRICTION_TOL * vref
+              and stick <= FRICTION_TOL * vref and err <= scale)
+    out["checks"] = bool(checks)
+    out["solved"] = bool(checks)
+    return out
+
+
 def build(sc):
     from ..models import collision as col
 
@@ -86,6 +165,12 @@ def build(sc):
 
 
 def command(sc) -> str:
+    if sc["family"] == "incline":
+        return (f"python problems/sliding_block.py --mu {sc['mu']} --incline {sc['alpha']} --v0 {sc['v0']} "
+                f"--T {sc['T']} --n {sc['N']}")
+    if sc["family"] == "rolling":
+        return (f"python problems/rolling_ball.py --body {sc['body']} --mu {sc['mu']} --v0 {sc['v0']} "
+                f"--spin {sc['spin']} --T {sc['T']} --n {sc['N']}")
     if sc["family"] == "ball":
         return (f"python problems/bouncing_ball.py --restitution {sc['e']} --height {sc['height']} "
                 f"--velocity {sc['velocity']} --T {sc['T']} --n {sc['N']}")
@@ -119,6 +204,8 @@ def run_scene(sc) -> dict:
     from ..baselines.events import event_driven
     from ..solve import trajectory
 
+    if sc["family"] in ("incline", "rolling"):
+        return run_friction_scene(sc)
     system, q0, v0 = build(sc)
     t0 = time.perf_counter()
     tr = trajectory.solve_initial_value(system, q0, v0, sc["T"], sc["N"])

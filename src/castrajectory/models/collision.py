@@ -395,3 +395,70 @@ def bowl(mass: float = 1.0, width: float = 0.4, height: float = 0.2, g: float = 
     R = positive("bowl radius", radius)
     return rectangle_contact_system(Body(mass, width, height), finite("g", g), restitution_coefficient,
                                     bowl_ground(R))
+
+
+# ----------------------------------------------------------------------------- friction scenes
+#: I / (m R²) of the rolling bodies
+ROLLING_SHAPES = {"disk": 0.5, "sphere": 0.4}
+
+
+def sliding_block(mass: float, mu: float, alpha: float, g: float) -> LagrangianSystem:
+    """A point mass on a plane inclined at ``alpha``: ``q = (s, y)``, s up the plane, the gap ``y ≥ 0`` with
+    Coulomb friction ``mu`` and the slip velocity ``ṡ`` (gravity ``g`` at ``alpha`` from the plane's normal)."""
+    from .mechanics import velocity
+    q = ca.SX.sym("q", 2)
+    return LagrangianSystem(q, Atoms([q], [mass]), [Gravity(g, direction=(-math.sin(alpha), -math.cos(alpha)))],
+                            names=["s", "y"], points_expr=[q],
+                            contact=Contact([q[1]], restitution=0.0, friction=mu, slip=[velocity(q)[0]],
+                                            names=["floor"]))
+
+
+def rolling_body(shape: str, mass: float, radius: float, mu: float, g: float) -> LagrangianSystem:
+    """A disk or a sphere (``ROLLING_SHAPES``) moving in the plane on the floor: ``q = (x, y, θ)``
+    (θ counter-clockwise), the gap ``y − R ≥ 0`` with friction ``mu`` and the contact point's slip ``ẋ + R θ̇``."""
+    from .mechanics import velocity
+    q = ca.SX.sym("q", 3)
+    k = ROLLING_SHAPES[shape]
+    qd = velocity(q)
+    R = radius
+    rim = [ca.vertcat(q[0] + R * ca.cos(q[2] + a), q[1] + R * ca.sin(q[2] + a))
+           for a in np.linspace(0, 2 * np.pi, 9)[:-1]]
+    return LagrangianSystem(q, MassMatrix(ca.diag(ca.vertcat(mass, mass, k * mass * R * R))),
+                            [Potential(mass * g * q[1], "gravity")], names=["x", "y", "theta"], points_expr=rim,
+                            contact=Contact([q[1] - R], restitution=0.0, friction=mu, slip=[qd[0] + R * qd[2]],
+                                            names=["floor"]))
+
+
+def sliding_block_oracle(v0, mu, alpha, g, t):
+    """The sliding block's closed form: ``s(t)`` and the stop time (None if it never comes to rest):
+    launched up it decelerates at g(sin α + μ cos α), then sticks if tan α <= μ or slides back at
+    g(sin α − μ cos α); launched down or from rest likewise."""
+    sa, ca_ = math.sin(alpha), math.cos(alpha)
+    down = g * (sa - mu * ca_)                      # the acceleration down the slope while sliding down
+    t = np.asarray(t, float)
+    if v0 > 0:
+        dec = g * (sa + mu * ca_)
+        t1 = v0 / dec
+        up = v0 * t - 0.5 * dec * t * t
+        top = v0 * v0 / (2 * dec)
+        if down <= 0:
+            return np.where(t < t1, up, top), t1
+        return np.where(t < t1, up, top - 0.5 * down * (t - t1) ** 2), None
+    if v0 < 0:   # launched downhill: s̈ = −down while it slides down
+        if down < 0:
+            t1 = v0 / down
+            return np.where(t < t1, v0 * t - 0.5 * down * t * t, v0 * t1 - 0.5 * down * t1 * t1), t1
+        return v0 * t - 0.5 * down * t * t, None
+    if down <= 0:
+        return np.zeros_like(t), 0.0
+    return -0.5 * down * t * t, None
+
+
+def rolling_oracle(shape, v0, w0, R, mu, g):
+    """A sliding disk or sphere: the time at which it starts rolling, ``|u0| k/((1 + k) μ g)``, and its final
+    speed ``(v0 + k R ω0)/(1 + k)`` (slip u0 = v0 − R ω0, ω clockwise, k = I/(m R²))."""
+    k = ROLLING_SHAPES[shape]
+    u0 = v0 - R * w0
+    t_roll = abs(u0) * k / ((1 + k) * mu * g)
+    v_final = (v0 + k * R * w0) / (1 + k)
+    return t_roll, v_final
