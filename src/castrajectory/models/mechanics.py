@@ -20,10 +20,10 @@ scene names; in particular a scene with ``g = 0`` simply omits
 Holonomic constraints ``c(q) = 0`` are a list of expressions; their
 multipliers are unknowns of the trajectory NLP.
 
-Unilateral contact is one more term, :class:`Contact`: gap expressions
-``φ_j(q) ≥ 0`` (one per contact point) and a restitution coefficient.  A
-system without it builds no contact variables anywhere
-(:mod:`castrajectory.solve.contact` transcribes it).
+Unilateral contact is one more term, :class:`~castrajectory.models.contact.Contact`
+(:mod:`castrajectory.models.contact`): gap expressions ``φ_j(q) ≥ 0`` (one per contact point), a
+restitution coefficient, the impact law and Coulomb friction.  A system without it builds no contact
+variables anywhere (:mod:`castrajectory.solve.contact` transcribes it).
 
 Example (planar pendulum, one atom)::
 
@@ -40,6 +40,7 @@ import casadi as ca
 import numpy as np
 
 from ..validation import InputError, finite
+from .contact import Contact  # noqa: F401  (the contact term; re-exported: it stands beside the other terms)
 
 # ----------------------------------------------------------------------------- time and velocity symbols
 _TIME = ca.SX.sym("t")
@@ -336,74 +337,6 @@ class Damping:
         return -ca.mtimes(ca.DM(C), system.qd)
 
 
-# ----------------------------------------------------------------------------- contact
-@dataclass
-class Contact:
-    """Unilateral contacts: gaps ``φ_j(q) ≥ 0`` (SX expressions of q) with Newton restitution ``e``.
-
-    An impact of contact ``j`` reverses its normal velocity ``∇φ_j q̇`` by the
-    factor ``e`` (``e = 1``: elastic, the default); impulses act along
-    ``M⁻¹∇φ_jᵀ`` with ``μ_j ≥ 0``.  ``names`` label the contact points in output.  ``law`` says how
-    an impact at several contacts at once is resolved (simultaneous or sequential; see the field).
-    A ball dropped from 1 m bounces at ``t = √(2/g)``:
-
-    >>> import casadi as ca, castrajectory as ct
-    >>> y = ca.SX.sym("y", 1)
-    >>> ball = ct.LagrangianSystem(y, ct.Atoms([ca.vertcat(0, y)], [1.0]), [ct.Gravity(9.81)],
-    ...                            contact=ct.Contact([y[0]], restitution=0.8))
-    >>> run = ct.simulate(ball, [1.0], [0.0], T=0.6, N=120)
-    >>> run.success, round(run.detail.impacts[0].t, 9) == round((2 / 9.81) ** 0.5, 9)
-    (True, True)
-    """
-
-    gaps: Sequence[object]
-    restitution: float = 1.0
-    names: Optional[Sequence[str]] = None
-    #: how an impact at several contacts at once is resolved: ``"simultaneous"`` (Newton's law at every
-    #: contact together, ``J v⁺ + e J v⁻ ≥ 0 ⟂ μ ≥ 0``) or ``"sequential"`` (a cascade of one-contact
-    #: impacts, the fastest approach first: the limit of vanishing gaps, the textbook Newton's cradle)
-    law: str = "simultaneous"
-    #: Coulomb friction coefficients, one number for every contact or one per contact (0: frictionless,
-    #: the rows of a frictionless contact exactly)
-    friction: object = 0.0
-    #: each contact's slip velocity, the tangential velocity of its contact point: an expression linear in
-    #: the velocity (``ct.velocity(q)``), needed where the friction is positive (2-D: one number per contact)
-    slip: Optional[Sequence[object]] = None
-
-    def __post_init__(self):
-        if self.law not in ("simultaneous", "sequential"):
-            raise InputError(f"the impact law must be 'simultaneous' or 'sequential' (got {self.law!r})")
-        count = len(self.gaps)
-        try:
-            fr = np.broadcast_to(np.asarray(self.friction, dtype=float), (count,)).copy()
-        except (TypeError, ValueError):
-            raise InputError(f"friction must be a number or one number per contact ({count}); got "
-                             f"{self.friction!r}") from None
-        if not np.all(np.isfinite(fr)) or np.any(fr < 0):
-            raise InputError(f"friction coefficients must be finite and >= 0 (got {self.friction!r})")
-        self.friction = fr
-        if np.any(fr > 0):
-            if self.slip is None or len(self.slip) != count:
-                raise InputError(f"friction needs each contact's slip velocity: Contact(..., slip=[...]) with "
-                                 f"{count} expression{'s' if count > 1 else ''} in the velocity")
-            self.slip = [ca.SX(v) if not isinstance(v, ca.SX) else v for v in self.slip]
-            if any(v.numel() != 1 for v in self.slip):
-                raise InputError("a slip velocity is one number per contact (planar friction); a tangent "
-                                 "plane in 3-D is not supported yet")
-        e = finite("restitution", self.restitution)
-        if not 0.0 <= e <= 1.0:
-            raise InputError(f"restitution must be between 0 and 1 (got {self.restitution})")
-        self.restitution = e
-        self.gaps = [ca.SX(g) if not isinstance(g, ca.SX) else g for g in self.gaps]
-        if not self.gaps or any(g.numel() != 1 for g in self.gaps):
-            raise ValueError("a Contact needs at least one scalar gap expression")
-        self.names = list(self.names) if self.names else [f"contact{j}" for j in range(len(self.gaps))]
-
-    @property
-    def count(self) -> int:
-        return len(self.gaps)
-
-
 # ----------------------------------------------------------------------------- the system
 class _Timed(ca.Function):
     """A CasADi function whose last input is the time.  ``optional``: a call may leave the time out
@@ -520,19 +453,7 @@ class LagrangianSystem:
         for k, c in enumerate(self.constraints):
             check(c, f"constraint {k}")
         if self.contact is not None:
-            for k, v in enumerate(self.contact.slip or []):
-                name = self.contact.names[k]
-                check(v, f"the slip velocity of {name!r}", rates=True)
-                D = ca.jacobian(v, self.qd)
-                rest = ca.substitute(v, self.qd, ca.SX.zeros(self.nq))
-                if ca.depends_on(D, self.qd) or ca.depends_on(D, self.t) or not rest.is_zero():
-                    raise InputError(f"the slip velocity of {name!r} must be linear in the velocity, D(q) q̇ "
-                                     "(no other term, no time)")
-            for k, g in enumerate(self.contact.gaps):
-                check(g, f"the gap of {self.contact.names[k]!r}")
-                if ca.depends_on(g, self.t):
-                    raise InputError(f"the gap of {self.contact.names[k]!r} depends on time: moving obstacles are "
-                                     "not supported yet")
+            self.contact.validate(self.q, self.qd, self.t, check)
         if self.points_expr:
             for k, pnt in enumerate(self.points_expr):
                 check(pnt, f"plotted point {k}")
@@ -611,11 +532,7 @@ class LagrangianSystem:
         if self.nc:
             out.append(f"{self.nc} holonomic constraint{'s' if self.nc > 1 else ''}")
         if self.contact is not None:
-            fr = self.contact.friction
-            friction = "" if not np.any(fr > 0) else (f", μ = {fr[0]:g}" if np.all(fr == fr[0]) else
-                                                        ", μ = " + "/".join(f"{x:g}" for x in fr))
-            out.append(f"contact: {self.ncontact} gap{'s' if self.ncontact > 1 else ''}, e = {self.contact.restitution:g}"
-                       f"{friction}")
+            out.append(self.contact.describe())
         return out
 
     # -- symbolic pieces (expressions in self.q, self.qd)
@@ -748,9 +665,7 @@ class LagrangianSystem:
             raise ValueError("this system has no contact term")
 
         def build():
-            rows = [ca.jacobian(v, self.qd) for v in self.contact.slip] if self.contact.slip else \
-                [ca.SX(1, self.nq) for _ in self.contact.gaps]
-            return ca.Function("tangent", [self.q], [ca.densify(ca.vertcat(*rows))])
+            return ca.Function("tangent", [self.q], [self.contact.slip_jacobian(self.qd)])
         return self._get("tangent", build)
 
     @property

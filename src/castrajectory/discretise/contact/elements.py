@@ -70,12 +70,12 @@ class ContactMechanics:
         # (the multipliers are inputs only where there are constraints: a contact scene without them
         # keeps the element functions it had)
         xl, xls = ([lam], [lams]) if m else ([], [])
-        self._kinematics = kin = lambda xp, x, xn, tau_m, tau_p: _sub_node_kinematics(  # noqa: E731
+        self._kinematics = lambda xp, x, xn, tau_m, tau_p: _sub_node_kinematics(  # noqa: E731
             D1, D2, J, Mf, C, e, xp, x, xn, tau_m, tau_p)
         self._C, self._D1, self._J = C, D1, J
         # Coulomb friction (only where a coefficient is positive: a frictionless system keeps its rows and
         # element functions exactly): the tangential force is ρ times the normal one, at the node (ρ ν) and
-        # at the sub-node (ρ μ), one ratio ρ_j per step and contact, |ρ_j| ≤ μ_f,j; see node_row
+        # at the sub-node (ρ μ), |ρ| ≤ μ_f; see node_row, sub_row and slip
         self.mu_f = np.asarray(system.contact.friction, float)
         self.friction = bool(np.any(self.mu_f > 0))
         self._D = system.tangent if self.friction else None
@@ -91,7 +91,7 @@ class ContactMechanics:
         self.node = ca.Function("c_node", [qsm, bm, qk, qs, b, nu, hp, h] + xl + xr,
                                 [self.node_row(D2(qsm, qk, (1 - am) * hp), qk, qs, b, nu, lam, h, frn)])
         sub_row, r = self.sub_row(qk, qs, qk1, b, mu, lams, h, frs)
-        pm, pp, _ = kin(qk, qs, qk1, a * h, (1 - a) * h)
+        pm, pp = D2(qk, qs, a * h), -D1(qs, qk1, (1 - a) * h)          # the momenta on either side of q̃
         self.sub = ca.Function("c_sub", [qk, qs, qk1, b, mu, h] + xls + xr, [sub_row])
         if self.friction:
             #: the slip velocities the friction opposes, [node part; sub-node part] (see slip)
@@ -182,13 +182,7 @@ class ContactMechanics:
         that lands exactly on a node (to rounding) has its impact there: the sub-nodes, strictly inside
         their steps, cannot time it, and the node's force ``ν`` would otherwise stop the arrival plastically."""
         pp = -self._D1(qk, qs, (0.5 + b) * h)
-        M = self.system.mass_matrix(qk)
-        v = ca.solve(M, pp + self.e * p_in)
-        Cx = self._C(qk)
-        if Cx.size1():
-            MiCt = ca.solve(M, Cx.T)
-            v = v - ca.mtimes(MiCt, ca.solve(ca.mtimes(Cx, MiCt), ca.mtimes(Cx, v)))
-        return ca.mtimes(self._J(qk), v)
+        return ca.mtimes(self._J(qk), _tangent_velocity(self.system.mass_matrix(qk), self._C(qk), pp + self.e * p_in))
 
     def _march_function(self, phi):
         """One step of the transcription's own rows, each contact in a mode given by masks (the march).
@@ -285,10 +279,14 @@ def _sub_node_kinematics(D1, D2, J, Mf, C, e, xp, x, xn, tau_m, tau_p):
     ``e = 1`` their kinetic energy ``½ v̄ᵀMv̄`` is the same on both sides of the impact."""
     pm = D2(xp, x, tau_m)
     pp = -D1(x, xn, tau_p)
-    M = Mf(x)
-    v = ca.solve(M, pp + e * pm)
-    Cx = C(x)
-    if Cx.size1():
-        MiCt = ca.solve(M, Cx.T)
-        v = v - ca.mtimes(MiCt, ca.solve(ca.mtimes(Cx, MiCt), ca.mtimes(Cx, v)))
-    return pm, pp, ca.mtimes(J(x), v)
+    return pm, pp, ca.mtimes(J(x), _tangent_velocity(Mf(x), C(x), pp + e * pm))
+
+
+def _tangent_velocity(M, C, p):
+    """``Π p``: the velocity ``M⁻¹p`` restricted to the constraints' tangent space,
+    ``Π = M⁻¹ − M⁻¹Cᵀ(CM⁻¹Cᵀ)⁻¹CM⁻¹`` (``M⁻¹`` without constraints)."""
+    v = ca.solve(M, p)
+    if C.size1():
+        MiCt = ca.solve(M, C.T)
+        v = v - ca.mtimes(MiCt, ca.solve(ca.mtimes(C, MiCt), ca.mtimes(C, v)))
+    return v

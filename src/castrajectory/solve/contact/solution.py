@@ -10,11 +10,9 @@ from ...result import HomotopyStep, NLPResult, Result
 from ...discretise.contact.elements import ContactMechanics
 from ...discretise.contact.transcription import LOOKAHEAD, TOUCH_TOL
 from .nlp import ContactNLP
+from .step import IMPACT_SPEED_STEPS
 
 
-#: A sub-node impulse counts as an impact when the contact approaches faster than this many
-#: steps' worth of its normal acceleration (resting contact approaches at about ½ step's worth).
-IMPACT_SPEED_STEPS = 2.0
 #: ... and its impulse exceeds this fraction of the momentum scale (interior-point noise is far below).
 IMPULSE_TOL = 1e-6
 #: An impact is *caught* where Newton's law misses by more than this fraction of the arrival speed.
@@ -124,36 +122,30 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     pN = np.asarray(cm.p_node_minus(S[-1], B[-1], q[-1], H[N - 1])).reshape(1, -1)
     p = np.vstack([pp - half[:N], pN + half[N:]])
     p[0] = p0
-    # impacts at nodes: the node's momentum is the one after the impact (p_k⁺), not the mean
-    node_impacts = _node_impacts(cm, tn, q, pp, 2 * half, nu_full, closed, H, N)
-    for imp in node_impacts:
-        p[imp.step] = pp[imp.step]
+    t = np.concatenate([[0.0], np.cumsum(H[:N])])
+    if np.all(H == h):
+        t = np.linspace(0.0, N * h, N + 1)
+    t_sub = t[:-1] + (0.5 + B) * H[:N]
+    # Impacts (_impacts_at): at the sub-nodes, and at interior nodes where a flight landed on the node (the
+    # march's mode N: the node's impulse h ν); the node's momentum is then the one after it, not the mean
+    tol = IMPULSE_TOL * tn.scales_p / tn.scales_ell
+    impacts = []
+    for k in np.flatnonzero(np.any(MU > tol, axis=1)):
+        pm = np.asarray(cm.p_minus(q[k], S[k], B[k], H[k])).reshape(-1)
+        pl = np.asarray(cm.p_plus(S[k], q[k + 1], B[k], H[k])).reshape(-1)
+        impacts += _impacts_at(cm, k, float(t_sub[k]), S[k], pm, pl, MU[k], tol, H[k], at_node=False)
+    for k in np.flatnonzero(np.any(force[1:N] > tol, axis=1)) + 1:
+        at = _impacts_at(cm, k, float(t[k]), q[k], pp[k] - 2 * half[k], pp[k], force[k], tol, H[k], at_node=True)
+        if at:
+            impacts += at
+            p[k] = pp[k]
+    impacts.sort(key=lambda i: (i.t, i.contact))
+    simultaneous = _simultaneous_warnings(cm, impacts)
     # velocities M⁻¹p, tangent to the holonomic constraints where there are any
     v = cm.dm.velocities(q, p)
     energy = sysm.energies(q, v)
     gap = np.asarray(sysm.gap.map(N + 1)(q.T)[0]).reshape(c, N + 1).T
     gap_sub = np.asarray(sysm.gap.map(N)(S.T)[0]).reshape(c, N).T
-    t = np.concatenate([[0.0], np.cumsum(H[:N])])
-    if np.all(H == h):
-        t = np.linspace(0.0, N * h, N + 1)
-    t_sub = t[:-1] + (0.5 + B) * H[:N]
-    # Impacts: sub-node impulses of a contact that approaches faster than a step's worth of its
-    # normal acceleration (slower "impacts" are the discrete form of persistent contact).
-    impacts = []
-    for k, j in zip(*np.where(MU > IMPULSE_TOL * tn.scales_p / tn.scales_ell)):
-        x, tk, muk = S[k], float(t_sub[k]), float(MU[k, j])
-        pm = np.asarray(cm.p_minus(q[k], S[k], B[k], H[k])).reshape(-1)
-        pl = np.asarray(cm.p_plus(S[k], q[k + 1], B[k], H[k])).reshape(-1)
-        vb, va = cm.dm.velocities(np.array([x, x]), np.array([pm, pl]))
-        Jj = np.asarray(sysm.gap(x)[1])[j]
-        an = abs(float(np.asarray(cm.acc_normal(x, vb)).reshape(-1)[j]))
-        if -float(Jj @ vb) > IMPACT_SPEED_STEPS * an * H[k]:
-            # caught: Newton's law waived (the arrival stopped, not reversed by e), which the
-            # transcription allows only where the contact is closed at the next node
-            vn_b, vn_a = float(Jj @ vb), float(Jj @ va)
-            impacts.append(SubNodeImpact(int(k), tk, int(j), muk, np.array(x, float).copy(), vb, va,
-                                  caught=bool(abs(vn_a + cm.e * vn_b) > CAUGHT_LAW * abs(vn_b))))
-    impacts, simultaneous = _simultaneous(cm, tn, impacts + node_impacts, MU, q, S, B, H)
     # Impulse per node: Λ_k = h ν_k + (1 − α_k) μ_k + α_{k−1} μ_{k−1}, each sub-node impulse shared
     # between its two nodes by linear (hat-function) interpolation of its time; node N takes the
     # look-ahead step's node force and sub-node share (its dual cell reaches past T).  For a body
@@ -184,81 +176,47 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
         program={"terms": sysm.terms(), "steps": int(tn.L), **tn.nlp.anatomy()})
 
 
-def _simultaneous(cm: ContactMechanics, tn, impacts, MU, q, S, B, H):
-    """Every contact that takes part in an impact, and a warning for each simultaneous one.
-
-    An impact at a sub-node may be carried on through contacts that were already closed (a ball resting
-    against the next one in Newton's cradle: no approach, yet an impulse).  A contact with an impulse at
-    an impact's sub-node takes part when that impulse alone would change its normal velocity by more
-    than a step's worth of its normal acceleration (the scale that separates an impact from resting
-    contact, :data:`IMPACT_SPEED_STEPS`).  Two or more contacts in one impact make it simultaneous: its
-    outcome depends on the impact law, which the answer says (the simultaneous Newton law here)."""
-    sysm = cm.system
-    names, law = sysm.contact.names, sysm.contact.law
-    by_step: dict = {}
-    for imp in impacts:
-        by_step.setdefault((imp.step, imp.at_node), []).append(imp)
-    out, warnings = list(impacts), []
-    for (k, at_node), imps in sorted(by_step.items()):
-        listed = {i.contact for i in imps}
-        if at_node:
-            if len(listed) > 1:
-                warnings.append(_simultaneous_warning(imps[0].t, [names[j] for j in sorted(listed)], law))
-            continue
-        x = S[k]
-        pm = np.asarray(cm.p_minus(q[k], S[k], B[k], H[k])).reshape(-1)
-        pl = np.asarray(cm.p_plus(S[k], q[k + 1], B[k], H[k])).reshape(-1)
-        vb, va = cm.dm.velocities(np.array([x, x]), np.array([pm, pl]))
-        Jx = np.asarray(sysm.gap(x)[1])
-        an = np.abs(np.asarray(cm.acc_normal(x, vb)).reshape(-1))
-        for j in np.flatnonzero(MU[k] > IMPULSE_TOL * tn.scales_p / tn.scales_ell):
-            if j in listed:
-                continue
-            w = float(Jx[j] @ cm.dm.velocities(np.array([x]), np.array([Jx[j]]))[0])
-            if MU[k, j] * w > IMPACT_SPEED_STEPS * an[j] * H[k]:
-                vn_b, vn_a = float(Jx[j] @ vb), float(Jx[j] @ va)
-                out.append(SubNodeImpact(int(k), imps[0].t, int(j), float(MU[k, j]), np.array(x, float).copy(),
-                                         vb, va, caught=bool(abs(vn_a + cm.e * vn_b) > CAUGHT_LAW * max(abs(vn_b), 1e-300))))
-                listed.add(int(j))
-        if len(listed) > 1:
-            warnings.append(_simultaneous_warning(imps[0].t, [names[j] for j in sorted(listed)], law))
-    out.sort(key=lambda i: (i.t, i.contact))
-    return out, warnings
+def _impacts_at(cm: ContactMechanics, k: int, t: float, x, p_before, p_after, impulses, tol: float, h: float,
+                at_node: bool) -> List[SubNodeImpact]:
+    """The impacts at one point ``x`` (a sub-node, or a node where a flight landed) with the momenta on either
+    side and the contacts' impulses there.  A contact whose impulse meets an arrival faster than a step's worth
+    of its normal acceleration takes an impact (slower "impacts" are the discrete form of persistent contact);
+    where one does, so does every contact whose impulse alone would change its normal velocity by more than
+    that (an impact carried on through contacts already closed: a ball resting against the next one in
+    Newton's cradle, no approach, yet an impulse).  An impact is *caught* where Newton's law is waived (the
+    arrival stopped, not reversed by e: the transcription allows it only where the contact is closed at the
+    next node)."""
+    js = np.flatnonzero(impulses > tol)
+    if js.size == 0:
+        return []
+    vb, va = cm.dm.velocities(np.array([x, x]), np.array([p_before, p_after]))
+    Jx = np.asarray(cm.system.gap(x)[1])
+    scale = IMPACT_SPEED_STEPS * np.abs(np.asarray(cm.acc_normal(x, vb)).reshape(-1)) * h
+    if not any(-float(Jx[j] @ vb) > scale[j] for j in js):
+        return []
+    out = []
+    for j in js:
+        vn_b, vn_a = float(Jx[j] @ vb), float(Jx[j] @ va)
+        w = float(Jx[j] @ cm.dm.velocities(np.array([x]), np.array([Jx[j]]))[0])
+        if -vn_b > scale[j] or impulses[j] * w > scale[j]:
+            out.append(SubNodeImpact(int(k), t, int(j), float(impulses[j]), np.array(x, float).copy(), vb, va,
+                                     caught=bool(abs(vn_a + cm.e * vn_b) > CAUGHT_LAW * max(abs(vn_b), 1e-300)),
+                                     at_node=at_node))
+    return out
 
 
-def _simultaneous_warning(t: float, names, law: str) -> str:
+def _simultaneous_warnings(cm: ContactMechanics, impacts) -> List[str]:
+    """A warning for each impact that two or more contacts take: its outcome depends on the impact law,
+    which the warning names."""
+    names, law = cm.system.contact.names, cm.system.contact.law
     how = ("the simultaneous Newton law, each contact's normal velocity reversed by e" if law == "simultaneous"
            else "the sequential law, one contact after the other, the fastest approach first")
-    return (f"a simultaneous impact at t = {t:.6g}: {', '.join(names)} take impulses in one step; its outcome "
-            f"depends on the impact law (here {how}; Contact(law=...))")
-
-
-def _node_impacts(cm: ContactMechanics, tn, q, pp, jump, nu_full, closed, H, N) -> List[SubNodeImpact]:
-    """Impacts at interior nodes: a closed contact whose node impulse ``h ν`` meets an arrival faster than
-    a step's worth of its normal acceleration (the march's mode N: a flight that landed on the node).
-    ``jump``: ``p_k⁺ − p_k⁻`` per node."""
-    sysm = cm.system
-    out: List[SubNodeImpact] = []
-    t = N * H[0] * np.linspace(0.0, 1.0, N + 1) if np.all(H[:N] == H[0]) else np.concatenate([[0.0], np.cumsum(H[:N])])
-    pushed = closed[1:N] & (nu_full[1:N] > IMPULSE_TOL * tn.scales_p / tn.scales_ell)
-    for k in np.where(np.any(pushed, axis=1))[0] + 1:
-        x = q[k]
-        vb, va = cm.dm.velocities(np.array([x, x]), np.array([pp[k] - jump[k], pp[k]]))
-        Jx = np.asarray(sysm.gap(x)[1])
-        an = np.abs(np.asarray(cm.acc_normal(x, vb)).reshape(-1))
-        js = np.where(pushed[k - 1])[0]
-        arrivals = [j for j in js if -float(Jx[j] @ vb) > IMPACT_SPEED_STEPS * an[j] * H[k]]
-        if not arrivals:
-            continue
-        # and the closed contacts that carry the impact on (as at a sub-node, see _simultaneous)
-        w = {j: float(Jx[j] @ cm.dm.velocities(np.array([x]), np.array([Jx[j]]))[0]) for j in js}
-        for j in js:
-            if j in arrivals or nu_full[k, j] * w[j] > IMPACT_SPEED_STEPS * an[j] * H[k]:
-                vn_b, vn_a = float(Jx[j] @ vb), float(Jx[j] @ va)
-                out.append(SubNodeImpact(int(k), float(t[k]), int(j), float(nu_full[k, j]), np.array(x, float).copy(),
-                                         vb, va, caught=bool(abs(vn_a + cm.e * vn_b) > CAUGHT_LAW * max(abs(vn_b), 1e-300)),
-                                         at_node=True))
-    return out
+    groups: dict = {}
+    for imp in impacts:
+        groups.setdefault((imp.step, imp.at_node), []).append(imp)
+    return [f"a simultaneous impact at t = {imps[0].t:.6g}: {', '.join(names[i.contact] for i in imps)} take "
+            f"impulses in one step; its outcome depends on the impact law (here {how}; Contact(law=...))"
+            for imps in groups.values() if len(imps) > 1]
 
 
 #: An elastic scene (e = 1) whose energy falls by more than this fraction is reported with a warning.

@@ -26,10 +26,10 @@ O, H, R, I, C, N, F, T, P = "O", "H", "R", "I", "C", "N", "F", "T", "P"
 #: friction modes of a contact in a step: no friction force, sticking, sliding with a positive slip
 #: velocity (ρ = −μ_f), sliding with a negative one (ρ = μ_f)
 FREE, STICK, UP, DOWN = "-", "S", "U", "D"
-#: A contact that touches at a step's first node while approaching faster than this many steps' worth of
-#: its normal acceleration arrives with an impact at that node (mode N; resting contact approaches at about
-#: ½ step's worth).
-ARRIVAL_SPEED_STEPS = 2.0
+#: A contact approaching faster than this many steps' worth of its normal acceleration arrives with an
+#: impact (resting contact approaches at about ½ step's worth): touching at a step's first node it takes the
+#: impact there (mode N), and an answer lists its impulse as an impact (solution.py).
+IMPACT_SPEED_STEPS = 2.0
 
 
 #: Newton steps of each step of a chunk (:meth:`_Step.chunk`).
@@ -51,8 +51,8 @@ class _Step:
         self._chunks = cm._chunk_fns
         self.ell, self.pref, self.vref = scales[0], scales[1], scales[2]
         self.n, self.c, self.m = cm.n, cm.c, cm.m
-        # friction: one ratio ρ per contact at the end of the unknowns, and the friction modes of the
-        # previous step (the march sets them: a contact that stuck starts its next step sticking)
+        # friction: two ratios ρ per contact (node force, sub-node impulse) at the end of the unknowns, and
+        # the friction modes of the previous step (the march sets them: a contact that stuck starts sticking)
         self.nf = 2 * cm.c if cm.friction else 0
         self.fprev = [FREE] * (2 * cm.c)
 
@@ -203,7 +203,8 @@ def _crossing_fraction(g0, gs, gn, alpha):
 
 
 def _march_step(step: _Step, q, p, h, g_q, held_prev, tol, finest: bool):
-    """One step from ``(q, p)``: ``(q̃, q_{k+1}, β, ν, μ, λ, λ̃, modes, gaps at q_{k+1})``, ``"split"`` if
+    """One step from ``(q, p)``: ``(q̃, q_{k+1}, β, ν, μ, λ, λ̃, modes, gaps at q_{k+1}, friction ratios,
+    friction modes)`` (:func:`_result`), ``"split"`` if
     it needs two impacts at different times (and is not the finest step), or ``(reason, detail)``.
 
     The modes are searched greedily (one change per solve, at the most violated condition); if that
@@ -216,7 +217,7 @@ def _march_step(step: _Step, q, p, h, g_q, held_prev, tol, finest: bool):
     x0 = np.concatenate([q + 0.5 * h * v, q + h * v, [0.0], np.zeros(2 * c + 2 * step.m + step.nf)])
     # a flight that landed on this node (to rounding) arrives with its impact here: Newton's law at the node
     an = np.abs(np.asarray(step.cm.acc_normal(q, v)).reshape(-1))
-    arriving = touch & ~held_prev & (-(np.asarray(step.cm.system.gap(q)[1]) @ v) > ARRIVAL_SPEED_STEPS * an * h)
+    arriving = touch & ~held_prev & (-(np.asarray(step.cm.system.gap(q)[1]) @ v) > IMPACT_SPEED_STEPS * an * h)
     modes0 = [N if arriving[j] else H if (touch[j] and held_prev[j]) else O for j in range(c)]
     modes, tried, crossed = list(modes0), set(), set()
     x, frac, why = x0, None, "rounds"
@@ -376,9 +377,10 @@ def _sequential(step: _Step, q, p, h, x, modes, mu, pen):
     re-solved with the impulses of the cascade (:func:`castrajectory.models.impact.sequential_impact`) on
     the sub-node's state: the sub-node (its time and place) and the momentum before it do not depend on
     the impulses, so the step keeps them and only its end moves.  The contacts then are in modes T (the
-    one timing the sub-node) and F, their impulses fixed; at a node's impact (mode N), P (the node's).  ``None`` where the law does not change the step
-    (the simultaneous law, one contact, no impact); a step whose cascade leaves a contact below the
-    surface at its end is ``None`` too (the simultaneous answer stands, with its warning)."""
+    one timing the sub-node) and F, their impulses fixed; at a node's impact (mode N), P (the node's).
+    ``None`` where the law does not change the step (the simultaneous law, one contact, no impact); a step
+    whose cascade leaves a contact below the surface at its end is ``None`` too (the simultaneous answer
+    stands, with its warning)."""
     cm = step.cm
     if cm.system.contact.law != "sequential":
         return None
@@ -398,17 +400,11 @@ def _sequential(step: _Step, q, p, h, x, modes, mu, pen):
             return None
         qs, b = x[:n], float(x[2 * n])
         pm = np.asarray(cm.p_minus(q, qs, b, h)).reshape(-1)
-    M = np.asarray(cm.system.mass_matrix(qs))
+    # the cascade in the contacts' normal velocities: Π = M⁻¹ on the constraints' tangent space (velocities)
     Jx = np.asarray(cm.system.gap(qs)[1])[involved]
-    PiJt = np.linalg.solve(M, Jx.T)
-    if cm.m:
-        Cq = np.asarray(cm.system.constraint(qs)[1])
-        MiCt = np.linalg.solve(M, Cq.T)
-        PiJt = PiJt - MiCt @ np.linalg.solve(Cq @ MiCt, Cq @ PiJt)
-    v = np.linalg.solve(M, pm)
-    if cm.m:
-        v = v - MiCt @ np.linalg.solve(Cq @ MiCt, Cq @ v)
-    cascade, _ = sequential_impact(Jx @ PiJt, Jx @ v, cm.e)
+    PiJt = cm.dm.velocities(np.repeat(qs[None, :], len(involved), axis=0), Jx)
+    v = cm.dm.velocities(qs[None, :], pm[None, :])[0]
+    cascade, _ = sequential_impact(Jx @ PiJt.T, Jx @ v, cm.e)
     mufix = np.zeros(c)
     if at_node:
         mufix[involved] = cascade / h                  # the node's force: impulse per step
