@@ -647,11 +647,6 @@ def test_restitution_outside_unit_interval_is_refused(e):
         col.rectangle_drop(1.0, 2.0, 1.0, G, e)
 
 
-def test_galerkin4_with_contact_is_refused():
-    with pytest.raises(InputError, match="two-point"):
-        trajectory.solve_initial_value(col.bouncing_ball(), [1.0], [0.0], 1.0, 50, scheme="galerkin4")
-
-
 @pytest.mark.parametrize("method", ["rk4", "march", "implicit-euler"])
 def test_baseline_steppers_refuse_contact(method):
     with pytest.raises(InputError, match="contact"):

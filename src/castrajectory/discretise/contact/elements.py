@@ -1,10 +1,16 @@
-"""CasADi element functions of the contact transcription, for one system and a two-point scheme.
+"""CasADi element functions of the contact transcription, for one system and any scheme.
 
 :class:`ContactMechanics` builds, once per system and scheme, every small function the contact
-program is made of: the initial, node and sub-node momentum rows, gaps, Newton's impact law
-(weighted and with its ℓ1 slacks), the penalty terms, the sub-node momenta, and the RK4 flow
+program is made of: the initial, node and sub-node momentum rows, the stage rows, gaps, Newton's impact
+law (weighted and with its ℓ1 slacks), the penalty terms, the sub-node momenta, and the RK4 flow
 used by the event-located guess.  The rows they form are :mod:`.transcription`; the
 derivation is ``docs/derivations.md``, "Contact trajectories".
+
+Every scheme: a step is split at its sub-node ``q̃_k`` into two parts, ``[q_k, q̃_k]`` of length ``αh`` and
+``[q̃_k, q_{k+1}]`` of length ``(1 − α)h``, and each part is one step of the scheme with its own stages
+(``Z⁻_k`` and ``Z⁺_k``, ``stages · n`` values each; none for midpoint and trapezoid, whose element functions
+are then exactly the two-point ones).  An impact at the sub-node therefore sits between two smooth
+pieces, each integrated at the scheme's order.
 """
 from __future__ import annotations
 
@@ -36,10 +42,15 @@ class ContactMechanics:
         if system.controls:
             raise InputError("contact with controls is optimal control through contact, not supported yet")
         dm = DiscreteMechanics(system, scheme)
-        if dm.s:
-            raise InputError(f"contact trajectories need a two-point scheme (midpoint or trapezoid), not {scheme}")
         self.system, self.dm = system, dm
         self.n, self.c, self.e = n, c, e = dm.n, system.ncontact, system.contact.restitution
+        #: stage values per part of a step (each step has two parts, split at its sub-node), and the
+        #: constraint multipliers at those stages (none for the two-point schemes)
+        self.s = s = dm.s
+        self.ms = dm.scheme.stages * dm.m if s else 0
+        #: the two-point functions of the event-located guess (the fallback's guess flies with RK4 and holds
+        #: contacts with the midpoint's rows; the stages then start on the straight lines, stage_guess)
+        self.guide = self if not s else ContactMechanics(system, "midpoint")
         # holonomic constraints c(q) = 0 (m of them): multipliers at the nodes and the sub-nodes
         self.m = m = dm.m
         cfun = system.constraint if m else None
@@ -47,14 +58,15 @@ class ContactMechanics:
         qc = ca.SX.sym("qc", n)
         self.constraint_row = ca.Function("c_con", [qc], [cfun(qc)[0] if m else ca.SX(0, 1)])
         z = ca.SX(0, 1)
+        self._z = z
         if system.forced:
             # forces (Force, Damping; no time): the discrete Lagrange–d'Alembert momenta over each part of a
             # step, p⁺ = −D₁L_d − f⁻ and p⁻ = D₂L_d + f⁺, stand where D₁L_d and D₂L_d stand without them
-            D1 = lambda a, b, tau: -dm.p_plus(a, z, b, tau)  # noqa: E731
-            D2 = lambda a, b, tau: dm.p_minus(a, z, b, tau)  # noqa: E731
+            D1 = lambda a, Z, b, tau: -dm.p_plus(a, Z, b, tau)  # noqa: E731
+            D2 = lambda a, Z, b, tau: dm.p_minus(a, Z, b, tau)  # noqa: E731
         else:
-            D1 = lambda a, b, tau: dm.D1(a, z, b, tau)  # noqa: E731
-            D2 = lambda a, b, tau: dm.D2(a, z, b, tau)  # noqa: E731
+            D1 = lambda a, Z, b, tau: dm.D1(a, Z, b, tau)  # noqa: E731
+            D2 = lambda a, Z, b, tau: dm.D2(a, Z, b, tau)  # noqa: E731
         gapf = system.gap
         Mf = system.mass_matrix
         sym = ca.SX.sym
@@ -65,13 +77,17 @@ class ContactMechanics:
         a, am = 0.5 + b, 0.5 + bm
         J = lambda q: gapf(q)[1]  # noqa: E731
         phi = lambda q: gapf(q)[0]  # noqa: E731
+        # the stages of the step's two parts (Z⁻ on [q_k, q̃_k], Z⁺ on [q̃_k, q_{k+1}]) and of the previous
+        # step's second part (Z⁺_{k−1}, for the node row); inputs only for a scheme with stages
+        zm, zp, zpm = (sym(nm, s) for nm in ("zm", "zp", "zpm")) if s else (z, z, z)
+        xzs, xzn, xz1, xz2 = ([zm, zp], [zpm, zm], [zm], [zp]) if s else ([], [], [], [])
         # constraint forces −C(q)ᵀλ at the nodes and −C(q̃)ᵀλ̃ at the sub-nodes (the sign of the smooth
         # transcription's DEL rows); λ, λ̃ have no entries without constraints
         # (the multipliers are inputs only where there are constraints: a contact scene without them
         # keeps the element functions it had)
         xl, xls = ([lam], [lams]) if m else ([], [])
-        self._kinematics = lambda xp, x, xn, tau_m, tau_p: _sub_node_kinematics(  # noqa: E731
-            D1, D2, J, Mf, C, e, xp, x, xn, tau_m, tau_p)
+        self._kinematics = lambda xp, x, xn, tau_m, tau_p, Zm, Zp: _sub_node_kinematics(  # noqa: E731
+            D1, D2, J, Mf, C, e, xp, x, xn, tau_m, tau_p, Zm, Zp)
         self._C, self._D1, self._J = C, D1, J
         # Coulomb friction (only where a coefficient is positive: a frictionless system keeps its rows and
         # element functions exactly): the tangential force is ρ times the normal one, at the node (ρ ν) and
@@ -85,14 +101,22 @@ class ContactMechanics:
         xr = [rho] if self.friction else []
         frn, frs = (rho[:c], rho[c:]) if self.friction else (None, None)
         # every node and sub-node row of the program, the held step and the march is node_row or sub_row
-        self.initial = ca.Function("c_initial", [q0, qs, b, p0, nu, h] + xl + xr,
-                                   [self.node_row(p0, q0, qs, b, nu, lam, h, frn)])
+        self.initial = ca.Function("c_initial", [q0, qs, b, p0, nu, h] + xl + xr + xz1,
+                                   [self.node_row(p0, q0, qs, b, nu, lam, h, frn, zm)])
         hp = sym("hp")
-        self.node = ca.Function("c_node", [qsm, bm, qk, qs, b, nu, hp, h] + xl + xr,
-                                [self.node_row(D2(qsm, qk, (1 - am) * hp), qk, qs, b, nu, lam, h, frn)])
-        sub_row, r = self.sub_row(qk, qs, qk1, b, mu, lams, h, frs)
-        pm, pp = D2(qk, qs, a * h), -D1(qs, qk1, (1 - a) * h)          # the momenta on either side of q̃
-        self.sub = ca.Function("c_sub", [qk, qs, qk1, b, mu, h] + xls + xr, [sub_row])
+        self.node = ca.Function("c_node", [qsm, bm, qk, qs, b, nu, hp, h] + xl + xr + xzn,
+                                [self.node_row(D2(qsm, zpm, qk, (1 - am) * hp), qk, qs, b, nu, lam, h, frn, zm)])
+        sub_row, r = self.sub_row(qk, qs, qk1, b, mu, lams, h, frs, zm, zp)
+        pm, pp = D2(qk, zm, qs, a * h), -D1(qs, zp, qk1, (1 - a) * h)          # the momenta on either side of q̃
+        self.sub = ca.Function("c_sub", [qk, qs, qk1, b, mu, h] + xls + xr + xzs, [sub_row])
+        if s:
+            #: the stage rows of both parts of a step (stage_rows) and the constraints at their stages
+            lz = sym("lamz", 2 * self.ms)
+            xlz = [lz] if m else []
+            self.stage = ca.Function("c_stage", [qk, qs, qk1, b, h, zm, zp] + xlz,
+                                     [self.stage_rows(qk, qs, qk1, b, h, zm, zp, lz)])
+            if m:
+                self.stage_constraint = ca.Function("c_stage_con", [zm, zp], [self.stage_constraints(zm, zp)])
         if self.friction:
             #: the slip velocities the friction opposes, [node part; sub-node part] (see slip)
             self.slip_row = ca.Function("c_slip", [qk, qs, qk1, b, h], [self.slip(qk, qs, qk1, b, h)])
@@ -106,44 +130,78 @@ class ContactMechanics:
         # separately (ContactNLP.residual).
         ell = sym("delta", c)
         self.impact_law, self.law_slack = self._law_functions(
-            "", [qk, qs, qk1, b, mu], [h, ell], mu * r * phi(qk1) / ell)
+            "", [qk, qs, qk1, b, mu], [h, ell] + xzs, mu * r * phi(qk1) / ell)
         # the unweighted law and the next node's gaps, for the residual of real (not caught) impacts
-        self.law_check = ca.Function("c_law_check", [qk, qs, qk1, b, mu, h], [mu * r, phi(qk1)])
+        self.law_check = ca.Function("c_law_check", [qk, qs, qk1, b, mu, h] + xzs, [mu * r, phi(qk1)])
         self.pair = ca.Function("c_pair", [qk, nu], [ca.vertcat(phi(qk), nu)])
         self.gap_row = ca.Function("c_gap", [qk], [phi(qk)])
         w = sym("w")
         self.split = ca.Function("c_split", [b, w], [w * b * b])
         self._objective_functions()
-        self.p_minus = ca.Function("p_minus_sub", [qk, qs, b, h], [pm])
-        self.p_plus = ca.Function("p_plus_sub", [qs, qk1, b, h], [pp])
-        self.p_node_plus = ca.Function("p_node_plus", [qk, qs, b, h], [-D1(qk, qs, a * h)])
-        self.p_node_minus = ca.Function("p_node_minus", [qsm, bm, qk, h], [D2(qsm, qk, (1 - am) * h)])
-        # a held step of the guess (α = ½): the node row with the incoming momentum p, the sub-node row,
-        # and, for the contacts held (mask 1), both gaps closed; the others' force and impulse pinned
-        # to 0.  Square in (q̃, q_{k+1}, ν, μ): the discrete motion with the held contacts as
-        # constraints (docs/derivations.md, "Contact trajectories", §5, "Held contacts")
-        mask = sym("mask", c)
-        xh = ca.vertcat(qs, qk1, nu, mu)
-        zm = ca.SX.zeros(m)
-        Rh = ca.vertcat(self.node_row(p0, qk, qs, 0.0, nu * mask, zm, h),
-                        self.sub_row(qk, qs, qk1, 0.0, mu * mask, zm, h)[0],
-                        mask * phi(qs) + (1 - mask) * mu, mask * phi(qk1) + (1 - mask) * nu)
-        self.held_step = ca.Function("held_step", [xh, qk, p0, mask, h], [Rh, ca.jacobian(Rh, xh)])
-        # free sub-node (no impact, α = ½): Newton function for the guess
-        F = D2(qk, qs, 0.5 * h) + D1(qs, qk1, 0.5 * h)
-        self.free_sub = ca.Function("free_sub", [qk, qs, qk1, h], [F, ca.jacobian(F, qs)])
-        # RK4 flow over tau with GUESS_SUBSTEPS substeps, for the event-located guess
-        v, tau = sym("v", n), sym("tau")
-        acc = system.acceleration
-        x, dt = ca.vertcat(qk, v), tau / GUESS_SUBSTEPS
-        f = lambda x: ca.vertcat(x[n:], acc(x[:n], x[n:]))  # noqa: E731
-        for _ in range(GUESS_SUBSTEPS):
-            x = rk4_step(f, x, dt)
-        self.flow = ca.Function("flow", [qk, v, tau], [x[:n], x[n:], phi(x[:n])])
-        self._flights: Dict[int, ca.Function] = {}
+        self.p_minus = ca.Function("p_minus_sub", [qk, qs, b, h] + xz1, [pm])
+        self.p_plus = ca.Function("p_plus_sub", [qs, qk1, b, h] + xz2, [pp])
+        self.p_node_plus = ca.Function("p_node_plus", [qk, qs, b, h] + xz1, [-D1(qk, zm, qs, a * h)])
+        self.p_node_minus = ca.Function("p_node_minus", [qsm, bm, qk, h] + xz2, [D2(qsm, zp, qk, (1 - am) * h)])
+        if not s:
+            # a held step of the guess (α = ½): the node row with the incoming momentum p, the sub-node row,
+            # and, for the contacts held (mask 1), both gaps closed; the others' force and impulse pinned
+            # to 0.  Square in (q̃, q_{k+1}, ν, μ): the discrete motion with the held contacts as
+            # constraints (docs/derivations.md, "Contact trajectories", §5, "Held contacts").  (A scheme with
+            # stages guesses with its guide's, the midpoint's.)
+            mask = sym("mask", c)
+            xh = ca.vertcat(qs, qk1, nu, mu)
+            zm0 = ca.SX.zeros(m)
+            Rh = ca.vertcat(self.node_row(p0, qk, qs, 0.0, nu * mask, zm0, h),
+                            self.sub_row(qk, qs, qk1, 0.0, mu * mask, zm0, h)[0],
+                            mask * phi(qs) + (1 - mask) * mu, mask * phi(qk1) + (1 - mask) * nu)
+            self.held_step = ca.Function("held_step", [xh, qk, p0, mask, h], [Rh, ca.jacobian(Rh, xh)])
+            # free sub-node (no impact, α = ½): Newton function for the guess
+            F = D2(qk, z, qs, 0.5 * h) + D1(qs, z, qk1, 0.5 * h)
+            self.free_sub = ca.Function("free_sub", [qk, qs, qk1, h], [F, ca.jacobian(F, qs)])
+            # RK4 flow over tau with GUESS_SUBSTEPS substeps, for the event-located guess
+            v, tau = sym("v", n), sym("tau")
+            acc = system.acceleration
+            x, dt = ca.vertcat(qk, v), tau / GUESS_SUBSTEPS
+            f = lambda x: ca.vertcat(x[n:], acc(x[:n], x[n:]))  # noqa: E731
+            for _ in range(GUESS_SUBSTEPS):
+                x = rk4_step(f, x, dt)
+            self.flow = ca.Function("flow", [qk, v, tau], [x[:n], x[n:], phi(x[:n])])
+            self._flights: Dict[int, ca.Function] = {}
         self._march_function(phi)
-        self.node_law_fn = ca.Function("c_node_law", [p0, qk, qs, b, h], [self.node_law(p0, qk, qs, b, h)])
-        self.acc_normal = ca.Function("acc_normal", [qk, v], [ca.mtimes(J(qk), acc(qk, v))])
+        self.node_law_fn = ca.Function("c_node_law", [p0, qk, qs, b, h] + xz1, [self.node_law(p0, qk, qs, b, h, zm)])
+        self.acc_normal = self.guide.acc_normal if s else ca.Function(
+            "acc_normal", [qk, v], [ca.mtimes(J(qk), acc(qk, v))])
+
+    # ------------------------------------------------------------------ stages
+    def stage_guess(self, Q, S) -> np.ndarray:
+        """Stages ``(L, 2s)`` on the straight lines of each step's parts, ``q_k → q̃_k`` and ``q̃_k → q_{k+1}``
+        (``Q`` the ``L + 1`` nodes, ``S`` the ``L`` sub-nodes), at the scheme's stage times."""
+        Q, S = np.atleast_2d(Q), np.atleast_2d(S)
+        st = self.dm.scheme
+        return np.hstack([st.stage_guess(Q[:-1], S), st.stage_guess(S, Q[1:])])
+
+    def stage_parts(self, Z):
+        """``([Z⁻], [Z⁺])`` of stage rows ``Z`` (``(…, 2s)``): the arguments the element functions take
+        (both empty for a two-point scheme)."""
+        if not self.s:
+            return [], []
+        Z = np.asarray(Z)
+        return [Z[..., :self.s]], [Z[..., self.s:]]
+
+    def stage_rows(self, qk, qs, qn, b, h, zm, zp, lz):
+        """The stationarity of the action in the stages of both parts of a step, with the forces on the
+        stages and the constraint forces there: each part's ``(∂L_d/∂Z + f^Z)/h − (τ/h) w ∇c(Z)ᵀν_Z``
+        (:attr:`DiscreteMechanics.stage_residual`, over the part's length τ, scaled by τ/h so every
+        row of a step is a momentum per ``h``)."""
+        a, ms = 0.5 + b, self.ms
+        sr = self.dm.stage_residual
+        l1, l2 = (lz[:ms], lz[ms:]) if self.m else (ca.SX(0, 1), ca.SX(0, 1))
+        return ca.vertcat(sr(qk, zm, qs, l1, a * h) * a, sr(qs, zp, qn, l2, (1 - a) * h) * (1 - a))
+
+    def stage_constraints(self, zm, zp):
+        """``c(Z_j) = 0`` at every stage of both parts of a step."""
+        n, st = self.n, self.dm.scheme.stages
+        return ca.vertcat(*[self.constraint_row(Z[j * n:(j + 1) * n]) for Z in (zm, zp) for j in range(st)])
 
 
     # ------------------------------------------------------------------ the rows, built once
@@ -154,41 +212,66 @@ class ContactMechanics:
         ``D(q̃_k)(q_{k+1} − q_k)/h``.  Sticking on both holds the contact point still through the step."""
         return ca.vertcat(ca.mtimes(self._D(qk), qs - qk) / ((0.5 + b) * h), ca.mtimes(self._D(qs), qn - qk) / h)
 
-    def node_row(self, p_in, qk, qs, b, nu, lam, h, rho=None):
+    def node_row(self, p_in, qk, qs, b, nu, lam, h, rho=None, zm=None):
         """The momentum balance at a node ``q_k`` with the incoming momentum ``p_in`` (``p_0`` at the start,
         ``D₂L_d`` of the previous sub-interval elsewhere): ``(p_in + D₁L_d(q_k, q̃_k, αh))/h + ∇φ(q_k)ᵀν
         − ∇c(q_k)ᵀλ``, α = ½ + β; ``ν`` the contact forces (weighted by the step), ``λ`` the constraint
-        multipliers (no entries without constraints).  The transcription's initial and node rows, the
-        held step and the march step are all this row."""
-        row = (p_in + self._D1(qk, qs, (0.5 + b) * h)) / h + ca.mtimes(self._J(qk).T, nu)
+        multipliers (no entries without constraints); ``zm`` the stages of the step's first part (none
+        for a two-point scheme).  The transcription's initial and node rows, the held step and the march
+        step are all this row."""
+        row = (p_in + self._D1(qk, self._z if zm is None else zm, qs, (0.5 + b) * h)) / h + ca.mtimes(self._J(qk).T, nu)
         if rho is not None:   # friction: the tangential force ρ ν along the slip directions D(q_k)
             row = row + ca.mtimes(self._D(qk).T, rho * nu)
         return row - ca.mtimes(self._C(qk).T, lam)
 
-    def sub_row(self, qk, qs, qn, b, mu, lams, h, rho=None):
+    def sub_row(self, qk, qs, qn, b, mu, lams, h, rho=None, zm=None, zp=None):
         """The momentum balance at the sub-node ``q̃_k`` between ``q_k`` and ``q_{k+1}``, with the impulses
         ``μ``: ``(p̃⁻ − p̃⁺ + ∇φ(q̃)ᵀμ)/h − ∇c(q̃)ᵀλ̃``; and Newton's law residual ``r`` there (see
-        :func:`_sub_node_kinematics`).  Returns ``(row, r)``."""
+        :func:`_sub_node_kinematics`; ``zm``, ``zp`` the stages of the parts either side).  Returns
+        ``(row, r)``."""
         a = 0.5 + b
-        pm, pp, r = self._kinematics(qk, qs, qn, a * h, (1 - a) * h)
+        pm, pp, r = self._kinematics(qk, qs, qn, a * h, (1 - a) * h, self._z if zm is None else zm,
+                                     self._z if zp is None else zp)
         row = pm - pp + ca.mtimes(self._J(qs).T, mu)
         if rho is not None:   # friction: the tangential impulse ρ μ
             row = row + ca.mtimes(self._D(qs).T, rho * mu)
         return row / h - ca.mtimes(self._C(qs).T, lams), r
 
-    def node_law(self, p_in, qk, qs, b, h):
+    def node_law(self, p_in, qk, qs, b, h, zm=None):
         """Newton's law at the node ``q_k`` itself: ``∇φ(q_k) Π(q_k) (p_k⁺ + e p_in)`` with ``p_k⁺ =
         −D₁L_d(q_k, q̃_k, αh)`` (the node row makes ``p_k⁺ − p_in`` the node's impulse ``h∇φᵀν``).  A flight
         that lands exactly on a node (to rounding) has its impact there: the sub-nodes, strictly inside
         their steps, cannot time it, and the node's force ``ν`` would otherwise stop the arrival plastically."""
-        pp = -self._D1(qk, qs, (0.5 + b) * h)
+        pp = -self._D1(qk, self._z if zm is None else zm, qs, (0.5 + b) * h)
         return ca.mtimes(self._J(qk), _tangent_velocity(self.system.mass_matrix(qk), self._C(qk), pp + self.e * p_in))
+
+    @property
+    def layout(self) -> Dict[str, slice]:
+        """Slices of the march step's unknowns (:meth:`_march_function`) by the transcription's names."""
+        if not hasattr(self, "_layout"):
+            n, c, m = self.n, self.c, self.m
+            sizes = [("qs", n), ("q", n), ("beta", 1), ("nu", c), ("mu", c), ("lam", m), ("lam_sub", m),
+                     ("fratio", 2 * c if self.friction else 0), ("zs", 2 * self.s), ("lam_stage", 2 * self.ms)]
+            out, o = {}, 0
+            for name, size in sizes:
+                out[name] = slice(o, o + size)
+                o += size
+            self._layout, self._nx = out, o
+        return self._layout
+
+    @property
+    def nx(self) -> int:
+        """The number of unknowns of one march step."""
+        self.layout
+        return self._nx
 
     def _march_function(self, phi):
         """One step of the transcription's own rows, each contact in a mode given by masks (the march).
 
-        Unknowns ``x = (q̃, q_{k+1}, β, ν, μ, λ_k, λ̃_k)`` (the multipliers of the holonomic constraints,
-        whose rows ``c(q̃) = 0``, ``c(q_{k+1}) = 0`` close the step; none without constraints); inputs the node ``q_k``, its incoming momentum
+        Unknowns ``x = (q̃, q_{k+1}, β, ν, μ, λ_k, λ̃_k, ρ, Z⁻, Z⁺, λ_Z)`` (:attr:`layout`: the multipliers
+        of the holonomic constraints, whose rows ``c(q̃) = 0``, ``c(q_{k+1}) = 0`` close the step; the
+        friction ratios; the stages of both parts, whose rows are :meth:`stage_rows`, and the constraint
+        multipliers there; each empty where the scene has no such term); inputs the node ``q_k``, its incoming momentum
         ``p_k⁻``, ``h``, the length ``ℓ`` and the scales of ν and μ, and per contact the masks
         ``t`` (the contact that times the sub-node: ``φ_t(q̃) = 0`` replaces ``β = β_fix``),
         ``held`` (``φ(q̃) = 0`` replaces ``ν = 0``), ``closed`` (``φ(q_{k+1}) = 0`` replaces
@@ -200,27 +283,31 @@ class ContactMechanics:
         program's rows (``docs/derivations.md``, "Contact trajectories", "The march").
         """
         n, c, m, sym = self.n, self.c, self.m, ca.SX.sym
-        nf = 2 * c if self.friction else 0
-        x = sym("x", 2 * n + 1 + 2 * c + 2 * m + nf)
-        qs, qn, b = x[:n], x[n:2 * n], x[2 * n]
-        o = 2 * n + 1
-        nu, mu, lam, lams = x[o:o + c], x[o + c:o + 2 * c], x[o + 2 * c:o + 2 * c + m], x[o + 2 * c + m:o + 2 * c + 2 * m]
-        rho = x[o + 2 * c + 2 * m:] if self.friction else None
+        L = self.layout
+        x = sym("x", self.nx)
+        qs, qn, b = x[L["qs"]], x[L["q"]], x[2 * n]
+        nu, mu, lam, lams = x[L["nu"]], x[L["mu"]], x[L["lam"]], x[L["lam_sub"]]
+        rho = x[L["fratio"]] if self.friction else None
         rho_n, rho_s = (rho[:c], rho[c:]) if self.friction else (None, None)
+        zm, zp = (x[L["zs"]][:self.s], x[L["zs"]][self.s:]) if self.s else (None, None)
         con = self.constraint_row
         qk, p, h, ell = sym("q", n), sym("p", n), sym("h"), sym("ell")
         snu, smu, vref, bfix = sym("snu"), sym("smu"), sym("vref"), sym("bfix")
         t, held, closed, law = sym("t", c), sym("held", c), sym("closed", c), sym("law", c)
         node, fixed, mufix, nfixed = sym("node", c), sym("fixed", c), sym("mufix", c), sym("nfixed", c)
-        sub_row, r = self.sub_row(qk, qs, qn, b, mu, lams, h, rho_s)
+        sub_row, r = self.sub_row(qk, qs, qn, b, mu, lams, h, rho_s, zm, zp)
         free = 1 - held - node - nfixed
         other = 1 - closed - law - fixed
-        R = ca.vertcat(self.node_row(p, qk, qs, b, nu, lam, h, rho_n), sub_row,
+        R = ca.vertcat(self.node_row(p, qk, qs, b, nu, lam, h, rho_n, zm), sub_row,
                        (1 - ca.sum1(t)) * (b - bfix) + ca.dot(t, phi(qs)) / ell,
-                       held * phi(qs) / ell + node * self.node_law(p, qk, qs, b, h) / vref
+                       held * phi(qs) / ell + node * self.node_law(p, qk, qs, b, h, zm) / vref
                        + nfixed * (nu - mufix) / snu + free * nu / snu,
                        closed * phi(qn) / ell + law * r / vref + fixed * (mu - mufix) / smu + other * mu / smu,
                        con(qs), con(qn))
+        if self.s:
+            R = ca.vertcat(R, self.stage_rows(qk, qs, qn, b, h, zm, zp, x[L["lam_stage"]]))
+            if m:
+                R = ca.vertcat(R, self.stage_constraints(zm, zp))
         extra = []
         if self.friction:
             # per contact: stick (the slip vanishes), slide (ρ = −sgn μ_f, sgn the slip's sign), or no
@@ -269,7 +356,7 @@ class ContactMechanics:
         self.slack_penalty = ca.Function("c_slack_pen", [sp, sm, rho], [rho * ca.sum1(sp + sm)])
 
 
-def _sub_node_kinematics(D1, D2, J, Mf, C, e, xp, x, xn, tau_m, tau_p):
+def _sub_node_kinematics(D1, D2, J, Mf, C, e, xp, x, xn, tau_m, tau_p, Zm, Zp):
     """Momenta on both sides of a sub-node ``x`` between ``xp`` and ``xn`` (sub-intervals ``tau_m``,
     ``tau_p``), ``p̃⁻ = D₂L_d(xp, x)`` and ``p̃⁺ = −D₁L_d(x, xn)``, and Newton's law residual
     ``r = ∇φ(x) Π(x) (p̃⁺ + e p̃⁻)`` (zero for every contact that obeys the law).
@@ -277,8 +364,8 @@ def _sub_node_kinematics(D1, D2, J, Mf, C, e, xp, x, xn, tau_m, tau_p):
     ``Π = M⁻¹ − M⁻¹Cᵀ(CM⁻¹Cᵀ)⁻¹CM⁻¹`` maps a momentum to the velocity tangent to the holonomic
     constraints (``M⁻¹`` without them): the law acts on the velocities the constraints allow, and for
     ``e = 1`` their kinetic energy ``½ v̄ᵀMv̄`` is the same on both sides of the impact."""
-    pm = D2(xp, x, tau_m)
-    pp = -D1(x, xn, tau_p)
+    pm = D2(xp, Zm, x, tau_m)
+    pp = -D1(x, Zp, xn, tau_p)
     return pm, pp, ca.mtimes(J(x), _tangent_velocity(Mf(x), C(x), pp + e * pm))
 
 

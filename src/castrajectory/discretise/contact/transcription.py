@@ -151,6 +151,12 @@ class ContactTranscription:
         if m:
             nlp.variable("lam", L * m)
             nlp.variable("lam_sub", L * m)
+        # a scheme with stages: the stages of both parts of every step, and their constraint multipliers
+        s = cm.s
+        if s:
+            nlp.variable("zs", L * 2 * s)
+            if m:
+                nlp.variable("lam_stage", L * 2 * cm.ms)
         nlp.parameter("p0", n)
         nlp.parameter("rho", 1, value=PENALTY[0])
         # weight of the centred-split term (0 where every β is fixed or timed: a decided branch)
@@ -168,17 +174,27 @@ class ContactTranscription:
         LAM = (lambda i: [X(nlp.index("lam").reshape(L, m)[i])]) if m else (lambda i: [])  # noqa: E731
         LAMS = (lambda i: [X(nlp.index("lam_sub").reshape(L, m)[i])]) if m else (lambda i: [])  # noqa: E731
         RHO = (lambda i: [X(nlp.index("fratio").reshape(L, 2 * c)[i])]) if cm.friction else (lambda i: [])  # noqa: E731
+        # the stages of a step's first part (ZM) and second part (ZP), none for a two-point scheme
+        ZI = nlp.index("zs").reshape(L, 2 * s) if s else None
+        ZM = (lambda i: [X(ZI[i, :s])]) if s else (lambda i: [])  # noqa: E731
+        ZP = (lambda i: [X(ZI[i, s:])]) if s else (lambda i: [])  # noqa: E731
         Hc = self.H.reshape(-1, 1)
         k = np.arange(L)
         rho = P(nlp.parameter_index("rho"))
         nlp.equal_elements("initial", cm.initial,
                            [X(Q[0]), X(S[0]), X(B[0]), P(nlp.parameter_index("p0")), X(NU[0]), Hc[0]] + LAM(0)
-                           + RHO(0))
+                           + RHO(0) + ZM(0))
         if L > 1:
             i = np.arange(1, L)
             nlp.equal_elements("node", cm.node, [X(S[i - 1]), X(B[i - 1]), X(Q[i]), X(S[i]), X(B[i]),
-                                                 X(NU[i]), Hc[i - 1], Hc[i]] + LAM(i) + RHO(i))
-        nlp.equal_elements("sub", cm.sub, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), Hc] + LAMS(k) + RHO(k))
+                                                 X(NU[i]), Hc[i - 1], Hc[i]] + LAM(i) + RHO(i) + ZP(i - 1) + ZM(i))
+        nlp.equal_elements("sub", cm.sub, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), Hc] + LAMS(k) + RHO(k)
+                           + ZM(k) + ZP(k))
+        if s:
+            LAMZ = [X(nlp.index("lam_stage").reshape(L, 2 * cm.ms))] if m else []
+            nlp.equal_elements("stage", cm.stage, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), Hc] + ZM(k) + ZP(k) + LAMZ)
+            if m:
+                nlp.equal_elements("stage_constraint", cm.stage_constraint, ZM(k) + ZP(k))
         if cm.friction:
             # the step's slip velocity: its bounds are the friction's modes (ContactNLP.solve_modes)
             nlp.inequality_elements("slip", cm.slip_row, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), Hc],
@@ -190,8 +206,8 @@ class ContactTranscription:
         nlp.inequality_elements("sub_gap", cm.gap_row, [X(S)], lb=0.0)
         LL = P(nlp.parameter_index("law_length").reshape(L, c))
         nlp.equal_elements("impact_law", cm.law_slack,
-                           [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), X(SP[k]), X(SM[k]), Hc, LL,
-                            np.array([self.scales_law])])
+                           [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), X(SP[k]), X(SM[k]), Hc, LL]
+                           + ZM(k) + ZP(k) + [np.array([self.scales_law])])
         # exact (l1) penalties: complementarity products and the impact-law slacks
         nlp.minimize_elements("node_penalty", cm.product_penalty, [X(Q[k]), X(NU[k]), rho, ell * pref / Hc])
         nlp.minimize_elements("sub_penalty", cm.product_penalty, [X(S[k]), X(MU[k]), rho, np.array([ell * pref])])
@@ -240,7 +256,9 @@ class ContactTranscription:
         S = values["qs"].reshape(L, cm.n)
         MU = values["mu"].reshape(L, c)
         B = values["beta"].reshape(L)
-        raw, nxt = (np.asarray(v).reshape(c, L).T for v in cm.law_check.map(L)(Q[:-1].T, S.T, Q[1:].T, B, MU.T, H))
+        zm, zp = self._stages(values)
+        raw, nxt = (np.asarray(v).reshape(c, L).T for v in cm.law_check.map(L)(Q[:-1].T, S.T, Q[1:].T, B, MU.T, H,
+                                                                               *[z.T for z in zm + zp]))
         nxt2 = np.vstack([nxt[1:], nxt[-1:]])
         leaves = (nxt > self.open_gap) | (nxt2 > self.open_gap)
         # ... if the contact arrived faster than the grid resolves (v_z = a h / e): a slower arrival
@@ -248,7 +266,7 @@ class ContactTranscription:
         # accumulation even where the contact opens again soon after
         ks = np.where(np.any(leaves & (MU > 0), axis=1))[0]
         if ks.size:
-            pm = np.asarray(cm.p_minus.map(ks.size)(Q[ks].T, S[ks].T, B[ks], H[ks])).T
+            pm = np.asarray(cm.p_minus.map(ks.size)(Q[ks].T, S[ks].T, B[ks], H[ks], *[z[ks].T for z in zm])).T
             for i, k in enumerate(ks):
                 J = np.asarray(cm.system.gap(S[k])[1])
                 vn = J @ np.linalg.solve(np.asarray(cm.system.mass_matrix(S[k])), pm[i])
@@ -260,13 +278,19 @@ class ContactTranscription:
             k += 1
             if not (nxt[k, j] > self.open_gap or nxt2[k, j] > self.open_gap):
                 continue
-            p_in = np.asarray(cm.p_node_minus(S[k - 1], B[k - 1], Q[k], H[k - 1])).reshape(-1)
+            p_in = np.asarray(cm.p_node_minus(S[k - 1], B[k - 1], Q[k], H[k - 1], *[z[k - 1] for z in zp])).reshape(-1)
             J = np.asarray(cm.system.gap(Q[k])[1])[j]
             if -(J @ np.linalg.solve(np.asarray(cm.system.mass_matrix(Q[k])), p_in)) > self.v_zeno:
-                r = float(np.asarray(cm.node_law_fn(p_in, Q[k], S[k], B[k], H[k])).reshape(-1)[j])
+                r = float(np.asarray(cm.node_law_fn(p_in, Q[k], S[k], B[k], H[k], *[z[k] for z in zm])).reshape(-1)[j])
                 raw[k, j] = max(abs(raw[k, j]), abs(H[k] * NU[k, j] * r))
                 leaves[k, j] = True
         return raw, leaves
+
+    def _stages(self, values):
+        """``([Z⁻], [Z⁺])`` per step, ``(L, s)`` each (both empty for a two-point scheme)."""
+        if not self.cm.s:
+            return [], []
+        return self.cm.stage_parts(np.asarray(values["zs"], float).reshape(self.L, 2 * self.cm.s))
 
     def residual(self, values) -> float:
         """Largest complementarity violation: |φ ν h|, |φ μ| and |μ r| (scaled as in the penalties)."""
@@ -279,8 +303,9 @@ class ContactTranscription:
         B = values["beta"].reshape(L)
         gq = np.asarray(cm.gap_row.map(L)(Q[:-1].T)).reshape(c, L).T
         gs = np.asarray(cm.gap_row.map(L)(S.T)).reshape(c, L).T
+        zm, zp = self._stages(values)
         law = np.asarray(cm.impact_law.map(L)(Q[:-1].T, S.T, Q[1:].T, B, MU.T, H,
-                                              self._law_length.T)).reshape(c, L).T
+                                              self._law_length.T, *[z.T for z in zm + zp])).reshape(c, L).T
         # Newton's law of every impact after which the body leaves, unweighted (_raw_law)
         raw, leaves = self._raw_law(values)
         law = np.where(self.law_exempt, 0.0, law)

@@ -78,9 +78,9 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
             # break; one function per length and system, the steps past L not used)
             K = min(span, L - k)
             Qn, Pn, X, Gs, Gn, Rr = (a[:, :K] if a.ndim == 2 else a[:K] for a in step.chunk(span, q, p, h, held))
-            n, c, m = cm.n, cm.c, cm.m
-            o = 2 * n + 1
-            NU, MU = X[o:o + c], X[o + c:o + 2 * c]
+            c = cm.c
+            lay = cm.layout
+            NU, MU = X[lay["nu"]], X[lay["mu"]]
             NU[~held], MU[~held] = 0.0, 0.0          # open: their rows ν = μ = 0, exactly
             ok = (Rr <= CHUNK_TOL * (1.0 + np.max(np.abs(X), axis=0)))
             ok &= np.all((Gs > tol) & (Gn > tol) | held[:, None], axis=0)
@@ -90,9 +90,9 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
             if i:
                 modes = [H if hj else O for hj in held]
                 for j in range(i):
-                    _record(rows, Qn[:, j], X[:n, j], 0.0, NU[:, j], MU[:, j], X[o + 2 * c:o + 2 * c + m, j],
-                            X[o + 2 * c + m:o + 2 * c + 2 * m, j], np.zeros(c, bool), h, k + j, modes,
-                            np.zeros(2 * c), [FREE] * (2 * c))
+                    vals = {name: X[sl, j] for name, sl in lay.items()}
+                    vals.update(q=Qn[:, j], beta=0.0, nu=NU[:, j], mu=MU[:, j], fratio=np.zeros(2 * c))
+                    _record(rows, vals, np.zeros(c, bool), h, k + j, modes, [FREE] * (2 * c))
                 step.fprev = [FREE] * (2 * c)
                 q, p, g_q = Qn[:, i - 1].copy(), Pn[:, i - 1].copy(), Gn[:, i - 1].copy()
                 held_prev = held.copy()
@@ -109,30 +109,40 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
                 if trace is not None:
                     trace.append((k, hk) + out + (q, p, g_q, held_prev))
                 return None
-            qs, qn, b, nu, mu, lam, lams, modes, gn, rho, fmodes = out
-            _record(rows, qn, qs, b, nu, mu, lam, lams, np.array([m == I for m in modes]) & (gn > tol), hk, k, modes,
-                    rho if cm.friction else np.zeros(2 * c), fmodes)
+            modes, gn, fmodes = out["modes"], out["gn"], out["fmodes"]
+            _record(rows, out, np.array([m == I for m in modes]) & (gn > tol), hk, k, modes, fmodes)
             step.fprev = list(fmodes)
-            p = np.asarray(cm.p_node_minus(qs, b, qn, hk)).reshape(-1)
+            qn = out["q"]
+            p = np.asarray(cm.p_node_minus(out["qs"], out["beta"], qn, hk,
+                                           *cm.stage_parts(out["zs"])[1])).reshape(-1)
             held_prev = np.array([m in (H, C) for m in modes])
             q, g_q = qn, gn
         k += 1
     out = {key: np.asarray(val) for key, val in rows.items()}
-    for key in ("q", "qs", "mu", "nu", "lam", "lam_sub", "fratio"):
-        out[key] = out[key].reshape(-1)
+    for key in _VALUES:
+        if key != "beta":
+            out[key] = out[key].reshape(-1)
     if not cm.m:
         del out["lam"], out["lam_sub"]
     if not cm.friction:
         del out["fratio"], out["fmodes"]
+    if not cm.s:
+        del out["zs"]
+    if not (cm.s and cm.m):
+        del out["lam_stage"]
     return out
 
 
-#: The per-step records of the march (``q`` is the step's end node).
-_ROWS = ("q", "qs", "beta", "nu", "mu", "lam", "lam_sub", "bounced", "steps", "base", "modes", "fratio", "fmodes")
+#: The per-step values of the march by the transcription's names (``q`` is the step's end node) ...
+_VALUES = ("q", "qs", "beta", "nu", "mu", "lam", "lam_sub", "fratio", "zs", "lam_stage")
+#: ... and the march's own records.
+_ROWS = _VALUES + ("bounced", "steps", "base", "modes", "fmodes")
 
 
-def _record(rows, *values) -> None:
-    """Append one step's values, in the order of :data:`_ROWS`."""
-    for key, val in zip(_ROWS, values):
+def _record(rows, values, bounced, h, base, modes, fmodes) -> None:
+    """Append one step: its ``values`` by name (:data:`_VALUES`) and the march's records."""
+    for key in _VALUES:
+        rows[key].append(values[key])
+    for key, val in zip(("bounced", "steps", "base", "modes", "fmodes"), (bounced, h, base, modes, fmodes)):
         rows[key].append(np.array(val) if key in ("modes", "fmodes") else val)
 

@@ -217,6 +217,10 @@ class ContactNLP(ContactTranscription):
         init = {k: np.asarray(v, float).reshape(-1).copy() for k, v in guess.items()
                 if k in self.nlp.variable_names}
         init["q"][:n] = q0
+        if self.cm.s and "zs" not in init:
+            # a guess without stages (the event-located one): the straight lines of each step's two parts
+            init["zs"] = self.cm.stage_guess(init["q"].reshape(self.L + 1, n),
+                                             init["qs"].reshape(self.L, n)).reshape(-1)
         if "s_plus" not in init:
             init["s_plus"] = np.zeros(self.L * c)
             init["s_minus"] = np.zeros(self.L * c)

@@ -97,6 +97,8 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     S = res.values["qs"][:N * n].reshape(N, n)
     B = res.values["beta"][:N].reshape(N)
     MU = res.values["mu"][:N * c].reshape(N, c)
+    # the stages of each step's two parts (none for a two-point scheme)
+    ZM, ZP = cm.stage_parts(res.values["zs"][:N * 2 * cm.s].reshape(N, 2 * cm.s)) if cm.s else ([], [])
     # step lengths (a refined grid where impacts crowd; h everywhere otherwise)
     H = tn.H
     hv = H[:N]
@@ -118,8 +120,8 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
         RHO = res.values["fratio"][:NL * 2 * c].reshape(NL, 2 * c)[:, :c]      # the node forces' ratios
         Dn = np.asarray(sysm.tangent.map(N + 1)(q.T)).reshape(c, N + 1, n).transpose(1, 0, 2)
         half += 0.5 * np.einsum("kcn,kc->kn", Dn, RHO[:N + 1] * force)
-    pp = np.asarray(cm.p_node_plus.map(N)(q[:-1].T, S.T, B, hv)).T
-    pN = np.asarray(cm.p_node_minus(S[-1], B[-1], q[-1], H[N - 1])).reshape(1, -1)
+    pp = np.asarray(cm.p_node_plus.map(N)(q[:-1].T, S.T, B, hv, *[z.T for z in ZM])).T
+    pN = np.asarray(cm.p_node_minus(S[-1], B[-1], q[-1], H[N - 1], *[z[-1] for z in ZP])).reshape(1, -1)
     p = np.vstack([pp - half[:N], pN + half[N:]])
     p[0] = p0
     t = np.concatenate([[0.0], np.cumsum(H[:N])])
@@ -131,8 +133,8 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     tol = IMPULSE_TOL * tn.scales_p / tn.scales_ell
     impacts = []
     for k in np.flatnonzero(np.any(MU > tol, axis=1)):
-        pm = np.asarray(cm.p_minus(q[k], S[k], B[k], H[k])).reshape(-1)
-        pl = np.asarray(cm.p_plus(S[k], q[k + 1], B[k], H[k])).reshape(-1)
+        pm = np.asarray(cm.p_minus(q[k], S[k], B[k], H[k], *[z[k] for z in ZM])).reshape(-1)
+        pl = np.asarray(cm.p_plus(S[k], q[k + 1], B[k], H[k], *[z[k] for z in ZP])).reshape(-1)
         impacts += _impacts_at(cm, k, float(t_sub[k]), S[k], pm, pl, MU[k], tol, H[k], at_node=False)
     for k in np.flatnonzero(np.any(force[1:N] > tol, axis=1)) + 1:
         at = _impacts_at(cm, k, float(t[k]), q[k], pp[k] - 2 * half[k], pp[k], force[k], tol, H[k], at_node=True)

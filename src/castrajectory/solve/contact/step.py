@@ -68,7 +68,9 @@ class _Step:
             zero = ca.DM.zeros(c)
             fz = [zero, zero] if self.nf else []        # chunks carry no friction force (free flight only)
             v = ca.solve(cm.system.mass_matrix(qs), ps)
-            x = ca.vertcat(qs + 0.5 * hs * v, qs + hs * v, ca.DM.zeros(1 + 2 * c + 2 * m + self.nf))
+            qm_, qn_ = qs + 0.5 * hs * v, qs + hs * v
+            x = ca.vertcat(qm_, qn_, ca.DM.zeros(1 + 2 * c + 2 * m + self.nf), _stage_line(cm, qs, qm_, qn_),
+                           ca.DM.zeros(2 * cm.ms))
             for _ in range(CHUNK_NEWTON):
                 r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero, zero, zero, zero, zero, *fz)
                 x = x - ca.solve(J, r)
@@ -76,8 +78,9 @@ class _Step:
             r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero, zero, zero, zero, zero, *fz)
             res = ca.mmax(ca.fabs(ca.solve(J, r)))
             qn, qt = x[n:2 * n], x[:n]
+            zp = [x[cm.layout["zs"]][cm.s:]] if cm.s else []
             one = ca.Function("chunk_step", [qs, ps, hs, hm] + sc,
-                              [qn, cm.p_node_minus(qt, 0.0, qn, hs), x, cm.gap_row(qt), cm.gap_row(qn), res])
+                              [qn, cm.p_node_minus(qt, 0.0, qn, hs, *zp), x, cm.gap_row(qt), cm.gap_row(qn), res])
             self._chunks[K] = one.mapaccum("chunk_steps", K, [0, 1], [0, 1])
         out = self._chunks[K](q, p, h, held.astype(float), self.ell, self.pref / h, self.pref, self.vref)
         return tuple(np.asarray(a) for a in out)
@@ -214,7 +217,7 @@ def _march_step(step: _Step, q, p, h, g_q, held_prev, tol, finest: bool):
     pen = 1e-12 * step.ell
     touch = g_q <= tol
     v = np.linalg.solve(np.asarray(step.cm.system.mass_matrix(q)), p)
-    x0 = np.concatenate([q + 0.5 * h * v, q + h * v, [0.0], np.zeros(2 * c + 2 * step.m + step.nf)])
+    x0 = restage(step.cm, np.concatenate([q + 0.5 * h * v, q + h * v, np.zeros(step.cm.nx - 2 * step.n)]), q)
     # a flight that landed on this node (to rounding) arrives with its impact here: Newton's law at the node
     an = np.abs(np.asarray(step.cm.acc_normal(q, v)).reshape(-1))
     arriving = touch & ~held_prev & (-(np.asarray(step.cm.system.gap(q)[1]) @ v) > IMPACT_SPEED_STEPS * an * h)
@@ -255,6 +258,7 @@ def _try(step: _Step, q, p, h, modes, x0, x, frac):
         # a newly timed impact: the sub-node starts at the estimated crossing
         start[2 * n] = min(max(frac - 0.5, ALPHA_MIN - 0.5), 0.5 - ALPHA_MIN)
         start[:n] = q + frac * (x[n:2 * n] - q)
+        start = restage(step.cm, start, q)
     xn, ok = step.solve(start, q, p, h, modes)
     timed = [j for j, m in enumerate(modes) if m in (I, C)]
     if timed and not (ok and ALPHA_MIN - 0.5 <= xn[2 * n] <= 0.5 - ALPHA_MIN):
@@ -289,8 +293,7 @@ def _friction(step: _Step, q, p, h, modes, x):
     if not step.nf:
         return x
     cm = step.cm
-    n, m = step.n, step.m
-    o = 2 * n + 1
+    n = step.n
     # slots: the node's force of each contact (held or released: ν free), then its sub-node impulse (held)
     active = [mj in (H, R) and cm.mu_f[j] > 0 for j, mj in enumerate(modes)] + \
         [mj == H and cm.mu_f[j] > 0 for j, mj in enumerate(modes)]
@@ -306,7 +309,7 @@ def _friction(step: _Step, q, p, h, modes, x):
         xf, ok = step.solve(x, q, p, h, modes, fmodes=fm)
         if not ok:
             return None
-        rho = xf[o + 2 * c + 2 * m:]
+        rho = xf[cm.layout["fratio"]]
         slip = np.asarray(cm.slip_row(q, xf[:n], xf[n:2 * n], xf[2 * n], h)).reshape(-1)
         worst, pick = 0.0, None
         for j, f in enumerate(fm):
@@ -330,11 +333,32 @@ def _friction(step: _Step, q, p, h, modes, x):
 
 
 def _result(step: _Step, x, modes, gn, fmodes=None):
-    n, c, m = step.n, step.c, step.m
-    o = 2 * n + 1
-    return (x[:n], x[n:2 * n], float(x[2 * n]), x[o:o + c], x[o + c:o + 2 * c], x[o + 2 * c:o + 2 * c + m],
-            x[o + 2 * c + m:o + 2 * c + 2 * m], list(modes), gn, x[o + 2 * c + 2 * m:],
-            list(fmodes) if fmodes is not None else [FREE] * (2 * c))
+    """The step's values by the transcription's names (:attr:`ContactMechanics.layout`), its modes, the gaps at
+    its end node and its friction modes."""
+    out = {name: x[sl] for name, sl in step.cm.layout.items()}
+    out["beta"] = float(x[2 * step.n])
+    if not step.nf:
+        out["fratio"] = np.zeros(2 * step.c)
+    out.update(modes=list(modes), gn=gn, fmodes=list(fmodes) if fmodes is not None else [FREE] * (2 * step.c))
+    return out
+
+
+def _stage_line(cm: ContactMechanics, q, qs, qn):
+    """The stages of both parts of a step on the straight lines ``q → q̃ → q_{k+1}`` (CasADi or numpy columns)."""
+    if not cm.s:
+        return ca.DM.zeros(0, 1) if not isinstance(q, np.ndarray) else np.zeros(0)
+    ct = cm.dm.scheme.stage_times
+    parts = [a + cj * (b - a) for a, b in ((q, qs), (qs, qn)) for cj in ct]
+    return np.concatenate(parts) if isinstance(q, np.ndarray) else ca.vertcat(*parts)
+
+
+def restage(cm: ContactMechanics, x, q):
+    """``x`` with its stages on the straight lines of its sub-node and end node (a new start of Newton)."""
+    if cm.s:
+        n = cm.n
+        x = x.copy()
+        x[cm.layout["zs"]] = _stage_line(cm, np.asarray(q, float), x[:n], x[n:2 * n])
+    return x
 
 
 #: Combinations of modes tried at most when the greedy search fails.
@@ -399,7 +423,7 @@ def _sequential(step: _Step, q, p, h, x, modes, mu, pen):
         if len(involved) < 2 or not any(modes[j] in (I, C) for j in involved):
             return None
         qs, b = x[:n], float(x[2 * n])
-        pm = np.asarray(cm.p_minus(q, qs, b, h)).reshape(-1)
+        pm = np.asarray(cm.p_minus(q, qs, b, h, *cm.stage_parts(x[cm.layout["zs"]])[0])).reshape(-1)
     # the cascade in the contacts' normal velocities: Π = M⁻¹ on the constraints' tangent space (velocities)
     Jx = np.asarray(cm.system.gap(qs)[1])[involved]
     PiJt = cm.dm.velocities(np.repeat(qs[None, :], len(involved), axis=0), Jx)

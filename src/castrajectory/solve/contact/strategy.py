@@ -144,7 +144,8 @@ def _solve_once(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str
     # the march failed (or its branch did not certify): the branch of the event-located guess on the
     # uniform grid, then the penalty continuation from that guess
     t_guess = time.perf_counter()
-    guess = event_guess(cm, q0, qd0, N + LOOKAHEAD, h, length, _v_zeno(cm, h, scales))
+    # (a scheme with stages guesses with its guide's two-point rows; its stages start on straight lines)
+    guess = event_guess(cm.guide, q0, qd0, N + LOOKAHEAD, h, length, _v_zeno(cm, h, scales))
     guess_time = time.perf_counter() - t_guess + march_time
     whole = ContactNLP(cm, N + LOOKAHEAD, h, scales)
     res = whole.solve_branch(q0, p0, guess, options, verbose, co.branch_max_iter, co.penalties)
