@@ -32,14 +32,17 @@ def parser():
     p.add_argument("--g", type=float, default=9.81, help="gravity (>= 0; 0 drops the gravity term)")
     p.add_argument("--T", type=float, default=2.5, help="duration T in s (> 0)")
     p.add_argument("--n", type=int, default=3000, help="number of time steps N (>= 2)")
+    cli.add_scheme(p)
     cli.add_accuracy(p)
     cli.add_plot(p)
     p.add_argument("--animate", metavar="PATH", help="write an animation (.gif, or .mp4 when ffmpeg is present)")
     return p
 
 
-def solve(height, velocity, e, mass, g, T, n, options=None, verbose=False, rtol=None, n_max=None):
-    """Solve the scene; returns (system, trajectory, summary dict of comparisons)."""
+def solve(height, velocity, e, mass, g, T, n, options=None, verbose=False, rtol=None, n_max=None, *,
+          scheme="midpoint"):
+    """Solve the scene with the discrete Lagrangian ``scheme``; returns (system, trajectory, summary dict
+    of comparisons)."""
     H = finite("height", height)
     v0 = finite("velocity", velocity)
     if g < 0:  # the scene's own condition; the model checks that g is finite
@@ -47,8 +50,8 @@ def solve(height, velocity, e, mass, g, T, n, options=None, verbose=False, rtol=
     if H < 0:
         raise InputError(f"the ball starts inside the ground: height {H} < 0")
     system = collision.bouncing_ball(mass, g, e)
-    tr = trajectory.solve_initial_value(system, [H], [v0], T, n, options=options, verbose=verbose, rtol=rtol,
-                                        n_max=n_max)
+    tr = trajectory.solve_initial_value(system, [H], [v0], T, n, scheme, options=options, verbose=verbose,
+                                        rtol=rtol, n_max=n_max)
     return system, tr, compare(tr, H, v0, float(g), system.contact.restitution, float(mass))
 
 
@@ -58,7 +61,8 @@ def compare(tr, H, v0, g, e, m):
     t_imp = np.array([i.t for i in imps])
     speeds = np.array([-float(i.v_before[0]) for i in imps])
     # apex of each flight: the first from the start; later ones from the post-impact velocity
-    # (the midpoint scheme is exact on a parabola, so y + v²/2g is the discrete flight's apex)
+    # (every scheme is exact on a parabola -- midpoint and trapezoid at the nodes, the Galerkin and Gauss
+    # families through their quadratic stages -- so y + v²/2g is the discrete flight's apex)
     apex = [H + max(v0, 0.0) ** 2 / (2 * g) if g > 0 else float("nan")]
     apex += [float(i.q[0]) + float(i.v_after[0]) ** 2 / (2 * g) if g > 0 else float("nan") for i in imps]
     t_ex, apex_ex, speed_ex = collision.ball_oracle(H, v0, g, e, tr.t[-1]) if g > 0 else (np.zeros(0),) * 3
@@ -92,9 +96,11 @@ def compare(tr, H, v0, g, e, m):
 def run(args):
     cli.check_animation_path(args.animate)
     system, tr, cmp_ = solve(args.height, args.velocity, args.restitution, args.mass, args.g, args.T, args.n,
-                             options=cli.ipopt_options(args), verbose=args.verbose, **cli.accuracy(args))
+                             options=cli.ipopt_options(args), verbose=args.verbose, scheme=args.scheme,
+                             **cli.accuracy(args))
     n_b = len(cmp_["impact_times"])
-    lines = [f"bouncing ball: H = {args.height:g} m, e = {args.restitution:g}, N = {args.n}, T = {args.T:g} s",
+    lines = [f"bouncing ball: H = {args.height:g} m, e = {args.restitution:g}, scheme {args.scheme}, "
+             f"N = {args.n}, T = {args.T:g} s",
              f"{n_b} impacts; max |t - t_exact| = {cli.fmt(cmp_['impact_time_error'], '.3e')} s; "
              f"max |apex - e^(2k) H| = {cli.fmt(cmp_['apex_error'], '.3e')} m"]
     for i, (ti, a) in enumerate(zip(cmp_["impact_times"][:6], cmp_["apex_heights"][1:7])):

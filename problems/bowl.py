@@ -3,8 +3,8 @@
 The seed's example of a body in a bowl.  Each corner's gap is its height
 above the bowl, φ_j = y_j − x_j²/(2R) ≥ 0; impulses act along M⁻¹∇φ_jᵀ and
 impacts obey Newton restitution e on ∇φ_j q̇.  With e = 1 the energy is
-conserved (the midpoint scheme keeps it bounded between impacts, and each
-impact conserves kinetic energy exactly).
+conserved (the variational scheme, --scheme, keeps it bounded between impacts,
+and each impact conserves kinetic energy exactly).
 
     python problems/bowl.py --T 4 --animate bowl.gif
 """
@@ -32,10 +32,10 @@ def run(args):
     body = collision.Body(args.mass, args.width, args.height)
     system = collision.rectangle_contact_system(body, finite("g", args.g), args.restitution, collision.bowl_ground(R))
     q0, qd0 = initial_state(args)
-    tr = trajectory.solve_initial_value(system, q0, qd0, args.T, args.n, options=cli.ipopt_options(args),
-                                        verbose=args.verbose, **cli.accuracy(args))
+    tr = trajectory.solve_initial_value(system, q0, qd0, args.T, args.n, args.scheme,
+                                        options=cli.ipopt_options(args), verbose=args.verbose, **cli.accuracy(args))
     lines = [f"bowl: R = {R:g}, body {args.width:g} x {args.height:g}, e = {args.restitution:g}, "
-             f"N = {args.n}, T = {args.T:g} s",
+             f"scheme {args.scheme}, N = {args.n}, T = {args.T:g} s",
              f"{len(tr.impacts)} impacts; energy drift max |E - E0| = {np.max(np.abs(tr.energy - tr.energy[0])):.2e}"]
     for imp in tr.impacts[:6]:
         lines.append(f"  t = {imp.t:.5f} s  {system.contact.names[imp.contact]:11s} μ = {imp.mu:.6g}")

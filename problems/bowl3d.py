@@ -4,8 +4,8 @@ The seed's "body bouncing in a bowl" in 3-D.  The box's orientation is a unit qu
 holonomic constraint, as for the free body of dzhanibekov.py), its centre moves freely, gravity
 acts along −z.  Each corner's gap is its height above the paraboloid, φ_j = z_j − (x_j² + y_j²)/(2R);
 impulses act along Π∇φ_jᵀ (Π: M⁻¹ projected on the quaternion constraint) and impacts obey Newton
-restitution e on the normal velocity.  With e = 1 the energy is conserved: the midpoint scheme keeps
-it bounded between impacts and every impact conserves the kinetic energy exactly.
+restitution e on the normal velocity.  With e = 1 the energy is conserved: the variational scheme
+(--scheme) keeps it bounded between impacts and every impact conserves the kinetic energy exactly.
 
     python problems/bowl3d.py --T 2 --animate bowl3d.gif
     python problems/bowl3d.py --restitution 0.5 --omega 4 -2 6 --json
@@ -39,6 +39,7 @@ def parser():
     p.add_argument("--g", type=float, default=9.81, help="gravity along -z (0 drops the gravity term)")
     p.add_argument("--T", type=float, default=1.5, help="duration T in s (> 0)")
     p.add_argument("--n", type=int, default=1000, help="number of time steps N (>= 2)")
+    cli.add_scheme(p)
     cli.add_accuracy(p)
     cli.add_plot(p)
     p.add_argument("--animate", metavar="PATH", help="write an animation (.gif, or .mp4 when ffmpeg is present)")
@@ -62,12 +63,13 @@ def run(args):
     R = positive("radius", args.radius)
     system = rb.box_in_bowl(args.mass, args.size, R, finite("g", args.g), args.restitution)
     q0, qd0 = initial_state(args)
-    tr = trajectory.solve_initial_value(system, q0, qd0, args.T, args.n, options=cli.ipopt_options(args),
-                                        verbose=args.verbose, **cli.accuracy(args))
+    tr = trajectory.solve_initial_value(system, q0, qd0, args.T, args.n, args.scheme,
+                                        options=cli.ipopt_options(args), verbose=args.verbose, **cli.accuracy(args))
     names = system.contact.names
     drift = float(np.max(np.abs(tr.energy - tr.energy[0])))
     lines = [f"box {' x '.join(f'{s:g}' for s in args.size)} in the bowl z = (x² + y²)/(2R), R = {R:g}, "
-             f"e = {args.restitution:g}, N = {args.n} ({len(tr.t) - 1} steps after refinement), T = {args.T:g} s",
+             f"e = {args.restitution:g}, scheme {args.scheme}, N = {args.n} ({len(tr.t) - 1} steps after "
+             f"refinement), T = {args.T:g} s",
              f"{len(tr.impacts)} impacts; energy drift max |E - E0| = {drift:.2e}; "
              f"|quaternion| - 1 at most {np.max(np.abs(np.linalg.norm(tr.q[:, 3:], axis=1) - 1)):.1e}"]
     for imp in tr.impacts[:6]:

@@ -46,6 +46,7 @@ def parser():
     p.add_argument("--g", type=float, default=9.81, help="gravity (> 0)")
     p.add_argument("--T", type=float, default=None, help="duration in s (default: twice the first impact's time)")
     p.add_argument("--n", type=int, default=400, help="number of time steps N (>= 2)")
+    cli.add_scheme(p)
     cli.add_accuracy(p)
     cli.add_plot(p)
     p.add_argument("--animate", metavar="PATH", help="write an animation (.gif, or .mp4 when ffmpeg is present)")
@@ -129,14 +130,14 @@ def run(args):
     system = cradle(n, args.mass, L, args.radius, args.gap, args.restitution, args.law, args.g)
     q0 = np.zeros(n)
     q0[0] = -args.lift
-    tr = trajectory.solve_initial_value(system, q0, np.zeros(n), T, args.n, options=cli.ipopt_options(args),
-                                        verbose=args.verbose, **cli.accuracy(args))
+    tr = trajectory.solve_initial_value(system, q0, np.zeros(n), T, args.n, args.scheme,
+                                        options=cli.ipopt_options(args), verbose=args.verbose, **cli.accuracy(args))
     V = 2 * math.sqrt(args.g * L) * math.sin(args.lift / 2)
     imps = sorted(tr.impacts, key=lambda i: (i.t, i.contact))
     data = {"t": tr.t, "q": tr.q, "v": tr.v, "energy": tr.energy, "law": args.law,
             "first_impact_time_exact": t1, "impact_speed_exact": V}
     lines = [f"Newton's cradle: {n} balls, lift {args.lift:g} rad, gap {args.gap:g} m, e = {args.restitution:g}, "
-             f"{args.law} law, N = {args.n}, T = {T:.6g} s"]
+             f"{args.law} law, scheme {args.scheme}, N = {args.n}, T = {T:.6g} s"]
     if imps:
         first = [i for i in imps if i.t <= imps[0].t + 1e-9 * T]
         # the speeds just after the first impact (all its contacts at once), L θ̇, or after the first

@@ -37,6 +37,7 @@ def parser():
     p.add_argument("--g", type=float, default=9.81, help="gravity (> 0)")
     p.add_argument("--T", type=float, default=0.5, help="duration T in s (> 0)")
     p.add_argument("--n", type=int, default=200, help="number of time steps N (>= 2)")
+    cli.add_scheme(p)
     cli.add_accuracy(p)
     cli.add_plot(p)
     p.add_argument("--animate", metavar="PATH", help="write an animation (.gif, or .mp4 when ffmpeg is present)")
@@ -83,7 +84,7 @@ def run(args):
         raise InputError(f"--push-height must lie in (0, --height] (got {args.push_height:g})")
     m, b, H, hp = args.mass, args.width, args.height, args.push_height
     system = box(m, b, H, hp, args.force, args.mu, args.g)
-    tr = trajectory.solve_initial_value(system, [0.0, H / 2, 0.0], [0.0, 0.0, 0.0], args.T, args.n,
+    tr = trajectory.solve_initial_value(system, [0.0, H / 2, 0.0], [0.0, 0.0, 0.0], args.T, args.n, args.scheme,
                                         options=cli.ipopt_options(args), verbose=args.verbose, **cli.accuracy(args))
     turn = float(np.max(np.abs(tr.q[:, 2])))
     shift = float(np.max(np.abs(tr.q[:, 0])))
@@ -92,7 +93,7 @@ def run(args):
     data = {"t": tr.t, "q": tr.q, "v": tr.v, "outcome": outcome, "outcome_exact": expect,
             "slide_force": args.mu * m * args.g, "tip_force": m * args.g * b / (2 * hp), "turn": turn, "shift": shift}
     lines = [f"pushed box: F = {args.force:g} N at h_p = {hp:g} m, μ = {args.mu:g}, b × H = {b:g} × {H:g} m, "
-             f"N = {args.n}, T = {args.T:g} s",
+             f"scheme {args.scheme}, N = {args.n}, T = {args.T:g} s",
              f"outcome: {outcome} (statics: {expect}; slides above μ m g = {data['slide_force']:.4g} N when "
              f"μ < b/(2h_p) = {b / (2 * hp):.4g}, tips above m g b/(2h_p) = {data['tip_force']:.4g} N)",
              f"largest turn {turn:.3e} rad, shift {shift:.3e} m", cli.status_line(tr.status, tr)]

@@ -36,6 +36,7 @@ def add_body_flags(p, width, height, x, y, angle, vx, vy, omega, T, n):
     p.add_argument("--g", type=float, default=9.81, help="gravity (0 drops the gravity term)")
     p.add_argument("--T", type=float, default=T, help="duration T in s (> 0)")
     p.add_argument("--n", type=int, default=n, help="number of time steps N (>= 2)")
+    cli.add_scheme(p)
     cli.add_accuracy(p)
     cli.add_plot(p)
     p.add_argument("--animate", metavar="PATH", help="write an animation (.gif, or .mp4 when ffmpeg is present)")
@@ -94,11 +95,11 @@ def run(args):
     system = collision.rectangle_contact_system(body, finite("g", args.g), args.restitution, collision.flat_ground)
     e = system.contact.restitution
     q0, qd0 = initial_state(args)
-    tr = trajectory.solve_initial_value(system, q0, qd0, args.T, args.n, options=cli.ipopt_options(args),
-                                        verbose=args.verbose, **cli.accuracy(args))
+    tr = trajectory.solve_initial_value(system, q0, qd0, args.T, args.n, args.scheme,
+                                        options=cli.ipopt_options(args), verbose=args.verbose, **cli.accuracy(args))
     rows, worst = impact_table(tr, body, e)
     lines = [f"rectangle drop: {args.width:g} x {args.height:g}, m = {args.mass:g}, e = {e:g}, "
-             f"N = {args.n}, T = {args.T:g} s",
+             f"scheme {args.scheme}, N = {args.n}, T = {args.T:g} s",
              f"{len(rows)} impacts ({sum(r['caught'] for r in rows)} caught, plastic); "
              f"max |v⁺ - closed-form corner law| over the bounces = {worst:.2e}"]
     for r in rows[:8]:

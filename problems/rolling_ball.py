@@ -40,6 +40,7 @@ def parser():
     p.add_argument("--g", type=float, default=9.81, help="gravity (> 0)")
     p.add_argument("--T", type=float, default=1.0, help="duration T in s (> 0)")
     p.add_argument("--n", type=int, default=400, help="number of time steps N (>= 2)")
+    cli.add_scheme(p)
     cli.add_accuracy(p)
     cli.add_plot(p)
     p.add_argument("--animate", metavar="PATH", help="write an animation (.gif, or .mp4 when ffmpeg is present)")
@@ -64,7 +65,8 @@ def run(args):
     system = ball(args.body, args.mass, R, args.mu, args.g)
     # θ counter-clockwise: a clockwise spin ω0 is θ̇ = −ω0
     tr = trajectory.solve_initial_value(system, [0.0, R, 0.0], [args.v0, 0.0, -args.spin], args.T, args.n,
-                                        options=cli.ipopt_options(args), verbose=args.verbose, **cli.accuracy(args))
+                                        args.scheme, options=cli.ipopt_options(args), verbose=args.verbose,
+                                        **cli.accuracy(args))
     t, v, w = tr.t, tr.v[:, 0], -tr.v[:, 2]
     slip = v - R * w
     t_ex, v_ex = oracle(args.body, args.v0, args.spin, R, args.mu, args.g)
@@ -75,7 +77,7 @@ def run(args):
             "final_speed": float(v[-1]), "final_speed_exact": v_ex,
             "error_vs_exact": abs(float(v[-1]) - v_ex) if t_ex < args.T else None}
     lines = [f"rolling {args.body}: v0 = {args.v0:g} m/s, spin {args.spin:g} rad/s (clockwise), μ = {args.mu:g}, "
-             f"R = {R:g} m, N = {args.n}, T = {args.T:g} s",
+             f"R = {R:g} m, scheme {args.scheme}, N = {args.n}, T = {args.T:g} s",
              f"rolls from t = {cli.fmt(t_roll, '.6g')} s (exact {t_ex:.6g} s; one step is {args.T / args.n:.3g} s)",
              f"final speed {v[-1]:.12g} m/s (exact {v_ex:.12g})", cli.status_line(tr.status, tr)]
 

@@ -37,6 +37,7 @@ def parser():
     p.add_argument("--g", type=float, default=9.81, help="gravity (> 0)")
     p.add_argument("--T", type=float, default=1.0, help="duration T in s (> 0)")
     p.add_argument("--n", type=int, default=400, help="number of time steps N (>= 2)")
+    cli.add_scheme(p)
     cli.add_accuracy(p)
     cli.add_plot(p)
     p.add_argument("--animate", metavar="PATH", help="write an animation (.gif, or .mp4 when ffmpeg is present)")
@@ -62,7 +63,7 @@ def run(args):
         if getattr(args, flag) <= 0:
             raise InputError(f"--{flag} must be positive (got {getattr(args, flag):g})")
     system = block(args.mass, args.mu, args.incline, args.g)
-    tr = trajectory.solve_initial_value(system, [0.0, 0.0], [args.v0, 0.0], args.T, args.n,
+    tr = trajectory.solve_initial_value(system, [0.0, 0.0], [args.v0, 0.0], args.T, args.n, args.scheme,
                                         options=cli.ipopt_options(args), verbose=args.verbose, **cli.accuracy(args))
     t, s, v = tr.t, tr.q[:, 0], tr.v[:, 0]
     s_ex, stop_ex = exact(args.v0, args.mu, args.incline, args.g, t)
@@ -74,8 +75,8 @@ def run(args):
     err = float(np.max(np.abs(s - s_ex)))
     data = {"t": t, "s": s, "v": v, "stop_time": stop, "stop_time_exact": stop_ex, "s_exact": s_ex,
             "error_vs_exact": err, "energy": tr.energy}
-    lines = [f"sliding block: μ = {args.mu:g}, incline {args.incline:g} rad, v0 = {args.v0:g} m/s, N = {args.n}, "
-             f"T = {args.T:g} s",
+    lines = [f"sliding block: μ = {args.mu:g}, incline {args.incline:g} rad, v0 = {args.v0:g} m/s, "
+             f"scheme {args.scheme}, N = {args.n}, T = {args.T:g} s",
              f"s(T) = {s[-1]:.9g} m (exact {s_ex[-1]:.9g}); max |s − s_exact| = {err:.2e} m",
              f"at rest from t = {cli.fmt(stop, '.6g')} s (exact {cli.fmt(stop_ex, '.6g')} s; one step is {h:.3g} s)",
              cli.status_line(tr.status, tr)]

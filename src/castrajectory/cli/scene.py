@@ -107,13 +107,25 @@ def solve_trajectory(system, q0, qd0, args):
 def add_control_flags(p: argparse.ArgumentParser, n: int, scheme: str = "midpoint") -> None:
     """Flags shared by the optimal-control scenes: grid, scheme, plot and animation (the horizon and the
     physics are each scene's own)."""
-    from ..discretise.lagrangians import SCHEMES
     p.add_argument("--n", type=int, default=n, help="number of time steps N (>= 2)")
-    p.add_argument("--scheme", choices=list(SCHEMES), default=scheme, help="discrete Lagrangian")
+    add_scheme(p, scheme, contact=False)
     p.add_argument("--controls", choices=("quadrature", "step"), default="quadrature",
                    help="controls at the scheme's quadrature nodes (its order) or one per step (order 2)")
     add_plot(p)
     p.add_argument("--animate", metavar="PATH", help="write an animation (.gif, or .mp4 when ffmpeg is present)")
+
+
+#: ``--scheme``'s help in a contact scene: what a scheme means where an impact splits a step.
+CONTACT_SCHEME_HELP = "discrete Lagrangian (contact: each part of a step split at an impact carries the scheme's stages)"
+
+
+def add_scheme(p: argparse.ArgumentParser, default: str = "midpoint", contact: bool = True) -> None:
+    """``--scheme``: one of every registered discrete Lagrangian (:func:`castrajectory.schemes`), ``default``
+    unless given; ``contact`` says in its help what a scheme does at an impact (the contact scenes).  A name
+    that is not registered exits 2 with one line (argparse's ``invalid choice``)."""
+    from ..discretise.schemes import SCHEMES
+    p.add_argument("--scheme", choices=list(SCHEMES), default=default,
+                   help=CONTACT_SCHEME_HELP if contact else "discrete Lagrangian")
 
 
 def add_plot(p: argparse.ArgumentParser) -> None:
@@ -123,11 +135,10 @@ def add_plot(p: argparse.ArgumentParser) -> None:
 def add_trajectory_flags(p: argparse.ArgumentParser, T: float, n: int, scheme: str = "midpoint",
                          methods: bool = True) -> None:
     """Flags shared by the mechanics scenes: horizon, grid, scheme, method, plot and animation."""
-    from ..discretise.lagrangians import SCHEMES
     from ..solve.simulate import METHODS
     p.add_argument("--T", type=float, default=T, help="duration T in s (> 0)")
     p.add_argument("--n", type=int, default=n, help="number of time steps N (>= 2)")
-    p.add_argument("--scheme", choices=list(SCHEMES), default=scheme, help="discrete Lagrangian")
+    add_scheme(p, scheme, contact=False)
     if methods:
         add_accuracy(p)
     if methods:
