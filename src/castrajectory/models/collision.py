@@ -357,15 +357,29 @@ def ball_height(height: float, velocity: float, g: float, e: float, t) -> np.nda
 CORNER_NAMES = ["lower left", "lower right", "upper right", "upper left"]
 
 
-def rectangle_contact_system(body: Body, g: float, e, ground) -> LagrangianSystem:
+def rectangle_contact_system(body: Body, g: float, e, ground, friction=0.0) -> LagrangianSystem:
     """A :class:`Body` (checked) under gravity ``g`` (finite; 0 drops the term) over the ground whose gap
-    at a world point ``p`` is ``ground(p)``; ``e`` is checked by the :class:`Contact` term it builds."""
+    at a world point ``p`` is ``ground(p)``; ``e`` is checked by the :class:`Contact` term it builds.
+    With Coulomb ``friction`` (> 0) each corner slips at its velocity along the ground's tangent there,
+    ``t = (∂φ/∂y, −∂φ/∂x)/|∇φ|`` (the ground's level set through the corner)."""
     q = ca.SX.sym("q", 3)
     pts = [body_point(q, d) for d in body.corners]
     gaps = [ground(p) for p in pts]
     terms = [Gravity(g, heights=[q[1]], masses=[body.mass])] if g != 0.0 else []
+    slip = None
+    if np.any(np.asarray(friction, float) > 0):
+        from .mechanics import velocity
+        qd = velocity(q)
+        P = ca.SX.sym("p", 2)
+        n = ca.Function("n", [P], [ca.gradient(ground(P), P)])
+        slip = []
+        for p in pts:
+            nv = n(p)
+            t = ca.vertcat(nv[1], -nv[0]) / ca.norm_2(nv)
+            slip.append(ca.dot(t, ca.mtimes(ca.jacobian(p, q), qd)))
     return LagrangianSystem(q, MassMatrix(ca.SX(body.mass_matrix)), terms, names=NAMES,
-                            points_expr=pts + [pts[0]], contact=Contact(gaps, e, CORNER_NAMES))
+                            points_expr=pts + [pts[0]],
+                            contact=Contact(gaps, e, CORNER_NAMES, friction=friction, slip=slip))
 
 
 def flat_ground(p):
@@ -379,14 +393,15 @@ def bowl_ground(radius: float):
 
 
 def rectangle_drop(mass: float = 1.0, width: float = 2.0, height: float = 1.0, g: float = 9.81,
-                   restitution_coefficient: float = 1.0) -> LagrangianSystem:
-    """Rigid ``w × h`` rectangle over the ground ``y = 0``: four corner gaps ``y_j(q) ≥ 0``."""
+                   restitution_coefficient: float = 1.0, friction=0.0) -> LagrangianSystem:
+    """Rigid ``w × h`` rectangle over the ground ``y = 0``: four corner gaps ``y_j(q) ≥ 0`` (Coulomb
+    ``friction`` on each corner's horizontal velocity)."""
     return rectangle_contact_system(Body(mass, width, height), finite("g", g), restitution_coefficient,
-                                    flat_ground)
+                                    flat_ground, friction)
 
 
 def bowl(mass: float = 1.0, width: float = 0.4, height: float = 0.2, g: float = 9.81,
-         restitution_coefficient: float = 1.0, radius: float = 2.0) -> LagrangianSystem:
+         restitution_coefficient: float = 1.0, radius: float = 2.0, friction=0.0) -> LagrangianSystem:
     """Rectangle in the parabolic bowl ``y = x²/(2R)``: corner gaps ``φ_j = y_j − x_j²/(2R)``.
 
     The gap is the vertical distance to the bowl, whose gradient is normal to the
@@ -394,7 +409,7 @@ def bowl(mass: float = 1.0, width: float = 0.4, height: float = 0.2, g: float = 
     """
     R = positive("bowl radius", radius)
     return rectangle_contact_system(Body(mass, width, height), finite("g", g), restitution_coefficient,
-                                    bowl_ground(R))
+                                    bowl_ground(R), friction)
 
 
 # ----------------------------------------------------------------------------- friction scenes
@@ -462,3 +477,66 @@ def rolling_oracle(shape, v0, w0, R, mu, g):
     t_roll = abs(u0) * k / ((1 + k) * mu * g)
     v_final = (v0 + k * R * w0) / (1 + k)
     return t_roll, v_final
+
+
+# ----------------------------------------------------------------------------- the rimless wheel
+def rimless_wheel(spokes: int = 8, length: float = 1.0, slope: float = 0.08, mass: float = 1.0, g: float = 9.8,
+                  inertia: float = 0.01, mu: float = 1.0) -> LagrangianSystem:
+    """McGeer's rimless wheel: a hub of mass ``m`` with ``spokes`` massless spokes of length ``l`` (half-angle
+    ``α = π/spokes`` between neighbours) on a slope ``γ``, in the slope's frame (``x`` downhill, ``y`` along
+    its normal), ``q = (x, y, θ)``; the hub's own inertia ``I = inertia · m l²`` (the rigid body needs one;
+    0.01 leaves the limit cycle within 0.5 % of the point-mass one).  Each spoke tip is a contact (``e = 0``,
+    Coulomb ``mu``: its slip is the tip's velocity along the slope), spoke ``i`` pointing along
+    ``φ_i = θ + 2α i`` from the downward normal."""
+    spokes = integer_at_least("spokes", spokes, 3)
+    l, m = positive("length", length), positive("mass", mass)
+    gam, kap = finite("slope", slope), finite("inertia", inertia)
+    if not 0.0 <= gam < math.pi / 2:
+        raise InputError(f"the slope must be in [0, pi/2) rad (got {slope})")
+    if kap <= 0:
+        raise InputError(f"the hub's inertia (in units of m l^2) must be > 0 (got {inertia})")
+    from .mechanics import velocity
+    q = ca.SX.sym("q", 3)
+    qd = velocity(q)
+    a = math.pi / spokes
+    phis = [q[2] + 2 * a * i for i in range(spokes)]
+    tips = [ca.vertcat(q[0] + l * ca.sin(f), q[1] - l * ca.cos(f)) for f in phis]
+    gaps = [tip[1] for tip in tips]
+    slip = [qd[0] + l * ca.cos(f) * qd[2] for f in phis]
+    pts = []
+    for tip in tips:
+        pts += [ca.vertcat(q[0], q[1]), tip]
+    return LagrangianSystem(q, MassMatrix(ca.diag(ca.vertcat(m, m, kap * m * l * l))),
+                            [Potential(m * finite("g", g) * (q[1] * math.cos(gam) - q[0] * math.sin(gam)), "gravity")],
+                            names=["x", "y", "theta"], points_expr=pts,
+                            contact=Contact(gaps, restitution=0.0, friction=mu, slip=slip,
+                                            names=[f"spoke{i}" for i in range(spokes)]))
+
+
+def rimless_wheel_start(spokes: int, length: float, omega0: float):
+    """``(q0, q̇0)``: spoke 0 planted at the origin, its tip ahead of the hub by ``α`` (a step starts), the
+    wheel rolling downhill at ``ω0`` about that tip (``θ̇ = −ω0``)."""
+    a = math.pi / spokes
+    l = length
+    return (np.array([-l * math.sin(a), l * math.cos(a), a]),
+            np.array([l * math.cos(a) * omega0, l * math.sin(a) * omega0, -omega0]))
+
+
+def rimless_wheel_oracle(spokes: int, length: float, slope: float, g: float, inertia: float, omega0: float,
+                         steps: int):
+    """The wheel's angular rates just after each of ``steps`` touchdowns, and the limit cycle's: at a
+    touchdown the new tip sticks (plastic), the old one leaves, and the angular momentum about the new tip
+    is kept, ``ω⁺ = ω⁻ (cos 2α + κ)/(1 + κ)`` (``κ`` the hub's inertia over ``m l²``); a stance from ``+α``
+    to ``−α`` gains ``ω⁻² = ω⁺² + 4 (g/l) sin α sin γ / (1 + κ)``.  The fixed point is
+    ``ω* = c √(4 (g/l) sin α sin γ / ((1 + κ)(1 − c²)))``, ``c = (cos 2α + κ)/(1 + κ)``, which for ``κ → 0`` is
+    McGeer's ``cot 2α √(4 (g/l) sin α sin γ)`` (1.0949 rad/s for l = 1, g = 9.8, α = π/8, γ = 0.08).
+    ``None`` for a touchdown not reached (the wheel stops and rocks back: ω0 too small)."""
+    a = math.pi / spokes
+    kap = inertia
+    c = (math.cos(2 * a) + kap) / (1 + kap)
+    gain = 4 * (g / length) * math.sin(a) * math.sin(slope) / (1 + kap)
+    rates, w = [], omega0
+    for _ in range(steps):
+        w = c * math.sqrt(w * w + gain)
+        rates.append(w)
+    return np.array(rates), c * math.sqrt(gain / (1 - c * c))

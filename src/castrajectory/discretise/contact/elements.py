@@ -119,7 +119,8 @@ class ContactMechanics:
                 self.stage_constraint = ca.Function("c_stage_con", [zm, zp], [self.stage_constraints(zm, zp)])
         if self.friction:
             #: the slip velocities the friction opposes, [node part; sub-node part] (see slip)
-            self.slip_row = ca.Function("c_slip", [qk, qs, qk1, b, h], [self.slip(qk, qs, qk1, b, h)])
+            arrive = sym("arrive", c)
+            self.slip_row = ca.Function("c_slip", [qk, qs, qk1, b, h, arrive], [self.slip(qk, qs, qk1, b, h, arrive)])
         # Newton's law on the normal velocity at the sub-node, weighted by W = φ(q_{k+1})/δ: the law
         # holds unless the contact is closed again at the next node, where the body is caught (the
         # accumulation point of Zeno bouncing, where no step-resolved flight is left, or a body at
@@ -205,12 +206,18 @@ class ContactMechanics:
 
 
     # ------------------------------------------------------------------ the rows, built once
-    def slip(self, qk, qs, qn, b, h):
+    def slip(self, qk, qs, qn, b, h, arrive):
         """The slip velocities per contact that the step's friction opposes (maximal dissipation: the friction
         force opposes its slip, or the slip vanishes): for the node's force, the first part of the step,
-        ``D(q_k)(q̃_k − q_k)/(αh)``; for the sub-node's impulse, the whole step around it,
-        ``D(q̃_k)(q_{k+1} − q_k)/h``.  Sticking on both holds the contact point still through the step."""
-        return ca.vertcat(ca.mtimes(self._D(qk), qs - qk) / ((0.5 + b) * h), ca.mtimes(self._D(qs), qn - qk) / h)
+        ``D(q_k)(q̃_k − q_k)/(αh)``; for the sub-node's impulse of a contact held through the step, the whole
+        step around it, ``D(q̃_k)(q_{k+1} − q_k)/h`` (sticking on both holds the contact point still through
+        the step); for a contact that arrives at the sub-node (``arrive`` 1: an impact), the part after it,
+        ``D(q̃_k)(q_{k+1} − q̃_k)/((1 − α)h)``, the slip after the impact, which Coulomb's law at an impact
+        opposes (the contact point moved freely before it)."""
+        a = 0.5 + b
+        after = ca.mtimes(self._D(qs), qn - qs) / ((1 - a) * h)
+        whole = ca.mtimes(self._D(qs), qn - qk) / h
+        return ca.vertcat(ca.mtimes(self._D(qk), qs - qk) / (a * h), arrive * after + (1 - arrive) * whole)
 
     def node_row(self, p_in, qk, qs, b, nu, lam, h, rho=None, zm=None):
         """The momentum balance at a node ``q_k`` with the incoming momentum ``p_in`` (``p_0`` at the start,
@@ -312,12 +319,14 @@ class ContactMechanics:
         if self.friction:
             # per contact: stick (the slip vanishes), slide (ρ = −sgn μ_f, sgn the slip's sign), or no
             # friction force (ρ = 0: an open contact, or a frictionless one)
-            stick, sgn = sym("stick", 2 * c), sym("sgn", 2 * c)
+            # (fix: ρ = rfix, a ratio decided outside the step: the frictional impact law's tangential impulse)
+            stick, sgn, fix, rfix = sym("stick", 2 * c), sym("sgn", 2 * c), sym("fix", 2 * c), sym("rfix", 2 * c)
+            arrive = sym("arrive", c)
             slide = sgn * sgn
             muf = ca.DM(np.concatenate([self.mu_f, self.mu_f]))
-            R = ca.vertcat(R, stick * self.slip(qk, qs, qn, b, h) / vref + slide * (rho + sgn * muf)
-                           + (1 - stick - slide) * rho)
-            extra = [stick, sgn]
+            R = ca.vertcat(R, stick * self.slip(qk, qs, qn, b, h, arrive) / vref + slide * (rho + sgn * muf)
+                           + fix * (rho - rfix) + (1 - stick - slide - fix) * rho)
+            extra = [stick, sgn, fix, rfix, arrive]
         self.march_step = ca.Function("march_step", [x, qk, p, h, ell, snu, smu, vref, bfix, t, held, closed, law, node,
                                                       fixed, mufix, nfixed] + extra,
                                       [R, ca.jacobian(R, x)])

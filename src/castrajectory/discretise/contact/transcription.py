@@ -129,6 +129,8 @@ class ContactTranscription:
         #: impulses decided by another law (the sequential cascade of the march, steps × contacts): their
         #: sub-nodes are exempt from the one-contact Newton law in :meth:`residual`
         self.law_exempt = np.zeros((L, cm.c), dtype=bool)
+        #: the contacts that arrive at their sub-node, per step (friction: their slip is the one after it)
+        self.arrive = np.zeros((L, cm.c))
         # weight length of the law where the guess has no bounce: W = φ(q_{k+1})/δ with δ = ℓ
         # (law_lengths sets a shorter δ at the guess's bounces)
         self.delta = ell
@@ -197,7 +199,10 @@ class ContactTranscription:
                 nlp.equal_elements("stage_constraint", cm.stage_constraint, ZM(k) + ZP(k))
         if cm.friction:
             # the step's slip velocity: its bounds are the friction's modes (ContactNLP.solve_modes)
-            nlp.inequality_elements("slip", cm.slip_row, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), Hc],
+            # (which contacts arrive at their sub-node: their slip is the one after it, ContactMechanics.slip)
+            nlp.parameter("arrive", L * c, value=0.0)
+            nlp.inequality_elements("slip", cm.slip_row, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), Hc,
+                                                          P(nlp.parameter_index("arrive").reshape(L, c))],
                                     lb=-np.inf, ub=np.inf)
         if m:
             nlp.equal_elements("node_constraint", cm.constraint_row, [X(Q[1:])])

@@ -87,11 +87,16 @@ class ContactNLP(ContactTranscription):
             # the slip has the matching sign; no friction force, ρ = 0
             fm = np.asarray(point["fmodes"]).reshape(L, 2 * c)
             muf = np.tile(np.concatenate([self.cm.mu_f, self.cm.mu_f]), L).reshape(L, 2 * c)
-            rlo = np.select([fm == "S", fm == "U", fm == "D"], [-muf, -muf, muf], 0.0)
-            rhi = np.select([fm == "S", fm == "U", fm == "D"], [muf, -muf, muf], 0.0)
+            # (an impact's ratio, mode X, is the frictional impact law's: fixed at the march's value)
+            rx = np.asarray(point["fratio"], float).reshape(L, 2 * c)
+            rlo = np.select([fm == "S", fm == "U", fm == "D", fm == "X"], [-muf, -muf, muf, rx], 0.0)
+            rhi = np.select([fm == "S", fm == "U", fm == "D", fm == "X"], [muf, -muf, muf, rx], 0.0)
             slo = np.select([fm == "S", fm == "U"], [0.0, 0.0], -np.inf)
             shi = np.select([fm == "S", fm == "D"], [0.0, 0.0], np.inf)
             bounds["fratio"] = (rlo.reshape(-1), rhi.reshape(-1))
+            # the contacts that arrive at their sub-node (an impact, caught or fixed by a law): slip after it
+            self.arrive = np.isin(modes, ("I", "C", "T", "F")).astype(float)
+            self.nlp.set_parameter("arrive", self.arrive.reshape(-1))
             bounds["slip"] = (slo.reshape(-1), shi.reshape(-1))
         init = self._start(q0, p0, point)
         opts = {**CONTACT_IPOPT, **BRANCH_IPOPT, **(options or {})}

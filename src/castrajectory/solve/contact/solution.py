@@ -35,11 +35,13 @@ class SubNodeImpact:
     #: at the node ``step`` itself (a flight that landed on a node: Newton's law at the node, its impulse
     #: the node's h ν), not at a sub-node
     at_node: bool = False
+    #: the tangential (friction) impulse along the contact's slip direction (0 without friction)
+    mu_t: float = 0.0
 
     def as_dict(self) -> dict:
         return {"step": self.step, "t": self.t, "contact": self.contact, "mu": self.mu,
                 "q": self.q, "v_before": self.v_before, "v_after": self.v_after, "caught": self.caught,
-                "at_node": self.at_node}
+                "at_node": self.at_node, "mu_t": self.mu_t}
 
 
 @dataclass(kw_only=True)
@@ -132,12 +134,16 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     # march's mode N: the node's impulse h ν); the node's momentum is then the one after it, not the mean
     tol = IMPULSE_TOL * tn.scales_p / tn.scales_ell
     impacts = []
+    # (friction: the ratios of the sub-node impulses and of the node forces, for the tangential impulses)
+    RS = res.values["fratio"][:N * 2 * c].reshape(N, 2 * c) if cm.friction else np.zeros((N, 2 * c))
     for k in np.flatnonzero(np.any(MU > tol, axis=1)):
         pm = np.asarray(cm.p_minus(q[k], S[k], B[k], H[k], *[z[k] for z in ZM])).reshape(-1)
         pl = np.asarray(cm.p_plus(S[k], q[k + 1], B[k], H[k], *[z[k] for z in ZP])).reshape(-1)
-        impacts += _impacts_at(cm, k, float(t_sub[k]), S[k], pm, pl, MU[k], tol, H[k], at_node=False)
+        impacts += _impacts_at(cm, k, float(t_sub[k]), S[k], pm, pl, MU[k], tol, H[k], at_node=False,
+                               ratios=RS[k, c:])
     for k in np.flatnonzero(np.any(force[1:N] > tol, axis=1)) + 1:
-        at = _impacts_at(cm, k, float(t[k]), q[k], pp[k] - 2 * half[k], pp[k], force[k], tol, H[k], at_node=True)
+        at = _impacts_at(cm, k, float(t[k]), q[k], pp[k] - 2 * half[k], pp[k], force[k], tol, H[k], at_node=True,
+                         ratios=RS[k, :c] if k < N else np.zeros(c))
         if at:
             impacts += at
             p[k] = pp[k]
@@ -162,7 +168,8 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     fratio = slip = None
     if cm.friction:
         fratio = res.values["fratio"][:N * 2 * c].reshape(N, 2, c).transpose(0, 2, 1)
-        slip = np.asarray(cm.slip_row.map(N)(q[:-1].T, S.T, q[1:].T, B, hv)).reshape(2 * c, N).T
+        arrive = getattr(tn, "arrive", np.zeros((tn.L, c)))[:N]
+        slip = np.asarray(cm.slip_row.map(N)(q[:-1].T, S.T, q[1:].T, B, hv, arrive.T)).reshape(2 * c, N).T
         slip = slip.reshape(N, 2, c).transpose(0, 2, 1)
     warnings = simultaneous + _elastic_loss_warning(cm, energy, impacts, H[:N])
     return ContactTrajectory(
@@ -179,7 +186,7 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
 
 
 def _impacts_at(cm: ContactMechanics, k: int, t: float, x, p_before, p_after, impulses, tol: float, h: float,
-                at_node: bool) -> List[SubNodeImpact]:
+                at_node: bool, ratios=None) -> List[SubNodeImpact]:
     """The impacts at one point ``x`` (a sub-node, or a node where a flight landed) with the momenta on either
     side and the contacts' impulses there.  A contact whose impulse meets an arrival faster than a step's worth
     of its normal acceleration takes an impact (slower "impacts" are the discrete form of persistent contact);
@@ -187,8 +194,10 @@ def _impacts_at(cm: ContactMechanics, k: int, t: float, x, p_before, p_after, im
     that (an impact carried on through contacts already closed: a ball resting against the next one in
     Newton's cradle, no approach, yet an impulse).  An impact is *caught* where Newton's law is waived (the
     arrival stopped, not reversed by e: the transcription allows it only where the contact is closed at the
-    next node)."""
+    next node).  With friction (``ratios``: the tangential impulse over the normal one per contact) an impact
+    follows Stronge's law, not Newton's: it is caught where the contact does not separate after it (e > 0)."""
     js = np.flatnonzero(impulses > tol)
+    ratios = np.zeros(impulses.size) if ratios is None else np.asarray(ratios, float)
     if js.size == 0:
         return []
     vb, va = cm.dm.velocities(np.array([x, x]), np.array([p_before, p_after]))
@@ -201,9 +210,11 @@ def _impacts_at(cm: ContactMechanics, k: int, t: float, x, p_before, p_after, im
         vn_b, vn_a = float(Jx[j] @ vb), float(Jx[j] @ va)
         w = float(Jx[j] @ cm.dm.velocities(np.array([x]), np.array([Jx[j]]))[0])
         if -vn_b > scale[j] or impulses[j] * w > scale[j]:
+            frictional = ratios[j] != 0.0
+            caught = (cm.e > 0 and vn_a <= CAUGHT_LAW * max(abs(vn_b), 1e-300)) if frictional else \
+                abs(vn_a + cm.e * vn_b) > CAUGHT_LAW * max(abs(vn_b), 1e-300)
             out.append(SubNodeImpact(int(k), t, int(j), float(impulses[j]), np.array(x, float).copy(), vb, va,
-                                     caught=bool(abs(vn_a + cm.e * vn_b) > CAUGHT_LAW * max(abs(vn_b), 1e-300)),
-                                     at_node=at_node))
+                                     caught=bool(caught), at_node=at_node, mu_t=float(ratios[j] * impulses[j])))
     return out
 
 
@@ -216,9 +227,18 @@ def _simultaneous_warnings(cm: ContactMechanics, impacts) -> List[str]:
     groups: dict = {}
     for imp in impacts:
         groups.setdefault((imp.step, imp.at_node), []).append(imp)
-    return [f"a simultaneous impact at t = {imps[0].t:.6g}: {', '.join(names[i.contact] for i in imps)} take "
-            f"impulses in one step; its outcome depends on the impact law (here {how}; Contact(law=...))"
-            for imps in groups.values() if len(imps) > 1]
+    out = []
+    for imps in groups.values():
+        if len(imps) < 2:
+            continue
+        note = ""
+        if law == "simultaneous" and np.any(cm.mu_f[[i.contact for i in imps]] > 0):
+            note = ("; friction is not applied at an impact that several contacts take under the simultaneous "
+                    "law (no classical law holds there): Contact(law='sequential') applies it contact by contact")
+        out.append(f"a simultaneous impact at t = {imps[0].t:.6g}: {', '.join(names[i.contact] for i in imps)} take "
+                   f"impulses in one step; its outcome depends on the impact law (here {how}; Contact(law=...))"
+                   + note)
+    return out
 
 
 #: An elastic scene (e = 1) whose energy falls by more than this fraction is reported with a warning.
@@ -229,7 +249,7 @@ def _elastic_loss_warning(cm: ContactMechanics, energy, impacts, H) -> List[str]
     """For e = 1: the fraction of the energy lost, if above :data:`ELASTIC_LOSS_TOL`.  Elastic impacts
     conserve the energy exactly (docs, contact §3); a loss means arrivals were caught, i.e. bounces the
     grid does not resolve -- a step longer than the flights (the answer is the grid's, not the physics')."""
-    if cm.e != 1.0 or cm.system.forced or energy.size < 2 or not np.all(np.isfinite(energy)):
+    if cm.e != 1.0 or cm.system.forced or cm.friction or energy.size < 2 or not np.all(np.isfinite(energy)):
         return []
     E0 = float(energy[0])
     loss = (E0 - float(np.min(energy))) / max(abs(E0), 1e-300)

@@ -9,7 +9,7 @@ import numpy as np
 
 from ...discretise.contact.elements import ContactMechanics
 from ...discretise.contact.transcription import ALPHA_MIN
-from ...models.impact import sequential_impact
+from ...models.impact import frictional_impact, sequential_frictional_impact, sequential_impact
 from .. import jit
 
 #: Newton iterations of one step solve, and the largest row residual accepted (each row divided by
@@ -26,6 +26,8 @@ O, H, R, I, C, N, F, T, P = "O", "H", "R", "I", "C", "N", "F", "T", "P"
 #: friction modes of a contact in a step: no friction force, sticking, sliding with a positive slip
 #: velocity (ρ = −μ_f), sliding with a negative one (ρ = μ_f)
 FREE, STICK, UP, DOWN = "-", "S", "U", "D"
+#: ... and a ratio fixed by the frictional impact law (its tangential impulse over its normal one)
+FIX = "X"
 #: A contact approaching faster than this many steps' worth of its normal acceleration arrives with an
 #: impact (resting contact approaches at about ½ step's worth): touching at a step's first node it takes the
 #: impact there (mode N), and an answer lists its impulse as an impact (solution.py).
@@ -66,7 +68,8 @@ class _Step:
             qs, ps, hs, hm = ca.MX.sym("q", n), ca.MX.sym("p", n), ca.MX.sym("h"), ca.MX.sym("held", c)
             sc = [ca.MX.sym(name) for name in ("ell", "snu", "smu", "vref")]
             zero = ca.DM.zeros(c)
-            fz = [zero, zero] if self.nf else []        # chunks carry no friction force (free flight only)
+            zf = ca.DM.zeros(2 * c)
+            fz = [zf] * 4 + [zero] if self.nf else []   # chunks carry no friction force (free flight only)
             v = ca.solve(cm.system.mass_matrix(qs), ps)
             qm_, qn_ = qs + 0.5 * hs * v, qs + hs * v
             x = ca.vertcat(qm_, qn_, ca.DM.zeros(1 + 2 * c + 2 * m + self.nf), _stage_line(cm, qs, qm_, qn_),
@@ -102,10 +105,10 @@ class _Step:
             t[timing[1:]] = 0.0
         return t, held, closed, law, node, fixed, nfixed
 
-    def solve(self, x, q, p, h, modes, bfix=None, mufix=None, fmodes=None):
+    def solve(self, x, q, p, h, modes, bfix=None, mufix=None, fmodes=None, rfix=None):
         """Newton on the step's rows in the given modes (with ``bfix``: the sub-node's ``β`` fixed
-        there instead of timed by a contact; ``mufix``: the impulses of the contacts in modes F and T);
-        ``(x, ok)``."""
+        there instead of timed by a contact; ``mufix``: the impulses of the contacts in modes F and T;
+        ``rfix``: the friction ratios of the slots in friction mode FIX); ``(x, ok)``."""
         n, c = self.n, self.c
         self.snu, self.smu = self.pref / h, self.pref
         t, held, closed, law, node, fixed, nfixed = self.masks(modes)
@@ -118,7 +121,9 @@ class _Step:
         if self.nf:
             fm = fmodes or [FREE] * (2 * c)
             args = args + (np.array([f == STICK for f in fm], float),
-                           np.array([1.0 if f == UP else -1.0 if f == DOWN else 0.0 for f in fm]))
+                           np.array([1.0 if f == UP else -1.0 if f == DOWN else 0.0 for f in fm]),
+                           np.array([f == FIX for f in fm], float), np.zeros(2 * c) if rfix is None else rfix,
+                           np.array([m in (I, C, T, F) for m in modes], float))
         small = 0
         for _ in range(NEWTON_ITER):
             r, Jr = self.fn(x, *args)
@@ -126,18 +131,20 @@ class _Step:
             Jr = np.asarray(Jr)
             # rows and columns equilibrated (momentum rows ~ 1/h², gap rows ~ 1/ℓ): the step's
             # rounding then stays at the level of the unknowns, not of the Jacobian's condition
-            rs = 1.0 / np.maximum(np.max(np.abs(Jr), axis=1), 1e-300)
-            cs = 1.0 / np.maximum(np.max(np.abs(Jr * rs[:, None]), axis=0), 1e-300)
-            A = Jr * rs[:, None] * cs[None, :]
-            if not (np.all(np.isfinite(A)) and np.all(np.isfinite(r))):
-                return x, False
-            try:
-                dx = cs * np.linalg.solve(A, -r * rs)
-            except np.linalg.LinAlgError:
-                try:
-                    dx = cs * np.linalg.lstsq(A, -r * rs, rcond=None)[0]
-                except np.linalg.LinAlgError:
+            # (a trial far from the step's solution may overflow: it is refused, quietly)
+            with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+                rs = 1.0 / np.maximum(np.max(np.abs(Jr), axis=1), 1e-300)
+                cs = 1.0 / np.maximum(np.max(np.abs(Jr * rs[:, None]), axis=0), 1e-300)
+                A = Jr * rs[:, None] * cs[None, :]
+                if not (np.all(np.isfinite(A)) and np.all(np.isfinite(r))):
                     return x, False
+                try:
+                    dx = cs * np.linalg.solve(A, -r * rs)
+                except np.linalg.LinAlgError:
+                    try:
+                        dx = cs * np.linalg.lstsq(A, -r * rs, rcond=None)[0]
+                    except np.linalg.LinAlgError:
+                        return x, False
             x = x + dx
             if not np.all(np.isfinite(x)):
                 return x, False
@@ -234,11 +241,11 @@ def _march_step(step: _Step, q, p, h, g_q, held_prev, tol, finest: bool):
         if got is None:
             why = "newton"
             break
-        x, gs, gn, nu, mu, b = got
+        x, gs, gn, nu, mu, b, used = got
         crossed |= set(np.where((gs < -pen) | (gn < -pen))[0].tolist())
         change = _next_modes(modes, touch, g_q, gs, gn, nu, mu, b, pen, tol, step, finest)
         if change is None:
-            return _sequential(step, q, p, h, x, modes, mu, pen) or _result(step, x, modes, gn, step.last_fmodes)
+            return _cascade(step, q, p, h, x, used, pen) or _result(step, x, used, gn, step.last_fmodes)
         if change == "split":
             return "split" if not finest else ("split at the finest step", key)
         modes, frac = change
@@ -250,7 +257,8 @@ def _march_step(step: _Step, q, p, h, g_q, held_prev, tol, finest: bool):
 
 def _try(step: _Step, q, p, h, modes, x0, x, frac):
     """Solve the step in ``modes`` (from ``x``; a newly timed impact from its estimated crossing
-    fraction ``frac``): ``(x, gaps at q̃, gaps at q_{k+1}, ν, μ, β)``, or None if Newton fails."""
+    fraction ``frac``): ``(x, gaps at q̃, gaps at q_{k+1}, ν, μ, β, modes used)``, or None if Newton fails
+    (the modes used differ where an impact with friction took its impulse from its law: T or P, FIX)."""
     n, c = step.n, step.c
     gapf = step.cm.system.gap
     start = x.copy()
@@ -272,22 +280,32 @@ def _try(step: _Step, q, p, h, modes, x0, x, frac):
     xn = _friction(step, q, p, h, modes, xn)
     if xn is None:
         return None
+    used = list(modes)
+    if step.nf:
+        # an impact with friction: its impulse by the frictional impact law, the step solved again with it
+        law = _impact_law(step, q, p, h, xn, modes, cascade=False)
+        if law == "failed":
+            return None
+        if law is not None:
+            xn, used = law
     o = 2 * n + 1
     return (xn, np.asarray(gapf(xn[:n])[0]).reshape(-1), np.asarray(gapf(xn[n:2 * n])[0]).reshape(-1),
-            xn[o:o + c], xn[o + c:o + 2 * c], float(xn[2 * n]))
+            xn[o:o + c], xn[o + c:o + 2 * c], float(xn[2 * n]), used)
 
 
 #: Friction-mode changes tried per solve of a step's normal modes.
 FRICTION_ROUNDS = 8
 
 
-def _friction(step: _Step, q, p, h, modes, x):
+def _friction(step: _Step, q, p, h, modes, x, mufix=None, rfix=None):
     """The step's friction modes (Coulomb, maximal dissipation) for its normal modes, by the same greedy
     search: a contact held on the surface (H or R) with a positive coefficient starts as it ended the
     previous step (sticking if it was free); sticking fails where the ratio |ρ| exceeds μ_f (it then slides
     against ρ), sliding fails where the slip velocity has the wrong sign (it then sticks).  The slip velocity
     grows with ρ, so one of the three holds: stick ``s = 0, |ρ| ≤ μ_f``, slide ``ρ = −μ_f, s ≥ 0`` or
-    ``ρ = μ_f, s ≤ 0``.  The modes found are ``step.last_fmodes``; the point, or None."""
+    ``ρ = μ_f, s ≤ 0``.  Slots with a ratio in ``rfix`` (not NaN: an impact's, :func:`_impact_law`) keep it
+    (mode FIX), and ``mufix`` goes with the normal modes F, T and P.  The modes found are
+    ``step.last_fmodes``; the point, or None."""
     c = step.c
     step.last_fmodes = [FREE] * (2 * c)
     if not step.nf:
@@ -295,22 +313,26 @@ def _friction(step: _Step, q, p, h, modes, x):
     cm = step.cm
     n = step.n
     # slots: the node's force of each contact (held or released: ν free), then its sub-node impulse (held)
+    # (a caught arrival, C, holds its contact from the sub-node on: its impulse has friction like a held one's,
+    # against the slip after the sub-node)
     active = [mj in (H, R) and cm.mu_f[j] > 0 for j, mj in enumerate(modes)] + \
-        [mj == H and cm.mu_f[j] > 0 for j, mj in enumerate(modes)]
+        [mj in (H, C) and cm.mu_f[j] > 0 for j, mj in enumerate(modes)]
     muf = np.concatenate([cm.mu_f, cm.mu_f])
     fm = [(step.fprev[i] if step.fprev[i] != FREE else STICK) if active[i] else FREE for i in range(2 * c)]
+    if rfix is not None:
+        fm = [FIX if np.isfinite(rfix[i]) else f for i, f in enumerate(fm)]
+        rfix = np.where(np.isfinite(rfix), rfix, 0.0)
     tol = 1e-12 * step.vref
-    seen = set()
-    for _ in range(FRICTION_ROUNDS):
-        key = tuple(fm)
-        if key in seen:
-            return None
-        seen.add(key)
-        xf, ok = step.solve(x, q, p, h, modes, fmodes=fm)
+    slips = np.array([m in (I, C, T, F) for m in modes], float)
+
+    def judge(fm, x0):
+        """Solve in the friction modes ``fm``: ``(x, the most violated slot and its new mode)``; ``None`` if
+        Newton fails; the pick is None where every slot holds."""
+        xf, ok = step.solve(x0, q, p, h, modes, mufix=mufix, fmodes=fm, rfix=rfix)
         if not ok:
             return None
         rho = xf[cm.layout["fratio"]]
-        slip = np.asarray(cm.slip_row(q, xf[:n], xf[n:2 * n], xf[2 * n], h)).reshape(-1)
+        slip = np.asarray(cm.slip_row(q, xf[:n], xf[n:2 * n], xf[2 * n], h, slips)).reshape(-1)
         worst, pick = 0.0, None
         for j, f in enumerate(fm):
             if f == STICK and abs(rho[j]) > muf[j] * (1 + 1e-10):
@@ -323,12 +345,41 @@ def _friction(step: _Step, q, p, h, modes, x):
                 continue
             if viol > worst:
                 worst, pick = viol, (j, new)
+        return xf, pick
+
+    seen = set()
+    start = x
+    for _ in range(FRICTION_ROUNDS):
+        key = tuple(fm)
+        if key in seen:
+            break
+        seen.add(key)
+        got = judge(fm, x)
+        if got is None:
+            break
+        xf, pick = got
         if pick is None:
             step.last_fmodes = fm
             return xf
         fm = list(fm)
         fm[pick[0]] = pick[1]
         x = xf
+    # the greedy search cycled or stalled (a slip that stops or turns within the step, where the slots of the
+    # node and the sub-node interact): every combination of the free slots' modes, fewest changes first
+    slots = [i for i in range(2 * c) if active[i] and fm[i] != FIX]
+    base = [f for f in fm]
+    combos = sorted(product((STICK, UP, DOWN), repeat=len(slots)),
+                    key=lambda ch: sum(a != base[i] for a, i in zip(ch, slots)))
+    for ch in combos[:MAX_COMBINATIONS]:
+        trial = list(base)
+        for i, f in zip(slots, ch):
+            trial[i] = f
+        if tuple(trial) in seen:
+            continue
+        got = judge(trial, start)
+        if got is not None and got[1] is None:
+            step.last_fmodes = trial
+            return got[0]
     return None
 
 
@@ -390,60 +441,99 @@ def _enumerate(step: _Step, q, p, h, g_q, touch, modes0, crossed, x0, pen, tol, 
         got = _try(step, q, p, h, modes, x0, x0, frac)
         if got is None:
             continue
-        x, gs, gn, nu, mu, b = got
+        x, gs, gn, nu, mu, b, used = got
         if _next_modes(modes, touch, g_q, gs, gn, nu, mu, b, pen, tol, step, finest) is None:
-            return _sequential(step, q, p, h, x, modes, mu, pen) or _result(step, x, modes, gn, step.last_fmodes)
+            return _cascade(step, q, p, h, x, used, pen) or _result(step, x, used, gn, step.last_fmodes)
     return None
 
 
-def _sequential(step: _Step, q, p, h, x, modes, mu, pen):
-    """Under the sequential law (``Contact.law``), an impact that several contacts take at one sub-node is
-    re-solved with the impulses of the cascade (:func:`castrajectory.models.impact.sequential_impact`) on
-    the sub-node's state: the sub-node (its time and place) and the momentum before it do not depend on
-    the impulses, so the step keeps them and only its end moves.  The contacts then are in modes T (the
-    one timing the sub-node) and F, their impulses fixed; at a node's impact (mode N), P (the node's).
-    ``None`` where the law does not change the step (the simultaneous law, one contact, no impact); a step
-    whose cascade leaves a contact below the surface at its end is ``None`` too (the simultaneous answer
-    stands, with its warning)."""
+def _cascade(step: _Step, q, p, h, x, modes, pen):
+    """The sequential law's cascade on a solved step (:func:`_impact_law`), if it changes the step: its
+    result, or None (also where the cascade's end lies below a surface: the simultaneous answer stands,
+    with its warning)."""
+    got = _impact_law(step, q, p, h, x, modes, cascade=True)
+    if got is None or got == "failed":
+        return None
+    xs, new = got
+    gn = np.asarray(step.cm.system.gap(xs[step.n:2 * step.n])[0]).reshape(-1)
+    if np.any(gn < -pen):
+        return None
+    return _result(step, xs, new, gn, step.last_fmodes)
+
+
+def _impact_law(step: _Step, q, p, h, x, modes, cascade: bool):
+    """The impact law where it is not the step's own (Newton's law on each contact's normal velocity, in
+    the rows): the sequential law's cascade of an impact that several contacts take, and Coulomb friction
+    at an impact (:func:`castrajectory.models.impact.frictional_impact`, Stronge's energetic restitution).
+    The impulses come from the sub-node's state, which does not depend on them (its time and place, and
+    the momentum before it), so the step is solved again with them fixed and only its end moves: the
+    contacts in modes T (the one timing the sub-node) and F, at a node's impact P, and each frictional
+    impact's friction ratio in mode FIX.  ``cascade``: the sequential law at an impact that several contacts
+    take (with friction, each firing the frictional law); else one contact's impact with friction.
+    Returns ``(x, modes)``, ``None`` where the law does not change the step (the simultaneous law without
+    friction, one frictionless contact, a caught arrival, no impact), or ``"failed"`` where the step with
+    the law's impulses does not solve.
+
+    Under the simultaneous law an impact at several contacts is frictionless (no classical law holds
+    there); the answer says so (:func:`.solution._simultaneous_warnings`)."""
     cm = step.cm
-    if cm.system.contact.law != "sequential":
+    seq = cm.system.contact.law == "sequential"
+    if not (seq or step.nf):
         return None
     n, c = step.n, step.c
     o = 2 * n + 1
-    nu = x[o:o + c]
+    nu, mu = x[o:o + c], x[o + c:o + 2 * c]
     at_node = any(m == N for m in modes)
     if at_node:
         # an impact at the node q_k: its impulses h ν, the momentum before it the incoming p
         involved = [j for j, m in enumerate(modes) if (m == N or m in (H, R)) and nu[j] > 0.0]
-        if len(involved) < 2:
-            return None
         qs, pm = q, p
     else:
         involved = [j for j, m in enumerate(modes) if m in (I, C, H, R) and mu[j] > 0.0]
-        if len(involved) < 2 or not any(modes[j] in (I, C) for j in involved):
-            return None
+        if not any(modes[j] in (I, C) for j in involved):
+            return None                  # no impact
         qs, b = x[:n], float(x[2 * n])
         pm = np.asarray(cm.p_minus(q, qs, b, h, *cm.stage_parts(x[cm.layout["zs"]])[0])).reshape(-1)
-    # the cascade in the contacts' normal velocities: Π = M⁻¹ on the constraints' tangent space (velocities)
+    # (a caught arrival waives the law: no frictional impact there)
+    fric = step.nf and any(cm.mu_f[j] > 0 for j in involved) and (at_node or any(modes[j] == I for j in involved))
+    if not involved or (len(involved) >= 2) != cascade or (cascade and not seq) or (not cascade and not fric):
+        return None
+    # the law in the contacts' velocities: Π = M⁻¹ on the constraints' tangent space (velocities)
     Jx = np.asarray(cm.system.gap(qs)[1])[involved]
-    PiJt = cm.dm.velocities(np.repeat(qs[None, :], len(involved), axis=0), Jx)
     v = cm.dm.velocities(qs[None, :], pm[None, :])[0]
-    cascade, _ = sequential_impact(Jx @ PiJt.T, Jx @ v, cm.e)
-    mufix = np.zeros(c)
-    if at_node:
-        mufix[involved] = cascade / h                  # the node's force: impulse per step
-        seq = [P if j in involved else m for j, m in enumerate(modes)]
+    if fric:
+        Wr = np.vstack([Jx, np.asarray(cm.system.tangent(qs))[involved]])
+        G = Wr @ cm.dm.velocities(np.repeat(qs[None, :], Wr.shape[0], axis=0), Wr).T
+        if len(involved) == 1:
+            imp = frictional_impact(G, Wr @ v, cm.mu_f[involved[0]], cm.e)
+            Pn, Pt = imp.P[:1], imp.P[1:]
+        else:
+            Pn, Pt = sequential_frictional_impact(G, Wr @ v, cm.mu_f[involved], cm.e)
     else:
-        mufix[involved] = cascade
+        PiJt = cm.dm.velocities(np.repeat(qs[None, :], len(involved), axis=0), Jx)
+        Pn, _ = sequential_impact(Jx @ PiJt.T, Jx @ v, cm.e)
+        Pt = np.zeros_like(Pn)
+    mufix, rfix = np.zeros(c), np.full(2 * c, np.nan)
+    slot = 0 if at_node else c
+    for j, pn, pt in zip(involved, Pn, Pt):
+        if fric and cm.mu_f[j] > 0:
+            rfix[slot + j] = pt / pn if pn > 0 else 0.0
+    if at_node:
+        mufix[involved] = Pn / h                  # the node's force: impulse per step
+        new = [P if j in involved else m for j, m in enumerate(modes)]
+    else:
+        mufix[involved] = Pn
         timing = next(j for j, m in enumerate(modes) if m in (I, C))
-        seq = [T if j == timing else F if j in involved else m for j, m in enumerate(modes)]
-    xs, ok = step.solve(x, q, p, h, seq, mufix=mufix, fmodes=step.last_fmodes)
-    if not ok:
-        return None
-    gn = np.asarray(cm.system.gap(xs[n:2 * n])[0]).reshape(-1)
-    if np.any(gn < -pen):
-        return None
-    return _result(step, xs, seq, gn, step.last_fmodes)
+        new = [T if j == timing else F if j in involved else m for j, m in enumerate(modes)]
+    if step.nf:
+        xs = _friction(step, q, p, h, new, x, mufix=mufix, rfix=rfix)
+        if xs is None:
+            return "failed"
+    else:
+        xs, ok = step.solve(x, q, p, h, new, mufix=mufix)
+        if not ok:
+            return "failed"
+    return xs, new
 
 
 def _next_modes(modes, touch, g0, gs, gn, nu, mu, b, pen, tol, step, finest):
