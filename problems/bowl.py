@@ -15,7 +15,8 @@ import numpy as np
 from castrajectory import cli
 from castrajectory.models import collision
 from castrajectory.solve import trajectory
-from castrajectory.problems.rectangle_drop import add_body_flags, impact_panel, initial_state
+from castrajectory.problems.rectangle_drop import (add_body_flags, friction, friction_lines, friction_summary,
+                                                   impact_panel, initial_state)
 from castrajectory.validation import finite, positive
 
 
@@ -30,19 +31,22 @@ def run(args):
     cli.check_animation_path(args.animate)
     R = positive("radius", args.radius)
     body = collision.Body(args.mass, args.width, args.height)
-    system = collision.rectangle_contact_system(body, finite("g", args.g), args.restitution, collision.bowl_ground(R))
+    system = collision.rectangle_contact_system(body, finite("g", args.g), args.restitution, collision.bowl_ground(R),
+                                                friction(args))
     q0, qd0 = initial_state(args)
     tr = trajectory.solve_initial_value(system, q0, qd0, args.T, args.n, args.scheme,
                                         options=cli.ipopt_options(args), verbose=args.verbose, **cli.accuracy(args))
     lines = [f"bowl: R = {R:g}, body {args.width:g} x {args.height:g}, e = {args.restitution:g}, "
              f"scheme {args.scheme}, N = {args.n}, T = {args.T:g} s",
              f"{len(tr.impacts)} impacts; energy drift max |E - E0| = {np.max(np.abs(tr.energy - tr.energy[0])):.2e}"]
+    fr = friction_summary(system, tr, args.friction)
+    lines += friction_lines(fr)
     for imp in tr.impacts[:6]:
         lines.append(f"  t = {imp.t:.5f} s  {system.contact.names[imp.contact]:11s} μ = {imp.mu:.6g}")
     data = {"t": tr.t, "q": tr.q, "gap": tr.gap.min(axis=1), "mu": tr.node_impulse, "mu_sub": tr.mu,
-            "t_sub": tr.t_sub, "energy": tr.energy, "radius": R,
+            "t_sub": tr.t_sub, "energy": tr.energy, "radius": R, "friction": args.friction, **fr,
             "impacts": [{"t": i.t, "corner": system.contact.names[i.contact], "contact": i.contact, "mu": i.mu,
-                         "q": i.q, "v_before": i.v_before, "v_after": i.v_after, "caught": i.caught}
+                         "q": i.q, "v_before": i.v_before, "v_after": i.v_after, "caught": i.caught, "mu_t": i.mu_t}
                         for i in tr.impacts]}
     out = cli.contact_outcome("body in a bowl", system, tr, data, lines, ground=bowl_curve(R))
     out.writers["plot"] = lambda path: figure(out, system).savefig(path)

@@ -6,6 +6,14 @@ Each corner j has a gap y_j(q) ≥ 0 and an impulse μ_j ≥ 0 along M⁻¹∇y_
 velocity, at a sub-node whose time is an unknown.  Every impact is compared
 with the closed-form corner impact law of collision.rectangle_impact.
 
+With ``--friction μ`` each corner has Coulomb friction along the ground: a bounce follows Stronge's energetic
+restitution with friction (models.impact.frictional_impact), and each is compared with that law applied to
+its own arrival, with the kinetic energy never gained (``impact_energy_gain``, at most 0) and the tangential
+impulse in the cone (``friction_cone``, at most 0).  A corner straight under the centroid bounces like a
+round body (k = 1/3): it leaves rolling iff (k/(1+k))|u| ≤ μ(1+e)|v_n|.
+
+    python problems/rectangle_drop.py --friction 0.5 --restitution 0.5 --T 1.5 --n 600
+
     python problems/rectangle_drop.py --angle 0.3 --restitution 1 --T 3
     python problems/rectangle_drop.py --angle 0.001 --omega 0 --vx 0     # nearly flat landing
 """
@@ -16,8 +24,8 @@ import numpy as np
 from castrajectory import cli
 from castrajectory.models import collision
 from castrajectory.solve import trajectory
-from castrajectory.models.impact import simultaneous_impact
-from castrajectory.validation import finite
+from castrajectory.models.impact import frictional_impact, simultaneous_impact
+from castrajectory.validation import InputError, finite
 
 CORNER_NAMES = ["lower left", "lower right", "upper right", "upper left"]
 
@@ -37,6 +45,8 @@ def add_body_flags(p, width, height, x, y, angle, vx, vy, omega, T, n):
     p.add_argument("--T", type=float, default=T, help="duration T in s (> 0)")
     p.add_argument("--n", type=int, default=n, help="number of time steps N (>= 2)")
     cli.add_scheme(p)
+    p.add_argument("--friction", type=float, default=0.0,
+                   help="Coulomb friction coefficient at the corners (>= 0; 0: frictionless)")
     cli.add_accuracy(p)
     cli.add_plot(p)
     p.add_argument("--animate", metavar="PATH", help="write an animation (.gif, or .mp4 when ffmpeg is present)")
@@ -48,10 +58,47 @@ def parser():
     return p
 
 
+def friction(args) -> float:
+    """``--friction``, checked (finite, >= 0)."""
+    mu = finite("friction", args.friction)
+    if mu < 0:
+        raise InputError(f"--friction must be >= 0 (got {mu:g})")
+    return mu
+
+
 def initial_state(args):
     q0 = [finite("x", args.x), finite("y", args.y), finite("angle", args.angle)]
     qd0 = [finite("vx", args.vx), finite("vy", args.vy), finite("omega", args.omega)]
     return q0, qd0
+
+
+def friction_summary(system, tr, mu_f: float) -> dict:
+    """With friction: per bounce (not caught) the kinetic energy's change (never positive) and the tangential
+    impulse against the cone, and the frictional law on the bounce's own arrival against its outcome."""
+    if mu_f <= 0:
+        return {}
+    gains, cone, law = [], [], []
+    for imp in tr.impacts:
+        if imp.caught:
+            continue
+        M = np.asarray(system.mass_matrix(imp.q))
+        K0, K1 = 0.5 * imp.v_before @ M @ imp.v_before, 0.5 * imp.v_after @ M @ imp.v_after
+        gains.append((K1 - K0) / max(K0, 1e-300))
+        cone.append(abs(imp.mu_t) - mu_f * imp.mu)
+        if np.count_nonzero(tr.mu[imp.step] > 1e-9 * max(1.0, imp.mu)) == 1:
+            W = np.vstack([np.asarray(system.gap(imp.q)[1])[imp.contact], np.asarray(system.tangent(imp.q))[imp.contact]])
+            P = frictional_impact(W @ np.linalg.solve(M, W.T), W @ imp.v_before, mu_f, system.contact.restitution).P
+            law.append(float(np.max(np.abs(imp.v_before + np.linalg.solve(M, W.T @ P) - imp.v_after))))
+    return {"impact_energy_gain": max(gains) if gains else None, "friction_cone": max(cone) if cone else None,
+            "frictional_law_error": max(law) if law else None}
+
+
+def friction_lines(fr: dict) -> list:
+    if not fr:
+        return []
+    return [f"friction: largest relative kinetic-energy change at a bounce {cli.fmt(fr['impact_energy_gain'], '.3g')} "
+            f"(never positive), |μ_t| − μ μ_n at most {cli.fmt(fr['friction_cone'], '.3g')}, "
+            f"against the frictional law {cli.fmt(fr['frictional_law_error'], '.3g')}"]
 
 
 def impact_table(tr, body, e):
@@ -92,23 +139,32 @@ def impact_table(tr, body, e):
 def run(args):
     cli.check_animation_path(args.animate)
     body = collision.Body(args.mass, args.width, args.height)
-    system = collision.rectangle_contact_system(body, finite("g", args.g), args.restitution, collision.flat_ground)
+    system = collision.rectangle_contact_system(body, finite("g", args.g), args.restitution, collision.flat_ground,
+                                                friction(args))
     e = system.contact.restitution
     q0, qd0 = initial_state(args)
     tr = trajectory.solve_initial_value(system, q0, qd0, args.T, args.n, args.scheme,
                                         options=cli.ipopt_options(args), verbose=args.verbose, **cli.accuracy(args))
-    rows, worst = impact_table(tr, body, e)
+    fr = friction_summary(system, tr, args.friction)
+    # (with friction the frictionless corner law is not the oracle: friction_summary's law is)
+    rows, worst = impact_table(tr, body, e) if not fr else ([], 0.0)
     lines = [f"rectangle drop: {args.width:g} x {args.height:g}, m = {args.mass:g}, e = {e:g}, "
-             f"scheme {args.scheme}, N = {args.n}, T = {args.T:g} s",
-             f"{len(rows)} impacts ({sum(r['caught'] for r in rows)} caught, plastic); "
-             f"max |v⁺ - closed-form corner law| over the bounces = {worst:.2e}"]
+             f"friction {args.friction:g}, scheme {args.scheme}, N = {args.n}, T = {args.T:g} s"]
+    if fr:
+        lines += [f"{len(tr.impacts)} impacts ({sum(i.caught for i in tr.impacts)} caught, plastic)"] + friction_lines(fr)
+        lines += [f"  t = {i.t:.5f} s  {CORNER_NAMES[i.contact]:11s} θ = {i.q[2]:+.4f}  μ = {i.mu:.6g}  μ_t = {i.mu_t:+.6g}"
+                  f"{'  (caught)' if i.caught else ''}" for i in tr.impacts[:8]]
+    else:
+        lines.append(f"{len(rows)} impacts ({sum(r['caught'] for r in rows)} caught, plastic); "
+                     f"max |v⁺ - closed-form corner law| over the bounces = {worst:.2e}")
     for r in rows[:8]:
         law = "caught" if r["caught"] else f"law {r['mu_exact']:.6g}"
         lines.append(f"  t = {r['t']:.5f} s  {r['corner_name']:11s} θ = {r['angle']:+.4f}  μ = {r['mu']:.6g} "
                      f"({law})  v⁺ = {np.round(r['v_after'], 5).tolist()}")
     data = {"t": tr.t, "q": tr.q, "mu": tr.node_impulse, "mu_sub": tr.mu, "t_sub": tr.t_sub, "nu": tr.nu,
             "mass": body.mass, "width": body.width, "height": body.height, "restitution": e,
-            "impacts": rows, "impact_law_error": worst, "energy": tr.energy, "gap": tr.gap.min(axis=1)}
+            "impacts": rows, "impact_law_error": worst, "energy": tr.energy, "gap": tr.gap.min(axis=1),
+            "friction": args.friction, **fr}
     out = cli.contact_outcome("rectangle drop", system, tr, data, lines, ground=GROUND,
                               series={"c_y": tr.q[:, 1], "smallest corner gap": tr.gap.min(axis=1)})
     out.writers["plot"] = lambda path: figure(out, system).savefig(path)

@@ -133,6 +133,7 @@ SCENES: List[Scene] = [
         Entry("pushed_box", ("--mu", "0.8", "--force", "5.2"),
               "a box pushed at half its height, μ = 0.8: it tips about its front corner (statics: above 4.905 N)"),
     )),
+    Scene("rimless_wheel", "contact"),
     Scene("newtons_cradle", "contact", report=(
         Entry("newtons_cradle", ("--balls", "3", "--n", "200"),
               "Newton's cradle, 3 touching balls, the sequential law (the last leaves, the others stop)", True),
