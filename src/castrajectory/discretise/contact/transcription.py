@@ -6,8 +6,9 @@ restitution ``e``) is transcribed here into one program; a system without one ne
 reaches this module.  How the program is solved (the event-located guess, the penalty
 ladder, horizon windows) is :mod:`castrajectory.solve.contact`.
 
-Transcription (initial value, two-point schemes; derivation in
-``docs/derivations.md``, "Contact trajectories")
+Transcription (initial value; derivation in ``docs/derivations.md``, "Contact trajectories".  Written
+here with the two-point ``L_d``; a scheme with stages gives each part of a step its own stages and stage
+rows, :mod:`.elements`)
 -----------------------------------------------------------------------------
 Every step ``k`` of the grid (``t_{k+1} = t_k + h_k``; ``h_k = h`` unless refined) holds a *collision sub-node* ``q̃_k``
 at ``t_k + α_k h`` with ``α_k = ½ + β_k ∈ [ε, 1 − ε]`` (as in Fetecau, Marsden,
