@@ -20,11 +20,19 @@ error on the ball from 1.3 m (scripts/nosnoc_ball.py) beside castrajectory's, wi
 equal accuracy (goal: at least 50x).  One untimed warm-up per scene compiles the element functions
 (castrajectory.solve.jit's disk cache makes later runs load them).  Last, issue #25's pendulum against a
 joint limit: impact-time error against the event-driven reference and wall time, for every scheme family
-(goal: 1e-10 in under 1 s).
+(goal: 1e-10 in under 1 s).  Then issue #25's friction goal: the sliding sphere that starts to roll
+(problems/rolling_ball.py's model: m = 1, R = 0.1, mu = 0.3, g = 9.81, v0 = 2 m/s, no spin, T = 1 s;
+closed form t* = 2 v0/(7 mu g), v(T) = 5 v0/7), its rolling-start time and final speed against the closed
+form, error against wall time, for castrajectory (a sweep of N), MuJoCo (a sphere on a plane: its
+default soft contact, and its stiffest safe one, over a sweep of the timestep) and pymunk (a circle with
+the sphere's inertia on a segment, over the timestep and the solver's iterations), with the ratio of
+errors at equal wall time (goal: 100x more accurate than both).  MuJoCo and pymunk are optional peers
+(the ``bench`` extra); a missing one is skipped with a message.
 
     python scripts/bench_contact.py
     python scripts/bench_contact.py --repeats 1
     python scripts/bench_contact.py --only joint-limit
+    python scripts/bench_contact.py --only friction
 """
 from __future__ import annotations
 
@@ -72,13 +80,16 @@ def run(name, repeats):
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--repeats", type=int, default=3)
-    p.add_argument("--only", choices=("joint-limit",), help="run only this part")
+    p.add_argument("--only", choices=("joint-limit", "friction"), help="run only this part")
     args = p.parse_args(argv)
     if args.repeats < 1:
         print("bench_contact.py: error: --repeats must be >= 1", file=sys.stderr)
         return 2
     if args.only == "joint-limit":
         joint_limit(args.repeats)
+        return 0
+    if args.only == "friction":
+        friction(args.repeats)
         return 0
     worst_steps = 0
     print(f"{'scene':32s} {'wall s':>7s} {'build':>7s} {'solve':>7s} {'iter':>5s} {'steps':>5s} "
@@ -108,6 +119,7 @@ def main(argv=None) -> int:
           f"(error {err:.1e} s): time ratio {wall / mj:.1f}")
     peer_nosnoc(args.repeats)
     joint_limit(args.repeats)
+    friction(args.repeats)
     return 0
 
 
@@ -244,6 +256,253 @@ def peer_nosnoc(repeats: int) -> None:
                   f"its coarsest run; at castrajectory's own accuracy ({best_ours:.0e} s) nosnoc does not "
                   f"arrive: its best is {floor:.1e} s")
 
+
+#: Issue #25's friction scene: the sphere launched sliding (m, R, mu, g, v0, spin, T).
+FRICTION = (1.0, 0.1, 0.3, 9.81, 2.0, 0.0, 1.0)
+#: castrajectory's grids for the friction scene.
+FRICTION_GRIDS = (100, 200, 400, 800, 1600, 3200)
+#: The peers' timesteps in s (MuJoCo's two contact settings; pymunk at its default 10 iterations).
+MUJOCO_STEPS = (2e-3, 1e-3, 5e-4, 2e-4, 1e-4, 5e-5, 2e-5, 1e-5, 5e-6)
+PYMUNK_STEPS = (2e-3, 1e-3, 5e-4, 2e-4, 1e-4, 5e-5, 2e-5, 1e-5, 5e-6, 2e-6)
+#: pymunk's solver iterations swept at these timesteps (10 is its default).
+PYMUNK_ITERATIONS = ((1e-4, 1), (1e-4, 100), (1e-5, 1), (1e-5, 100))
+#: A peer rolls from the first sample from which its contact point's slip speed stays below this (m/s);
+#: the slip falls at 7 mu g/2 = 10.3 m/s^2 while sliding, so the threshold reads t* early by at most 1e-6 s.
+PEER_SLIP = 1e-5
+#: The settling at rest before the launch (s): the peers start from their own resting contact.
+PEER_SETTLE = 0.3
+#: Runs faster than this (s) are repeated --repeats times (the best wall time is kept); slower ones run once.
+FAST_RUN = 2.0
+#: Goal: this many times smaller errors than each peer at no more wall time.
+FRICTION_GOAL = 100.0
+
+
+def _rolls_from(t, slip, tol):
+    """The first sample time from which |slip| stays <= tol to the end (None: it never does)."""
+    over = np.nonzero(np.abs(slip) > tol)[0]
+    if not over.size:
+        return float(t[0])
+    return None if over[-1] == len(t) - 1 else float(t[over[-1] + 1])
+
+
+def _best_of(run_once, repeats):
+    """(wall, rolling time, final speed, note) of the fastest of --repeats runs (one run if it is slow)."""
+    best = run_once()
+    if best[0] < FAST_RUN:
+        for _ in range(repeats - 1):
+            again = run_once()
+            if again[0] < best[0]:
+                best = again
+    return best
+
+
+def _friction_castrajectory(N):
+    m, R, mu, g, v0, spin, T = FRICTION
+    system = collision.rolling_body("sphere", m, R, mu, g)
+    t0 = time.perf_counter()
+    tr = trajectory.solve_initial_value(system, [0.0, R, 0.0], [v0, 0.0, -spin], T, N)
+    wall = time.perf_counter() - t0
+    if not tr.success:
+        return wall, None, float("nan"), tr.status
+    # as problems/rolling_ball.py reads it: the first node from which the slip v - R w stays ~0
+    v, w = tr.v[:, 0], -tr.v[:, 2]
+    t_roll = _rolls_from(tr.t, v - R * w, 1e-9 * max(abs(v0), R * abs(spin), 1e-12))
+    return wall, t_roll, float(v[-1]), tr.status
+
+
+def _mujoco_xml(dt, stiff):
+    m, R, mu, g = FRICTION[:4]
+    I = 0.4 * m * R * R
+    # stiff: the smallest time constant MuJoCo keeps stable (2 dt), impedance near 1, and noslip passes
+    contact = (f'solref="{2 * dt:.6g} 1" solimp="0.999 0.9999 0.001 0.5 2"' if stiff else "")
+    noslip = 50 if stiff else 0
+    return (f'<mujoco><option timestep="{dt:.6g}" gravity="0 0 {-g}" noslip_iterations="{noslip}"/><worldbody>'
+            f'<geom type="plane" size="100 100 0.1" friction="{mu} 0 0" {contact}/>'
+            f'<body pos="0 0 {R}"><freejoint/><inertial pos="0 0 0" mass="{m}" diaginertia="{I} {I} {I}"/>'
+            f'<geom type="sphere" size="{R}" friction="{mu} 0 0" {contact}/></body></worldbody></mujoco>')
+
+
+def _friction_mujoco(dt, stiff):
+    """MuJoCo: a sphere on a plane, settled at rest on its soft contact, then launched along x.  The slip is
+    the velocity of the ball's material point at the floor, v + w x (0, 0, -z); timed: the stepping of the
+    1 s run with the state read each step."""
+    import mujoco
+    v0, T = FRICTION[4], FRICTION[6]
+    model = mujoco.MjModel.from_xml_string(_mujoco_xml(dt, stiff))
+    data = mujoco.MjData(model)
+    mujoco.mj_step(model, data, int(round(PEER_SETTLE / dt)))
+    n = int(round(T / dt))
+    qv, qp = np.empty((n + 1, 6)), np.empty((n + 1, 7))
+    t0 = time.perf_counter()
+    data.qvel[:] = 0.0
+    data.qvel[0] = v0
+    qv[0], qp[0] = data.qvel, data.qpos
+    for k in range(1, n + 1):
+        mujoco.mj_step(model, data)
+        qv[k], qp[k] = data.qvel, data.qpos
+    wall = time.perf_counter() - t0
+    # the free joint's angular velocity is in the body frame: rotate it by the quaternion (c, u)
+    c, u, wb = qp[:, 3:4], qp[:, 4:], qv[:, 3:]
+    uw = np.cross(u, wb)
+    w = wb + 2.0 * c * uw + 2.0 * np.cross(u, uw)
+    z = qp[:, 2]
+    slip = np.hypot(qv[:, 0] - w[:, 1] * z, qv[:, 1] + w[:, 0] * z)
+    t_roll = _rolls_from(np.arange(n + 1) * dt, slip, PEER_SLIP)
+    return wall, t_roll, float(qv[-1, 0]), f"creeps at {slip[-1]:.1e} m/s" if t_roll is None else ""
+
+
+def _friction_pymunk(dt, iterations):
+    """pymunk: a circle with the sphere's moment of inertia 2/5 m R^2 on a static segment (friction mu: the
+    circle's mu times the floor's 1), collision slop 1e-6 m (its default 0.1 is the ball's radius), settled
+    at rest, then launched along x; timed: the stepping of the 1 s run with the state read each step."""
+    import pymunk
+    m, R, mu, g, v0, spin, T = FRICTION
+    space = pymunk.Space()
+    space.gravity = (0.0, -g)
+    space.iterations = iterations
+    space.collision_slop = 1e-6
+    floor = pymunk.Segment(space.static_body, (-100.0, 0.0), (100.0, 0.0), 0.0)
+    floor.friction = 1.0
+    body = pymunk.Body(m, 0.4 * m * R * R)
+    body.position = (0.0, R)
+    ball = pymunk.Circle(body, R)
+    ball.friction, ball.elasticity = mu, 0.0
+    space.add(floor, body, ball)
+    for _ in range(int(round(PEER_SETTLE / dt))):
+        space.step(dt)
+    n = int(round(T / dt))
+    out = np.empty((n + 1, 2))
+    t0 = time.perf_counter()
+    body.velocity, body.angular_velocity = (v0, 0.0), -spin
+    out[0] = body.velocity.x, body.angular_velocity
+    for k in range(1, n + 1):
+        space.step(dt)
+        out[k] = body.velocity.x, body.angular_velocity
+    wall = time.perf_counter() - t0
+    slip = out[:, 0] + R * out[:, 1]              # counter-clockwise w: the bottom point moves at v + R w
+    t_roll = _rolls_from(np.arange(n + 1) * dt, slip, PEER_SLIP)
+    return wall, t_roll, float(out[-1, 0]), f"creeps at {abs(slip[-1]):.1e} m/s" if t_roll is None else ""
+
+
+def _peer_available(module):
+    import importlib.util
+    return importlib.util.find_spec(module) is not None
+
+
+def friction(repeats: int) -> None:
+    """Issue #25's friction goal: the rolling start and the final speed of the sliding sphere against the
+    closed form, error against wall time, castrajectory against MuJoCo and pymunk in this run."""
+    m, R, mu, g, v0, spin, T = FRICTION
+    t_ex, v_ex = collision.rolling_oracle("sphere", v0, spin, R, mu, g)
+    print(f"\nfriction: the sliding sphere (m = {m:g}, R = {R:g}, mu = {mu:g}, g = {g:g}, v0 = {v0:g} m/s, spin "
+          f"{spin:g}, T = {T:g} s) against the closed form: rolls from t* = 2 v0/(7 mu g) = {t_ex:.12f} s at "
+          f"v = 5 v0/7 = {v_ex:.12f} m/s")
+    print(f"  wall: castrajectory's whole solve (build + solve); the peers' stepping of the {T:g} s run with the "
+          f"state read each step (building the model and settling {PEER_SETTLE:g} s at rest excluded); best of "
+          f"{repeats} for runs under {FAST_RUN:g} s")
+
+    def err(row):
+        wall, t_roll, v_end, note = row
+        e_t = abs(t_roll - t_ex) if t_roll is not None else float("nan")
+        return wall, e_t, abs(v_end - v_ex), note
+
+    def table(title, rows):
+        print(f"  {title}")
+        print(f"    {'setting':34s} {'wall s':>8s} {'rolling-time err s':>18s} {'final-speed err':>15s}")
+        for label, (wall, e_t, e_v, note) in rows:
+            roll = f"{e_t:18.2e}" if np.isfinite(e_t) else f"{'never rolls':>18s}"
+            print(f"    {label:34s} {wall:8.4f} {roll} {e_v:15.2e}{'  ' + note if note else ''}")
+
+    single = lambda f: _best_of(f, repeats)  # noqa: E731
+    _friction_castrajectory(FRICTION_GRIDS[0])                      # warm-up (compiles, loads Ipopt)
+    ours = [(f"N = {N} (h = {T / N:.3g} s)", err(single(lambda N=N: _friction_castrajectory(N))))
+            for N in FRICTION_GRIDS]
+    table("castrajectory (problems/rolling_ball.py's model, midpoint; the rolling time read at the nodes: its "
+          "error is bounded below by ~h)", ours)
+    peers = {}
+    if _peer_available("mujoco"):
+        import mujoco
+        rows = [(f"{'stiff' if stiff else 'default'} contact, dt = {dt:.0e}",
+                 err(single(lambda dt=dt, stiff=stiff: _friction_mujoco(dt, stiff))))
+                for stiff in (False, True) for dt in MUJOCO_STEPS]
+        table(f"MuJoCo {mujoco.__version__} (a 3-D sphere on a plane, Euler, pyramidal cone; default: solref "
+              f"0.02 1, solimp 0.9 0.95 0.001; stiff: solref 2 dt 1, solimp 0.999 0.9999 0.001, 50 noslip "
+              f"iterations; rolls once the slip stays below {PEER_SLIP:g} m/s)", rows)
+        peers["MuJoCo"] = rows
+    else:
+        print("  MuJoCo: not installed (pip install '.[bench]'); skipped")
+    if _peer_available("pymunk"):
+        import pymunk
+        rows = [(f"dt = {dt:.0e}, {it} iterations", err(single(lambda dt=dt, it=it: _friction_pymunk(dt, it))))
+                for dt, it in [(dt, 10) for dt in PYMUNK_STEPS] + list(PYMUNK_ITERATIONS)]
+        table(f"pymunk {pymunk.version} (a 2-D circle, I = 2/5 m R^2, on a static segment; rolls once the slip "
+              f"stays below {PEER_SLIP:g} m/s)", rows)
+        peers["pymunk"] = rows
+    else:
+        print("  pymunk: not installed (pip install '.[bench]'); skipped")
+    if not peers:
+        print("  no peer installed: the comparison is skipped")
+        return
+
+    cheapest = min(r[0] for _, r in ours)
+    print("  at equal time: castrajectory's smallest error over its runs of no more wall time than the peer's "
+          "run, and the ratio peer error / castrajectory error (rolling time; final speed)")
+    ratios = {"rolling time": [], "final speed": []}
+    unmatched = total = 0
+    for peer, rows in peers.items():
+        cheap = [r for _, r in rows if r[0] < cheapest]
+        if cheap:
+            unmatched += len(cheap)
+            print(f"    {peer:7s} {len(cheap)} runs ({min(r[0] for r in cheap):.4f} to {max(r[0] for r in cheap):.4f} s) "
+                  f"are cheaper than castrajectory's cheapest solve ({cheapest:.3f} s): no equal-time comparison "
+                  f"(their best errors: rolling time {np.nanmin([r[1] for r in cheap] + [np.inf]):.1e} s, final speed "
+                  f"{min(r[2] for r in cheap):.1e} m/s)")
+        for label, (wall, e_t, e_v, _) in rows:
+            total += 1
+            within = [r for _, r in ours if r[0] <= wall]
+            if not within:
+                continue
+            c_t = min((r[1] for r in within if np.isfinite(r[1])), default=float("nan"))
+            c_v = min(r[2] for r in within)
+            r_t = e_t / c_t if np.isfinite(e_t) and np.isfinite(c_t) else float("nan")
+            r_v = e_v / max(c_v, 1e-300)
+            if np.isfinite(r_t):
+                ratios["rolling time"].append((r_t, peer))
+            ratios["final speed"].append((r_v, peer))
+            roll = f"{r_t:.2g}x" if np.isfinite(r_t) else "n/a (the peer never rolls)"
+            print(f"    {peer:7s} {label:34s} {wall:8.4f} s: castrajectory {c_t:.1e} s; {c_v:.1e} m/s  ratio "
+                  f"{roll}; {r_v:.2g}x")
+    met = {}
+    for oracle, rs in ratios.items():
+        if rs:
+            lo, hi = min(rs), max(rs)
+            met[oracle] = lo[0] >= FRICTION_GOAL
+            print(f"  {oracle}: ratio at least {lo[0]:.2g}x ({lo[1]}), at most {hi[0]:.2g}x ({hi[1]}), over {len(rs)} "
+                  f"equal-time comparisons (goal: >= {FRICTION_GOAL:g}x)")
+        else:
+            met[oracle] = False
+            print(f"  {oracle}: no equal-time comparison")
+    ok = all(met.values()) and unmatched < total
+    print(f"  {'PASS' if ok else 'MISS'}: {FRICTION_GOAL:g}x more accurate than {' and '.join(peers)} at equal time "
+          f"on the friction oracles (rolling time {'met' if met['rolling time'] else 'not met'}, final speed "
+          f"{'met' if met['final speed'] else 'not met'}; {unmatched} of {total} peer runs are cheaper than "
+          f"castrajectory's cheapest solve, {cheapest:.3f} s, and have no equal-time comparison)")
+    steps = [r[1] * N / T for N, (_, r) in zip(FRICTION_GRIDS, ours) if np.isfinite(r[1])]
+    n_fine, (_, fine) = FRICTION_GRIDS[-1], ours[-1]
+    best_peer = min(((r[1], r[0], p, lab) for p, rows in peers.items() for lab, r in rows if np.isfinite(r[1])),
+                    default=None)
+    print(f"  ceiling: castrajectory reads the rolling start at the nodes (the transition inside a step is not "
+          f"timed yet), so its rolling-time error is bounded below by ~h = T/N, first order (here "
+          f"{min(steps, default=float('nan')):.2f} to {max(steps, default=float('nan')):.2f} steps: "
+          f"{fine[1]:.1e} s at N = {n_fine}, h = {T / n_fine:.1e} s, in {fine[0]:.1f} s)"
+          + (f"; the time-steppers resolve it to their own step: {best_peer[0]:.1e} s ({best_peer[2]}, "
+             f"{best_peer[3]}) in {best_peer[1]:.2f} s" if best_peer else ""))
+    cas_v = max(r[2] for _, r in ours)
+    print(f"  final speed: castrajectory's is exact to rounding at every N (at most {cas_v:.1e} m/s off)"
+          + (f", and so is pymunk's (at most {max(r[2] for _, r in peers['pymunk']):.1e} m/s off): the closed form's "
+             "conserved angular momentum about the contact point, kept to rounding by both, so neither can be "
+             f"{FRICTION_GOAL:g}x more accurate than the other there (that ratio compares rounding errors)"
+             if "pymunk" in peers else ""))
 
 if __name__ == "__main__":
     sys.exit(main())
