@@ -27,12 +27,40 @@ complementarity ≤ 1e-8, impact law ≤ 1e-6, no catch the grid resolves, and f
     python scripts/contact_battery.py --workers 2     # two at a time (times then disturb each other)
     python scripts/contact_battery.py --dask-scheduler tcp://host:8786   # on a Dask cluster
 
-With ``--friction`` the friction families instead (issue #25): the block on an incline around tan α = μ and
-the planar rolling disk or sphere, μ in [0.1, 1.5], each checked for the cone (|ρ| <= μ), maximal
-dissipation (ρ s <= 0), sticking (no slip inside the cone) and its closed form (the incline's path within
-four steps' worth of its speed, a stop or a turn inside a step being first order; the rolling speed to 1e-9).
+With ``--friction`` the friction families instead (issue #25), taking turns, N in {200, 400, 800}, every tenth
+scene again at 2N (the twins meet every family):
 
-    python scripts/contact_battery.py --friction      # 30 scenes and their twins
+* ``incline``: the block on an incline around tan α = μ, μ in [0.1, 1.5]; the closed form of its path within
+  four steps' worth of its speed (a stop or a turn inside a step is first order);
+* ``rolling``: the planar rolling disk or sphere launched sliding with a spin, μ in [0.1, 1.5]; the rolling speed
+  to 1e-9;
+* ``spin-drop``: a disk or sphere dropped from H in [0.1, 1.5] with a drift and a spin, e in [0, 1], μ in [0, 1.5]
+  (0, the frictionless path, one time in eight), T past the first bounce, at most 1.5 s; the closed form of each
+  bounce (Stronge's law decouples for a round body: it lands at √(2H/g), each bounce (1 + e)|v_n| later by
+  2e|v_n|/g, and leaves rolling iff (k/(1 + k))|u| <= μ (1 + e)|v_n|, else sliding with the cone's impulse):
+  the impact times to 1e-10 s and the velocities after to 1e-9 of the scene's speed, as long as the grid
+  resolves the rebounds (a flight of at least 4 steps; for e = 0 the landing, whose velocities are waived only
+  where the answer lists it caught, as the old battery does);
+* ``rectangle-friction``: the rectangle dropped at a random angle, spin and drift, e in {0, 0.5, 0.8, 1}, μ as
+  the spin-drop's; one in four with a corner straight under the centroid (no spin), whose first bounce has the
+  round body's closed form (k = 1/3, r the half diagonal);
+* ``bowl-friction``: the rectangle in the bowl with friction, e and μ as the rectangle's.
+
+Every scene is checked for the cone (|ρ| <= μ, 1e-12) and no penetration; at the held contacts for maximal
+dissipation (ρ s <= 0) and sticking (no slip inside the cone), both off the impacts' own slots (the step's
+sub-node part of a contact's impact: there the ratio is the impact law's, and a coupled impact may turn the
+slip); at every bounce (one not caught) for its energy, ½vᵀMv after <= before to 1e-12 relative (Stronge's
+law never gains energy: the impact's dissipation check), and the impulse's cone |P_t| <= μ P_n; the bouncing
+families also for the complementarity residual (1e-8) and, for the rectangle and the bowl, the first impact's
+time and contact against the event-driven reference to 1e-10 s (the reference is frictionless: the first
+impact does not depend on μ; not compared where that arrival is too slow to be an impact on the grid,
+``first_arrival`` = slow, or within three steps of T).  A twin at 2N is worse when an oracle error (impact time,
+closed form) exceeds its N run's (by more than 1e-6 of it) and a tenth of its tolerance (1e-11 s, 1e-10): it
+then counts as not solved.
+Goals: at least 98 % solved, median under 1 s, none over 15 s, no twin worse.  CSV and summary:
+friction.csv and friction_summary.md in ``--out``.
+
+    python scripts/contact_battery.py --friction      # 100 scenes and their 10 twins (seed 17)
 
 With ``--schemes`` the scheme families instead (issue #25: every scheme of order >= 4 on scenes with
 non-trivial flights, which the event-driven reference flies by Gragg–Bulirsch–Stoer of order 16): the unit
@@ -81,8 +109,8 @@ import numpy as np  # noqa: E402
 from castrajectory.cli import sweeps  # noqa: E402
 from castrajectory.inspect import study  # noqa: E402
 from castrajectory.inspect.battery import (  # noqa: E402  (the scenes, their solve and their checks)
-    COMP_TOL, ENERGY_TOL, GAP_TOL, LAW_TOL, SCHEME_SET, TIME_FLOOR, battery_task, check_twins, draw_friction_scenes,
-    draw_scenes, draw_scheme_scenes, fitted_order)
+    COMP_TOL, ENERGY_TOL, FRICTION_FAMILIES, GAP_TOL, LAW_TOL, SCHEME_SET, TIME_FLOOR, battery_task,
+    check_friction_twins, check_twins, draw_friction_scenes, draw_scenes, draw_scheme_scenes, fitted_order)
 
 
 def run_all(scenes, timeout: float, log, executor=None, bar=None, quiet=False):
@@ -97,6 +125,11 @@ def run_all(scenes, timeout: float, log, executor=None, bar=None, quiet=False):
 FIELDS = ["id", "family", "N", "e", "status", "solved", "checks", "iterations", "time_s", "min_gap",
           "complementarity", "impact_law", "energy_change", "impacts", "caught", "resolvable_catches", "oracle_impacts",
           "impact_time_error", "mu", "cone", "dissipation", "stick", "oracle_error", "twin_of", "command"]
+
+FRICTION_FIELDS = ["id", "family", "N", "T", "e", "mu", "body", "centred", "status", "solved", "failed", "iterations",
+                   "time_s", "impacts", "caught", "oracle_impacts", "first_arrival", "min_gap", "complementarity", "cone",
+                   "dissipation", "stick", "impact_energy", "impact_cone", "impact_time_error", "oracle_error", "twin_of",
+                   "twin_ok", "command"]
 
 SCHEME_FIELDS = ["id", "family", "scheme", "order", "N", "T", "e", "limit", "wall", "q0", "v0", "status", "solved",
                  "failed", "iterations", "time_s", "impacts", "oracle_impacts", "caught", "impact_time_error", "time_tol",
@@ -134,18 +167,55 @@ def _family_rows(rows, families, columns):
     return out
 
 
+def _scene_params(r) -> str:
+    """A friction scene's drawn parameters, for the list of failures."""
+    keys = {"incline": ("alpha", "v0"), "rolling": ("body", "v0", "spin"),
+            "spin-drop": ("body", "radius", "height", "vx", "omega"),
+            "rectangle-friction": ("width", "height", "x", "y", "angle", "vx", "vy", "omega", "centred"),
+            "bowl-friction": ("radius", "width", "height", "x", "y", "angle", "vx", "vy", "omega")}[r["family"]]
+    return ", ".join(f"{k} = {_fmt(r.get(k))}" for k in keys)
+
+
 def summarise_friction(rows, seconds):
-    """The friction families' summary: per family the worst cone, dissipation, stick and oracle errors."""
+    """The friction families' summary: per family the count solved, the median and worst times, the worst of each
+    check (gap, complementarity, cone, ρ·s, stick, a bounce's energy change, an impulse's cone, the impact time
+    and the closed form); the failures with their parameters; the refinement pairs."""
     lines = _head("# Contact battery: friction", rows, seconds) + [
-        "| family | scenes | solved | median s | worst s | worst cone | worst ρ·s | worst stick slip | worst oracle error |",
-        "|---|---|---|---|---|---|---|---|---|"]
-    lines += _family_rows(rows, ("incline", "rolling"), (("cone", max), ("dissipation", max), ("stick", max),
-                                                          ("oracle_error", max)))
+        "| family | scenes | solved | median s | worst s | worst gap | worst compl. | worst cone | worst ρ·s | "
+        "worst stick slip | worst bounce dK/K | worst impulse cone | worst t-error | worst oracle error |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    lines += _family_rows(rows, FRICTION_FAMILIES, (
+        ("min_gap", min), ("complementarity", max), ("cone", max), ("dissipation", max), ("stick", max),
+        ("impact_energy", max), ("impact_cone", max), ("impact_time_error", max), ("oracle_error", max)))
+    lines += ["", "Columns: the worst over each family's successful solves (a check that does not apply is -); cone "
+              "|ρ| − μ; ρ·s and the stick slip off the impacts' own slots; a bounce's kinetic energy change over its "
+              "kinetic energy (not caught); an impulse's (|P_t| − μ P_n)/P_n; the impact times (s) against the closed "
+              "form (spin-drop, centred corner) or the event-driven reference's first impact (rectangle, bowl); the "
+              "closed form's error (incline: path, m; rolling: speed, m/s; spin-drop and centred corner: velocities "
+              "after the bounces over the scene's speed)."]
+    arrivals = [r.get("first_arrival") for r in rows if r.get("first_arrival")]
+    if arrivals:
+        lines += ["", "First arrivals of the rectangle and bowl scenes: " + ", ".join(
+            f"{k} {arrivals.count(k)}" for k in ("compared", "slow", "near T", "none") if arrivals.count(k)) + "."]
     fails = [r for r in rows if not r.get("solved")]
     if fails:
         lines += ["", "## Not solved", ""]
-        lines += [f"* {r['id']} ({r['family']}, μ = {r.get('mu')}, N = {r['N']}): {r['status']}\n  `{r['command']}`"
-                  for r in fails]
+        lines += [f"* {r['id']} ({r['family']}, μ = {r.get('mu')}, e = {r.get('e')}, N = {r['N']}, T = {r.get('T')}, "
+                  f"{_scene_params(r)}; {_fmt(r.get('time_s'))} s): {r.get('failed') or r['status']} "
+                  f"(status {r['status']})\n  `{r['command']}`" for r in fails]
+    by_id = {r["id"]: r for r in rows}
+    pairs = [(by_id[r["twin_of"]], r) for r in rows if r.get("twin_of") in by_id]
+    if pairs:
+        lines += ["", "## Refinement pairs (N, 2N): the oracle errors (impact time, s; closed form)", ""]
+
+        def errs(r):
+            return ", ".join(f"{name} {_fmt(v) if isinstance(v, float) and not math.isnan(v) else '-'}" for name, v in (
+                ("t", r.get("impact_time_error", math.nan)), ("closed form", r.get("oracle_error", math.nan))))
+        for coarse, fine in pairs:
+            verdict = "ok" if fine.get("twin_ok") else "WORSE" if coarse.get("solved") and fine.get("failed", "").startswith(
+                "twin worse") else "a run not solved"
+            lines.append(f"* {coarse['id']} ({coarse['family']}): N = {coarse['N']}: {errs(coarse)}; 2N: {errs(fine)}: "
+                         f"{verdict}")
     return "\n".join(lines) + "\n"
 
 
@@ -235,13 +305,15 @@ def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--seed", type=int, default=13)
     p.add_argument("--count", type=int, help="scenes drawn (every tenth is also run at 2N; with --schemes every "
-                   "one): 60, with --schemes 20")
+                   "one): 60, with --friction 100, with --schemes 20")
     p.add_argument("--timeout", type=float, default=120.0, help="seconds per scene before it is stopped")
-    p.add_argument("--out", default="battery", help="folder for battery.csv and summary.md")
-    p.add_argument("--family", choices=["ball", "rectangle", "bowl", "incline", "rolling", "pendulum", "double_pendulum"],
+    p.add_argument("--out", default="battery", help="folder for battery.csv and summary.md (friction.csv and "
+                   "friction_summary.md with --friction, schemes.csv and schemes_summary.md with --schemes)")
+    p.add_argument("--family", choices=["ball", "rectangle", "bowl", *FRICTION_FAMILIES, "pendulum", "double_pendulum"],
                    help="only this family")
     p.add_argument("--friction", action="store_true",
-                   help="the friction families instead (block on an incline, rolling disk or sphere; seed 17)")
+                   help="the friction families instead (block on an incline, rolling disk or sphere, a spinning disk or "
+                   "sphere bouncing, the rectangle dropped and in the bowl with friction; seed 17)")
     p.add_argument("--schemes", action="store_true",
                    help="the scheme families instead (pendulum at a joint limit, double pendulum at a wall; schemes "
                    "of order 4 to 8, each scene with its twin at 2N)")
@@ -251,7 +323,7 @@ def main(argv=None):
         print("contact_battery: --friction and --schemes are two batteries: one at a time", file=sys.stderr)
         return 2
     if args.count is None:
-        args.count = 20 if args.schemes else 60
+        args.count = 20 if args.schemes else 100 if args.friction else 60
     if args.count < 1 or (args.workers is not None and args.workers < 1) or not args.timeout > 0:
         print("contact_battery: --count and --workers must be >= 1 and --timeout > 0", file=sys.stderr)
         return 2
@@ -278,9 +350,11 @@ def main(argv=None):
                   f"energy {r.get('energy_error', math.nan):.1e} {r.get('failed') or ''}", flush=True)
             return
         if args.friction:
-            print(f"{r['id']:>6s} {r['family']:8s} N={r['N']:5d} mu={r['mu']:<6g} {str(r.get('status'))[:28]:28s} "
-                  f"solved={str(r.get('solved')):5s} {r.get('time_s', math.nan):7.2f} s cone {r.get('cone', math.nan):.1e} "
-                  f"work {r.get('dissipation', math.nan):.1e} oracle {r.get('oracle_error', math.nan):.1e}", flush=True)
+            print(f"{r['id']:>6s} {r['family']:18s} N={r['N']:4d} mu={r['mu']:<6g} e={r['e']:<5g} "
+                  f"{str(r.get('status'))[:12]:12s} solved={str(r.get('solved')):5s} {r.get('time_s', math.nan):6.2f} s "
+                  f"cone {r.get('cone', math.nan):.1e} work {r.get('dissipation', math.nan):.1e} "
+                  f"dK {r.get('impact_energy', math.nan):.1e} t-err {r.get('impact_time_error', math.nan):.1e} "
+                  f"oracle {r.get('oracle_error', math.nan):.1e} {r.get('failed') or ''}", flush=True)
             return
         print(f"{r['id']:>6s} {r['family']:9s} N={r['N']:5d} e={r['e']:<5g} {str(r.get('status'))[:28]:28s} "
               f"solved={str(r.get('solved')):5s} {r.get('iterations', 0) or 0:5d} it {r.get('time_s', math.nan):7.2f} s "
@@ -292,7 +366,10 @@ def main(argv=None):
     seconds = time.perf_counter() - t0
     if args.schemes:
         check_twins(rows)
+    elif args.friction:
+        check_friction_twins(rows)
     fields, names = (SCHEME_FIELDS, ("schemes.csv", "schemes_summary.md")) if args.schemes else \
+        (FRICTION_FIELDS, ("friction.csv", "friction_summary.md")) if args.friction else \
         (FIELDS, ("battery.csv", "summary.md"))
     sio = io.StringIO()
     w = csv.DictWriter(sio, fieldnames=fields, extrasaction="ignore")
@@ -306,7 +383,7 @@ def main(argv=None):
     print(summary)
     n_ok = sum(1 for r in rows if r.get("solved"))
     times = np.array([r.get("time_s", math.nan) for r in rows], float)
-    median_goal = 1 if args.schemes else 3
+    median_goal = 1 if args.schemes or args.friction else 3
     print("goals:")
     print(f"  {'PASS' if n_ok >= 0.98 * len(rows) else 'MISS'}  at least 98 % solved with every check: "
           f"{n_ok}/{len(rows)}")
@@ -317,6 +394,12 @@ def main(argv=None):
         twins = [r for r in rows if r.get("twin_of")]
         worse = sum(1 for r in twins if not r.get("twin_ok"))
         print(f"  {'PASS' if not worse else 'MISS'}  twins never worse than their N run: {len(twins) - worse}/{len(twins)}")
+    elif args.friction:     # a pair with a run not solved counts in the first goal; here the pairs both solved
+        twins = [r for r in rows if r.get("twin_of")]
+        worse = sum(1 for r in twins if str(r.get("failed", "")).startswith("twin worse"))
+        both = sum(1 for r in twins if r.get("twin_ok")) + worse
+        print(f"  {'PASS' if not worse else 'MISS'}  twins never worse than their N run: {worse} worse of the {both} "
+              f"pairs both solved ({len(twins) - both} pairs with a run not solved)")
     return 0
 
 

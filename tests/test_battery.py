@@ -1,5 +1,6 @@
 """The contact battery's scheme families (scripts/contact_battery.py --schemes, issue #25): drawn scenes solved
-and checked against the event-driven reference through the battery's own run function."""
+and checked against the event-driven reference through the battery's own run function; and its bouncing friction
+families (--friction: a spinning disk or sphere, the rectangle and the bowl with friction at their impacts)."""
 from __future__ import annotations
 
 import math
@@ -55,6 +56,38 @@ def test_twins_worse_than_their_run_are_not_solved():
     assert not rows[1]["twin_ok"] and not rows[1]["solved"] and "worse" in rows[1]["failed"]
     assert rows[3]["twin_ok"] and rows[3]["solved"]          # both at the 1e-12 floor
     assert math.isnan(battery.fitted_order(rows[2], rows[3]))
+
+
+def test_bouncing_friction_scenes_are_solved_with_every_check():
+    """Three drawn scenes of the bouncing friction families (seed 17): a disk bouncing with spin (μ = 0.82, e = 0.49,
+    N = 200), the rectangle with a corner straight under its centroid (μ = 1.23, e = 0.8, N = 800) and the bowl
+    (μ = 0.54, e = 1, N = 200), each solved in process by run_scene: no penetration, the cone, maximal dissipation
+    and sticking at the held contacts, no bounce gaining energy, the closed-form bounce (measured 8e-16 and 3e-15 s,
+    7e-14 and 6e-13 of the speed) and the event-driven reference's first impact time (2e-16 s).  About 3 s."""
+    scenes = {s["id"]: s for s in battery.draw_friction_scenes(17, 40)}
+    picked = [scenes[i] for i in ("f007", "f035", "f027")]
+    assert [s["family"] for s in picked] == ["spin-drop", "rectangle-friction", "bowl-friction"]
+    assert picked[1]["centred"] and all(s["mu"] > 0 for s in picked)
+    for sc in picked:
+        r = battery.run_scene(sc)
+        assert r["success"] and r["solved"], (sc["id"], r["status"], r.get("failed"))
+        assert r["impacts"] >= 1 and r["impact_time_error"] <= battery.IMPACT_TIME_TOL
+        assert r["cone"] <= battery.FRICTION_TOL and r["impact_cone"] <= battery.IMPACT_CONE_TOL
+        assert r["impact_energy"] <= battery.IMPACT_ENERGY_TOL
+        if sc["family"] != "bowl-friction":
+            assert r["oracle_error"] <= battery.BOUNCE_TOL and r["oracle_impacts"] >= 1
+        else:
+            assert r["first_arrival"] == "compared"
+
+
+def test_friction_twins_worse_than_their_run_are_not_solved():
+    rows = [dict(id="a", solved=True, impact_time_error=1e-9, oracle_error=math.nan),
+            dict(id="ax2", twin_of="a", solved=True, impact_time_error=2e-9, oracle_error=math.nan),
+            dict(id="b", solved=True, impact_time_error=4e-16, oracle_error=3e-11),
+            dict(id="bx2", twin_of="b", solved=True, impact_time_error=6e-12, oracle_error=5e-11)]
+    battery.check_friction_twins(rows)
+    assert not rows[1]["twin_ok"] and not rows[1]["solved"] and "impact_time_error" in rows[1]["failed"]
+    assert rows[3]["twin_ok"] and rows[3]["solved"]          # both at the rounding floor
 
 
 @pytest.mark.slow
