@@ -45,7 +45,9 @@ class Contact:
     #: the rows of a frictionless contact exactly)
     friction: object = 0.0
     #: each contact's slip velocity, the tangential velocity of its contact point: an expression linear in
-    #: the velocity (``ct.velocity(q)``), needed where the friction is positive (2-D: one number per contact)
+    #: the velocity (``ct.velocity(q)``), needed where the friction is positive: one number per contact in the
+    #: plane, or two (the components along two orthonormal tangents, a vector expression) on a tangent plane in
+    #: 3-D, where the friction is isotropic (Coulomb's circular cone)
     slip: Optional[Sequence[object]] = None
 
     def __post_init__(self):
@@ -64,10 +66,11 @@ class Contact:
             if self.slip is None or len(self.slip) != count:
                 raise InputError(f"friction needs each contact's slip velocity: Contact(..., slip=[...]) with "
                                  f"{count} expression{'s' if count > 1 else ''} in the velocity")
-            self.slip = [ca.SX(v) if not isinstance(v, ca.SX) else v for v in self.slip]
-            if any(v.numel() != 1 for v in self.slip):
-                raise InputError("a slip velocity is one number per contact (planar friction); a tangent "
-                                 "plane in 3-D is not supported yet")
+            self.slip = [ca.vec(ca.SX(v) if not isinstance(v, ca.SX) else v) for v in self.slip]
+            dims = {v.numel() for v in self.slip}
+            if len(dims) != 1 or not dims <= {1, 2}:
+                raise InputError("a slip velocity is one number per contact (planar friction) or two (the "
+                                 "tangent plane in 3-D), the same for every contact")
         e = finite("restitution", self.restitution)
         if not 0.0 <= e <= 1.0:
             raise InputError(f"restitution must be between 0 and 1 (got {self.restitution})")
@@ -80,6 +83,11 @@ class Contact:
     @property
     def count(self) -> int:
         return len(self.gaps)
+
+    @property
+    def slip_dim(self) -> int:
+        """Components of each contact's slip: 1 in the plane, 2 on a tangent plane (1 without friction)."""
+        return int(self.slip[0].numel()) if self.slip else 1
 
     # ------------------------------------------------------------------ used by LagrangianSystem
     def validate(self, q, qd, t, check) -> None:
@@ -100,7 +108,8 @@ class Contact:
                                  "not supported yet")
 
     def slip_jacobian(self, qd) -> ca.SX:
-        """``D(q)`` (contacts × coordinates), ``slip = D(q) q̇``; rows of zeros without slip expressions."""
+        """``D(q)`` (contacts × slip components, contact by contact, × coordinates), ``slip = D(q) q̇``; rows of
+        zeros without slip expressions."""
         rows = [ca.jacobian(v, qd) for v in self.slip] if self.slip else [ca.SX(1, qd.numel()) for _ in self.gaps]
         return ca.densify(ca.vertcat(*rows))
 

@@ -269,3 +269,95 @@ def sequential_frictional_impact(G: np.ndarray, w: np.ndarray, mu, e: float, max
         Pt[i] += imp.P[1]
         w += G[:, idx] @ imp.P
     raise RuntimeError(f"the impact cascade did not end within {max_firings} firings")
+
+
+def frictional_impact_plane(G, w_before, mu: float, e: float, steps: int = 400) -> FrictionalImpact:
+    """:func:`frictional_impact` on a tangent plane (3-D contact: ``G`` 3 × 3 for the normal and two
+    orthonormal tangents, ``w_before = (w_n < 0, w_t1, w_t2)``): Darboux–Keller integration in the normal
+    impulse with the isotropic cone, ``r = −μ w_t/|w_t|`` while the contact point slides (its direction turns
+    where the directions couple), ``r = −G_tt⁻¹G_tn`` while it sticks (if inside the cone).  Sliding is
+    integrated by RK4 in ``p`` (``steps`` per compression, halving towards a stop so that the slip reaches
+    zero geometrically, and each end -- compression, restitution -- bisected to rounding); sticking and an
+    uncoupled slide are linear, so exact.  Stronge's end and the energy identity as in the planar law."""
+    G = np.asarray(G, float).reshape(3, 3)
+    w = np.asarray(w_before, float).reshape(3).copy()
+    mu, e = float(mu), float(e)
+    if not w[0] < 0.0:
+        return FrictionalImpact(np.zeros(3), w, 0.0, 0.0, float(np.linalg.norm(w[1:])) == 0.0, 0)
+    scale = float(np.max(np.abs(w)))
+    tol = 1e-14 * scale
+    Gtt, Gtn = G[1:, 1:], G[1:, 0]
+    r_stick = -np.linalg.solve(Gtt, Gtn)
+    can_stick = float(np.linalg.norm(r_stick)) <= mu * (1 + 1e-12)
+
+    def ratio(wt):
+        n = float(np.linalg.norm(wt))
+        if n > tol:
+            return -mu * wt / n
+        if can_stick:
+            return r_stick
+        # the slip restarts where the coupling drives it: the direction s with s ∥ G_tn − μ G_tt s (fixed point)
+        s = Gtn / max(float(np.linalg.norm(Gtn)), 1e-300)
+        for _ in range(100):
+            v = Gtn - mu * Gtt @ s
+            s = v / max(float(np.linalg.norm(v)), 1e-300)
+        return -mu * s
+
+    def rate(y):          # y = (w (3), W, P_t (2)); d/dp
+        r = ratio(y[1:3])
+        dw = G @ np.concatenate([[1.0], r])
+        return np.concatenate([dw, [y[0]], r])
+
+    def rk4(y, dp):
+        k1 = rate(y)
+        k2 = rate(y + 0.5 * dp * k1)
+        k3 = rate(y + 0.5 * dp * k2)
+        k4 = rate(y + dp * k3)
+        return y + dp / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+
+    y = np.concatenate([w, [0.0], [0.0, 0.0]])
+    p, Wc = 0.0, None
+    for _ in range(1000 * steps):
+        wt = y[1:3]
+        nt = float(np.linalg.norm(wt))
+        sticking = nt <= tol and can_stick
+        if sticking:
+            y[1:3] = 0.0
+        # a step that changes the contact's velocities by a 1/steps-th of their size (sticking and an uncoupled
+        # slide are linear in p, which RK4 integrates exactly; a turning slip to its own truncation)
+        speed = float(np.linalg.norm(rate(y)[:3]))
+        dp = (float(np.linalg.norm(y[:3])) + 1e-3 * scale) / max(speed, 1e-300) / steps
+        if not sticking and nt > tol:
+            # towards a stop: at most half the slip per step (the slip then reaches zero geometrically)
+            dt = rate(y)[1:3]
+            closing = -float(wt @ dt) / nt
+            if closing > 0:
+                dp = min(dp, 0.5 * nt / closing)
+
+        def end(yy):      # > 0 once the phase's end is passed
+            return yy[0] if Wc is None else yy[3] - (1.0 - e * e) * Wc
+        yn = rk4(y, dp)
+        if end(yn) >= 0.0 and not (Wc is not None and e == 0.0):
+            lo, hi = 0.0, dp
+            for _ in range(200):
+                mid = 0.5 * (lo + hi)
+                if end(rk4(y, mid)) >= 0.0:
+                    hi = mid
+                else:
+                    lo = mid
+                if hi - lo <= 1e-16 * max(p + hi, 1e-300):
+                    break
+            y, p = rk4(y, hi), p + hi
+            if Wc is None:
+                y[0] = 0.0
+                Wc = float(y[3])
+                if e == 0.0:
+                    return FrictionalImpact(np.concatenate([[p], y[4:6]]), y[:3], Wc, 0.0,
+                                            float(np.linalg.norm(y[1:3])) <= tol, 1)
+                continue
+            return FrictionalImpact(np.concatenate([[p], y[4:6]]), y[:3], Wc, float(y[3]) - Wc,
+                                    float(np.linalg.norm(y[1:3])) <= tol, 1)
+        y, p = yn, p + dp
+        if not sticking and float(np.linalg.norm(y[1:3])) <= tol:
+            y[1:3] = 0.0
+    raise RuntimeError("the frictional impact on a tangent plane did not end")

@@ -357,7 +357,7 @@ BOX_CORNERS = ["---", "+--", "++-", "-+-", "--+", "+-+", "+++", "-++"]
 
 
 def box_in_bowl(mass: float, size: Sequence[float], radius: float, g: float = 9.81,
-                restitution: float = 1.0) -> LagrangianSystem:
+                restitution: float = 1.0, friction: float = 0.0) -> LagrangianSystem:
     """A box free in space over the paraboloid bowl ``z = (x² + y²)/(2R)``: ``q = (c, quat)``, the
     centre and the orientation quaternion (constraint ``|quat| = 1``), gravity ``g`` along ``−e_z``
     (left out for ``g = 0``), and one contact per corner with restitution ``e``.
@@ -365,7 +365,9 @@ def box_in_bowl(mass: float, size: Sequence[float], radius: float, g: float = 9.
     The gaps are the corners' heights above the bowl, ``φ_j = z_j − (x_j² + y_j²)/(2R)`` (a vertical
     distance: its gradient is normal to the bowl, so the impulses act along the normal, as for the
     planar bowl of :func:`castrajectory.models.collision.bowl`).  ``size`` are the edges along the
-    body axes; the kinetic energy is that of the uniform box (:meth:`Inertia.box`).
+    body axes; the kinetic energy is that of the uniform box (:meth:`Inertia.box`).  With Coulomb ``friction``
+    (> 0) each corner slips on the tangent plane of the bowl's level set through it: its velocity along two
+    orthonormal tangents, ``t₁ ∝ e_x − (e_x·n) n`` and ``t₂ = n × t₁`` (``n`` the unit normal), the isotropic cone.
     """
     m = positive("mass", mass)
     size = [positive(f"box edge {i + 1}", v) for i, v in enumerate(size)]
@@ -378,9 +380,46 @@ def box_in_bowl(mass: float, size: Sequence[float], radius: float, g: float = 9.
     corners = box_points(quat, size, c)
     gaps = [p[2] - (p[0] ** 2 + p[1] ** 2) / (2.0 * R) for p in corners]
     terms = [Gravity(g, heights=[c[2]], masses=[m])] if g != 0.0 else []
+    slip = None
+    if finite("friction", friction) > 0:
+        from .mechanics import velocity
+        qd = velocity(q)
+        slip = []
+        for p in corners:
+            n = ca.vertcat(-p[0] / R, -p[1] / R, 1.0)
+            n = n / ca.norm_2(n)
+            t1 = ca.DM([1.0, 0.0, 0.0]) - n[0] * n
+            t1 = t1 / ca.norm_2(t1)
+            t2 = ca.cross(n, t1)
+            pd = ca.mtimes(ca.jacobian(p, q), qd)
+            slip.append(ca.vertcat(ca.dot(t1, pd), ca.dot(t2, pd)))
     return LagrangianSystem(q, RigidBody(quat, Inertia.box(*size, m), center=c, mass=m), terms, [unit_norm(quat)],
                             names=["x", "y", "z"] + QUAT_NAMES, points_expr=corners,
-                            contact=Contact(gaps, restitution, BOX_CORNERS))
+                            contact=Contact(gaps, restitution, BOX_CORNERS, friction=friction, slip=slip))
+
+
+def sphere_on_floor(mass: float, radius: float, mu: float, g: float = 9.81, restitution: float = 0.0,
+                    shell: bool = False) -> LagrangianSystem:
+    """A uniform sphere (or a thin shell, I = 2/3 m R²) on the floor ``z = 0``: ``q = (c, quat)`` on SO(3)
+    (constraint ``|quat| = 1``), gravity along ``−e_z``, the gap ``c_z − R ≥ 0`` with Coulomb friction ``mu`` on
+    the tangent plane: the contact point's slip ``(ċ_x − R ω_y, ċ_y + R ω_x)`` (``ω`` in space axes), two
+    components, the isotropic (circular) cone."""
+    from .mechanics import velocity
+    m, R = positive("mass", mass), positive("radius", radius)
+    g = finite("g", g)
+    q = ca.SX.sym("q", 7)
+    c, quat = q[:3], q[3:]
+    qd = velocity(q)
+    w = angular_velocity(quat, qd[3:], frame="space")
+    slip = ca.vertcat(qd[0] - R * w[1], qd[1] + R * w[0])
+    k = 2.0 / 3.0 if shell else 0.4
+    inertia = Inertia(k * m * R * R, k * m * R * R, k * m * R * R)
+    terms = [Gravity(g, heights=[c[2]], masses=[m])] if g != 0.0 else []
+    marks = [c + ca.mtimes(rotation(quat), ca.DM(R * np.array(d, float))) for d in
+             [(1, 0, 0), (-1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 0, 1), (0, 0, -1)]]
+    return LagrangianSystem(q, RigidBody(quat, inertia, center=c, mass=m), terms, [unit_norm(quat)],
+                            names=["x", "y", "z"] + QUAT_NAMES, points_expr=marks,
+                            contact=Contact([c[2] - R], restitution, ["floor"], friction=mu, slip=[slip]))
 
 
 def heavy_top(mass: float, inertia: Inertia, distance: float, g: float = 9.81) -> LagrangianSystem:

@@ -95,11 +95,13 @@ class ContactMechanics:
         self.mu_f = np.asarray(system.contact.friction, float)
         self.friction = bool(np.any(self.mu_f > 0))
         self._D = system.tangent if self.friction else None
-        # two ratios per contact and step, [ρ_node; ρ_sub]: the node's force ν and the sub-node's impulse μ
-        # each carry their own friction, against the slip of their own part of the step (slip)
-        rho = sym("rho", 2 * c)
+        #: components of each contact's slip: 1 in the plane, 2 on a tangent plane in 3-D (the isotropic cone)
+        self.fd = d = system.contact.slip_dim if self.friction else 1
+        # two ratios per contact and step, [ρ_node; ρ_sub] (each with d components): the node's force ν and the
+        # sub-node's impulse μ each carry their own friction, against the slip of their own part of the step (slip)
+        rho = sym("rho", 2 * c * d)
         xr = [rho] if self.friction else []
-        frn, frs = (rho[:c], rho[c:]) if self.friction else (None, None)
+        frn, frs = (rho[:c * d], rho[c * d:]) if self.friction else (None, None)
         # every node and sub-node row of the program, the held step and the march is node_row or sub_row
         self.initial = ca.Function("c_initial", [q0, qs, b, p0, nu, h] + xl + xr + xz1,
                                    [self.node_row(p0, q0, qs, b, nu, lam, h, frn, zm)])
@@ -121,6 +123,15 @@ class ContactMechanics:
             #: the slip velocities the friction opposes, [node part; sub-node part] (see slip)
             arrive = sym("arrive", c)
             self.slip_row = ca.Function("c_slip", [qk, qs, qk1, b, h, arrive], [self.slip(qk, qs, qk1, b, h, arrive)])
+            if d == 2:
+                # the isotropic cone's rows for the certificate: μ_f² − |ρ|² ≥ 0 per slot, and sliding's
+                # ρ + μ_f s/|s| = 0 per component (friction_rows)
+                R2 = ca.reshape(rho, d, -1)
+                muf2 = np.concatenate([self.mu_f, self.mu_f])
+                self.cone_row = ca.Function("c_cone", [rho], [ca.DM(muf2 ** 2) - ca.transpose(ca.sum1(R2 * R2))])
+                one = ca.DM.ones(2 * c)
+                self.slide_row = ca.Function("c_slide", [qk, qs, qk1, b, h, arrive, rho], [self.friction_rows(
+                    self.slip(qk, qs, qk1, b, h, arrive), rho, 0 * one, one, 0 * one, ca.DM.zeros(2 * c * d), 1.0)])
         # Newton's law on the normal velocity at the sub-node, weighted by W = φ(q_{k+1})/δ: the law
         # holds unless the contact is closed again at the next node, where the body is caught (the
         # accumulation point of Zeno bouncing, where no step-resolved flight is left, or a body at
@@ -217,7 +228,12 @@ class ContactMechanics:
         a = 0.5 + b
         after = ca.mtimes(self._D(qs), qn - qs) / ((1 - a) * h)
         whole = ca.mtimes(self._D(qs), qn - qk) / h
-        return ca.vertcat(ca.mtimes(self._D(qk), qs - qk) / (a * h), arrive * after + (1 - arrive) * whole)
+        arr = self._per_component(arrive)
+        return ca.vertcat(ca.mtimes(self._D(qk), qs - qk) / (a * h), arr * after + (1 - arr) * whole)
+
+    def _per_component(self, v):
+        """A value per contact repeated for each of its slip components (contact by contact)."""
+        return v if self.fd == 1 else ca.vec(ca.repmat(ca.transpose(v), self.fd, 1))
 
     def node_row(self, p_in, qk, qs, b, nu, lam, h, rho=None, zm=None):
         """The momentum balance at a node ``q_k`` with the incoming momentum ``p_in`` (``p_0`` at the start,
@@ -228,7 +244,7 @@ class ContactMechanics:
         step are all this row."""
         row = (p_in + self._D1(qk, self._z if zm is None else zm, qs, (0.5 + b) * h)) / h + ca.mtimes(self._J(qk).T, nu)
         if rho is not None:   # friction: the tangential force ρ ν along the slip directions D(q_k)
-            row = row + ca.mtimes(self._D(qk).T, rho * nu)
+            row = row + ca.mtimes(self._D(qk).T, rho * self._per_component(nu))
         return row - ca.mtimes(self._C(qk).T, lam)
 
     def sub_row(self, qk, qs, qn, b, mu, lams, h, rho=None, zm=None, zp=None):
@@ -241,7 +257,7 @@ class ContactMechanics:
                                      self._z if zp is None else zp)
         row = pm - pp + ca.mtimes(self._J(qs).T, mu)
         if rho is not None:   # friction: the tangential impulse ρ μ
-            row = row + ca.mtimes(self._D(qs).T, rho * mu)
+            row = row + ca.mtimes(self._D(qs).T, rho * self._per_component(mu))
         return row / h - ca.mtimes(self._C(qs).T, lams), r
 
     def node_law(self, p_in, qk, qs, b, h, zm=None):
@@ -258,7 +274,8 @@ class ContactMechanics:
         if not hasattr(self, "_layout"):
             n, c, m = self.n, self.c, self.m
             sizes = [("qs", n), ("q", n), ("beta", 1), ("nu", c), ("mu", c), ("lam", m), ("lam_sub", m),
-                     ("fratio", 2 * c if self.friction else 0), ("zs", 2 * self.s), ("lam_stage", 2 * self.ms)]
+                     ("fratio", 2 * c * self.fd if self.friction else 0), ("zs", 2 * self.s),
+                     ("lam_stage", 2 * self.ms)]
             out, o = {}, 0
             for name, size in sizes:
                 out[name] = slice(o, o + size)
@@ -295,7 +312,8 @@ class ContactMechanics:
         qs, qn, b = x[L["qs"]], x[L["q"]], x[2 * n]
         nu, mu, lam, lams = x[L["nu"]], x[L["mu"]], x[L["lam"]], x[L["lam_sub"]]
         rho = x[L["fratio"]] if self.friction else None
-        rho_n, rho_s = (rho[:c], rho[c:]) if self.friction else (None, None)
+        cd = c * self.fd
+        rho_n, rho_s = (rho[:cd], rho[cd:]) if self.friction else (None, None)
         zm, zp = (x[L["zs"]][:self.s], x[L["zs"]][self.s:]) if self.s else (None, None)
         con = self.constraint_row
         qk, p, h, ell = sym("q", n), sym("p", n), sym("h"), sym("ell")
@@ -320,16 +338,36 @@ class ContactMechanics:
             # per contact: stick (the slip vanishes), slide (ρ = −sgn μ_f, sgn the slip's sign), or no
             # friction force (ρ = 0: an open contact, or a frictionless one)
             # (fix: ρ = rfix, a ratio decided outside the step: the frictional impact law's tangential impulse)
-            stick, sgn, fix, rfix = sym("stick", 2 * c), sym("sgn", 2 * c), sym("fix", 2 * c), sym("rfix", 2 * c)
+            # (a tangent plane, d = 2: sgn is the mask of sliding, whose rows are ρ + μ_f s/|s| = 0, the ratio
+            # against the slip's direction on the circular cone; see friction_rows)
+            stick, sgn, fix, rfix = sym("stick", 2 * c), sym("sgn", 2 * c), sym("fix", 2 * c), sym("rfix", 2 * cd)
             arrive = sym("arrive", c)
-            slide = sgn * sgn
-            muf = ca.DM(np.concatenate([self.mu_f, self.mu_f]))
-            R = ca.vertcat(R, stick * self.slip(qk, qs, qn, b, h, arrive) / vref + slide * (rho + sgn * muf)
-                           + fix * (rho - rfix) + (1 - stick - slide - fix) * rho)
+            R = ca.vertcat(R, self.friction_rows(self.slip(qk, qs, qn, b, h, arrive), rho, stick, sgn, fix, rfix, vref))
             extra = [stick, sgn, fix, rfix, arrive]
         self.march_step = ca.Function("march_step", [x, qk, p, h, ell, snu, smu, vref, bfix, t, held, closed, law, node,
                                                       fixed, mufix, nfixed] + extra,
                                       [R, ca.jacobian(R, x)])
+
+    def friction_rows(self, slip, rho, stick, sgn, fix, rfix, vref):
+        """The friction's rows of a step, per slot (contact and part; masks per slot, values per component):
+        sticking, the slip vanishes; sliding, the ratio opposes the slip at the cone's edge -- in the plane
+        ``ρ = −sgn μ_f`` (sgn the slip's sign), on a tangent plane ``ρ + μ_f s/|s| = 0`` (sgn then the mask of
+        sliding); ``fix``, ``ρ = rfix``; otherwise no friction force, ``ρ = 0``."""
+        d = self.fd
+        muf = np.concatenate([self.mu_f, self.mu_f])
+        if d == 1:
+            slide = sgn * sgn
+            return stick * slip / vref + slide * (rho + sgn * ca.DM(muf)) + fix * (rho - rfix) \
+                + (1 - stick - slide - fix) * rho
+        rep = lambda v: ca.vec(ca.repmat(ca.transpose(v), d, 1))  # noqa: E731
+        # |s| per slot, smoothed below 1e-12 of the velocity scale (Newton's derivative at s = 0); the sliding
+        # row is ρ + μ_f s/|s| (ρ on the cone's edge against the slip: written as ρ|s| + μ_f s it would leave ρ
+        # free as s → 0, and a slot whose slip had vanished kept |ρ| = 3.5 μ_f in our trials)
+        S = ca.reshape(slip, d, -1)
+        norm = ca.transpose(ca.sqrt(ca.sum1(S * S) + (1e-12 * vref) ** 2))
+        slide = sgn
+        return rep(stick) * slip / vref + rep(slide) * (rho + ca.DM(np.repeat(muf, d)) * slip / rep(norm)) \
+            + rep(fix) * (rho - rfix) + (1 - rep(stick) - rep(slide) - rep(fix)) * rho
 
     def flights(self, K: int) -> ca.Function:
         """``K`` RK4 steps of length ``h`` from ``(q, v)``: nodes, velocities and gaps as columns."""

@@ -147,8 +147,8 @@ class ContactTranscription:
         # Coulomb friction: the ratio ρ of tangential to normal force per step and contact, |ρ| ≤ μ_f
         # (only with friction: a frictionless system builds no friction variable)
         if cm.friction:
-            muf2 = np.concatenate([cm.mu_f, cm.mu_f])
-            nlp.variable("fratio", L * 2 * c, lb=np.tile(-muf2, L), ub=np.tile(muf2, L))
+            muf2 = np.repeat(np.concatenate([cm.mu_f, cm.mu_f]), cm.fd)
+            nlp.variable("fratio", L * 2 * c * cm.fd, lb=np.tile(-muf2, L), ub=np.tile(muf2, L))
         # multipliers of the holonomic constraints at the nodes 0..L-1 and the sub-nodes (none without)
         m = cm.m
         if m:
@@ -176,7 +176,7 @@ class ContactTranscription:
         # the constraint multipliers' arguments (none without constraints)
         LAM = (lambda i: [X(nlp.index("lam").reshape(L, m)[i])]) if m else (lambda i: [])  # noqa: E731
         LAMS = (lambda i: [X(nlp.index("lam_sub").reshape(L, m)[i])]) if m else (lambda i: [])  # noqa: E731
-        RHO = (lambda i: [X(nlp.index("fratio").reshape(L, 2 * c)[i])]) if cm.friction else (lambda i: [])  # noqa: E731
+        RHO = (lambda i: [X(nlp.index("fratio").reshape(L, 2 * c * cm.fd)[i])]) if cm.friction else (lambda i: [])  # noqa: E731
         # the stages of a step's first part (ZM) and second part (ZP), none for a two-point scheme
         ZI = nlp.index("zs").reshape(L, 2 * s) if s else None
         ZM = (lambda i: [X(ZI[i, :s])]) if s else (lambda i: [])  # noqa: E731
@@ -202,9 +202,14 @@ class ContactTranscription:
             # the step's slip velocity: its bounds are the friction's modes (ContactNLP.solve_modes)
             # (which contacts arrive at their sub-node: their slip is the one after it, ContactMechanics.slip)
             nlp.parameter("arrive", L * c, value=0.0)
-            nlp.inequality_elements("slip", cm.slip_row, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), Hc,
-                                                          P(nlp.parameter_index("arrive").reshape(L, c))],
+            AR = P(nlp.parameter_index("arrive").reshape(L, c))
+            nlp.inequality_elements("slip", cm.slip_row, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), Hc, AR],
                                     lb=-np.inf, ub=np.inf)
+            if cm.fd == 2:
+                # the tangent plane's circular cone, and sliding against the slip (bounds by the modes)
+                nlp.inequality_elements("cone", cm.cone_row, RHO(k), lb=-np.inf, ub=np.inf)
+                nlp.inequality_elements("slide", cm.slide_row, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), Hc, AR] + RHO(k),
+                                        lb=-np.inf, ub=np.inf)
         if m:
             nlp.equal_elements("node_constraint", cm.constraint_row, [X(Q[1:])])
             nlp.equal_elements("sub_constraint", cm.constraint_row, [X(S)])

@@ -97,7 +97,7 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
     # (holonomic constraints: the guess leaves their multipliers at 0; the branch solve forms them)
     lam0 = [np.zeros(cm.m)] if cm.m else []
     # (friction: the guess's rows carry no friction force; the march resolves friction)
-    lam0 += [np.zeros(2 * cm.c)] if cm.friction else []
+    lam0 += [np.zeros(2 * cm.c * cm.fd)] if cm.friction else []
     p0 = np.asarray(cm.system.mass_matrix(q0)) @ np.asarray(v0, float)
     Mf, gapf = cm.system.mass_matrix, cm.system.gap
     Q = np.zeros((L + 1, n))

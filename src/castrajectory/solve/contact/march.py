@@ -91,7 +91,7 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
                 modes = [H if hj else O for hj in held]
                 for j in range(i):
                     vals = {name: X[sl, j] for name, sl in lay.items()}
-                    vals.update(q=Qn[:, j], beta=0.0, nu=NU[:, j], mu=MU[:, j], fratio=np.zeros(2 * c))
+                    vals.update(q=Qn[:, j], beta=0.0, nu=NU[:, j], mu=MU[:, j], fratio=np.zeros(2 * c * cm.fd))
                     _record(rows, vals, np.zeros(c, bool), h, k + j, modes, [FREE] * (2 * c))
                 step.fprev = [FREE] * (2 * c)
                 q, p, g_q = Qn[:, i - 1].copy(), Pn[:, i - 1].copy(), Gn[:, i - 1].copy()

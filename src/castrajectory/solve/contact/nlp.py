@@ -85,19 +85,27 @@ class ContactNLP(ContactTranscription):
         if self.cm.friction:
             # the friction's modes: sticking, the slip row vanishes (ρ within the cone); sliding, ρ = ∓μ_f and
             # the slip has the matching sign; no friction force, ρ = 0
+            d = self.cm.fd
             fm = np.asarray(point["fmodes"]).reshape(L, 2 * c)
             muf = np.tile(np.concatenate([self.cm.mu_f, self.cm.mu_f]), L).reshape(L, 2 * c)
             # (an impact's ratio, mode X, is the frictional impact law's: fixed at the march's value)
-            rx = np.asarray(point["fratio"], float).reshape(L, 2 * c)
-            rlo = np.select([fm == "S", fm == "U", fm == "D", fm == "X"], [-muf, -muf, muf, rx], 0.0)
-            rhi = np.select([fm == "S", fm == "U", fm == "D", fm == "X"], [muf, -muf, muf, rx], 0.0)
-            slo = np.select([fm == "S", fm == "U"], [0.0, 0.0], -np.inf)
-            shi = np.select([fm == "S", fm == "D"], [0.0, 0.0], np.inf)
+            rx = np.asarray(point["fratio"], float).reshape(L, 2 * c, d)
+            fmd, mud = np.repeat(fm[..., None], d, axis=2), np.repeat(muf[..., None], d, axis=2)
+            rlo = np.select([fmd == "S", fmd == "U", fmd == "D", fmd == "X", fmd == "L"], [-mud, -mud, mud, rx, -mud], 0.0)
+            rhi = np.select([fmd == "S", fmd == "U", fmd == "D", fmd == "X", fmd == "L"], [mud, -mud, mud, rx, mud], 0.0)
+            slo = np.select([fmd == "S", fmd == "U"], [0.0, 0.0], -np.inf)
+            shi = np.select([fmd == "S", fmd == "D"], [0.0, 0.0], np.inf)
             bounds["fratio"] = (rlo.reshape(-1), rhi.reshape(-1))
             # the contacts that arrive at their sub-node (an impact, caught or fixed by a law): slip after it
             self.arrive = np.isin(modes, ("I", "C", "T", "F")).astype(float)
             self.nlp.set_parameter("arrive", self.arrive.reshape(-1))
             bounds["slip"] = (slo.reshape(-1), shi.reshape(-1))
+            if d == 2:
+                # the circular cone: |ρ| ≤ μ_f sticking or sliding; sliding, ρ|s| + μ_f s = 0
+                on = np.isin(fm, ("S", "L"))
+                bounds["cone"] = (np.where(on, 0.0, -np.inf).reshape(-1), np.full(L * 2 * c, np.inf))
+                sl = np.repeat((fm == "L")[..., None], d, axis=2).reshape(-1)
+                bounds["slide"] = (np.where(sl, 0.0, -np.inf), np.where(sl, 0.0, np.inf))
         init = self._start(q0, p0, point)
         opts = {**CONTACT_IPOPT, **BRANCH_IPOPT, **(options or {})}
         opts["max_iter"] = min(int(opts["max_iter"]), max_iter)

@@ -119,9 +119,10 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     half = 0.5 * np.einsum("kcn,kc->kn", Jn, force)
     if cm.friction:
         # the friction force at the node, ρ h ν along the slip directions D(q_k), splits the momenta too
-        RHO = res.values["fratio"][:NL * 2 * c].reshape(NL, 2 * c)[:, :c]      # the node forces' ratios
-        Dn = np.asarray(sysm.tangent.map(N + 1)(q.T)).reshape(c, N + 1, n).transpose(1, 0, 2)
-        half += 0.5 * np.einsum("kcn,kc->kn", Dn, RHO[:N + 1] * force)
+        d = cm.fd
+        RHO = res.values["fratio"][:NL * 2 * c * d].reshape(NL, 2 * c * d)[:, :c * d]   # the node forces' ratios
+        Dn = np.asarray(sysm.tangent.map(N + 1)(q.T)).reshape(c * d, N + 1, n).transpose(1, 0, 2)
+        half += 0.5 * np.einsum("kcn,kc->kn", Dn, RHO[:N + 1] * np.repeat(force, d, axis=1))
     pp = np.asarray(cm.p_node_plus.map(N)(q[:-1].T, S.T, B, hv, *[z.T for z in ZM])).T
     pN = np.asarray(cm.p_node_minus(S[-1], B[-1], q[-1], H[N - 1], *[z[-1] for z in ZP])).reshape(1, -1)
     p = np.vstack([pp - half[:N], pN + half[N:]])
@@ -135,7 +136,9 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     tol = IMPULSE_TOL * tn.scales_p / tn.scales_ell
     impacts = []
     # (friction: the ratios of the sub-node impulses and of the node forces, for the tangential impulses)
-    RS = res.values["fratio"][:N * 2 * c].reshape(N, 2 * c) if cm.friction else np.zeros((N, 2 * c))
+    fd = cm.fd
+    RS = (res.values["fratio"][:N * 2 * c * fd].reshape(N, 2 * c, fd) if cm.friction else np.zeros((N, 2 * c, 1)))
+    RS = RS[..., 0] if fd == 1 else RS
     # a contact that arrives from flight (open at the step's node) and is open at one of the two nodes after its
     # impulse (beyond a resting body's hop, a h²/8): the impulse sent it off
     gaps_next = np.asarray(sysm.gap.map(N + 1)(q.T)[0]).reshape(c, N + 1).T
@@ -147,7 +150,7 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
                                & (gaps_next[k] > TOUCH_TOL * tn.scales_ell))
     for k in np.flatnonzero(np.any(force[1:N] > tol, axis=1)) + 1:
         at = _impacts_at(cm, k, float(t[k]), q[k], pp[k] - 2 * half[k], pp[k], force[k], tol, H[k], at_node=True,
-                         ratios=RS[k, :c] if k < N else np.zeros(c))
+                         ratios=RS[k, :c] if k < N else np.zeros_like(RS[0, :c]))
         if at:
             impacts += at
             p[k] = pp[k]
@@ -171,10 +174,13 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     total_iter = sum(a["iterations"] for a in attempts)
     fratio = slip = None
     if cm.friction:
-        fratio = res.values["fratio"][:N * 2 * c].reshape(N, 2, c).transpose(0, 2, 1)
+        fd = cm.fd
+        fratio = res.values["fratio"][:N * 2 * c * fd].reshape(N, 2, c, fd).transpose(0, 2, 1, 3)
         arrive = getattr(tn, "arrive", np.zeros((tn.L, c)))[:N]
-        slip = np.asarray(cm.slip_row.map(N)(q[:-1].T, S.T, q[1:].T, B, hv, arrive.T)).reshape(2 * c, N).T
-        slip = slip.reshape(N, 2, c).transpose(0, 2, 1)
+        slip = np.asarray(cm.slip_row.map(N)(q[:-1].T, S.T, q[1:].T, B, hv, arrive.T)).reshape(2 * c * fd, N).T
+        slip = slip.reshape(N, 2, c, fd).transpose(0, 2, 1, 3)
+        if fd == 1:       # planar: (N, contacts, 2) for [node force, sub-node impulse]
+            fratio, slip = fratio[..., 0], slip[..., 0]
     warnings = simultaneous + _elastic_loss_warning(cm, energy, impacts, H[:N])
     return ContactTrajectory(
         warnings=warnings,
@@ -199,12 +205,12 @@ def _impacts_at(cm: ContactMechanics, k: int, t: float, x, p_before, p_after, im
     Newton's cradle, no approach, yet an impulse).  An impact is *caught* where Newton's law is waived (the
     arrival stopped, not reversed by e: the transcription allows it only where the contact is closed at the
     next node).  With friction (``ratios``: the tangential impulse over the normal one per contact) an impact
-    follows Stronge's law, not Newton's: it is caught where the contact does not separate after it (e > 0).
+    follows Stronge's law, not Newton's: it is caught where the contact does not leave faster than that scale.
     An arrival slower than that scale is an impact too where it bounces (``leaves``: the contact is open at
     the next node, and its normal velocity turned from approach to separation): a coarse grid's slow bounce
     (a pendulum's second arrival at 0.915 rad/s against 2 |a_n| h = 0.98 at N = 40 was not listed)."""
     js = np.flatnonzero(impulses > tol)
-    ratios = np.zeros(impulses.size) if ratios is None else np.asarray(ratios, float)
+    ratios = np.zeros(impulses.size) if ratios is None else np.asarray(ratios, float)   # (contacts,) or (contacts, 2)
     if js.size == 0:
         return []
     vb, va = cm.dm.velocities(np.array([x, x]), np.array([p_before, p_after]))
@@ -219,11 +225,14 @@ def _impacts_at(cm: ContactMechanics, k: int, t: float, x, p_before, p_after, im
         vn_b, vn_a = float(Jx[j] @ vb), float(Jx[j] @ va)
         w = float(Jx[j] @ cm.dm.velocities(np.array([x]), np.array([Jx[j]]))[0])
         if -vn_b > scale[j] or bounce[j] or impulses[j] * w > scale[j]:
-            frictional = ratios[j] != 0.0
-            caught = (cm.e > 0 and vn_a <= CAUGHT_LAW * max(abs(vn_b), 1e-300)) if frictional else \
-                abs(vn_a + cm.e * vn_b) > CAUGHT_LAW * max(abs(vn_b), 1e-300)
+            frictional = bool(np.any(ratios[j] != 0.0))
+            # (with friction: caught where it does not leave faster than the scale that separates an impact from
+            # persistent contact -- a plastic landing, whose discrete v⁺ carries the support of the step's rest)
+            caught = vn_a <= scale[j] if frictional else abs(vn_a + cm.e * vn_b) > CAUGHT_LAW * max(abs(vn_b), 1e-300)
             out.append(SubNodeImpact(int(k), t, int(j), float(impulses[j]), np.array(x, float).copy(), vb, va,
-                                     caught=bool(caught), at_node=at_node, mu_t=float(ratios[j] * impulses[j])))
+                                     caught=bool(caught), at_node=at_node,
+                                     mu_t=(float(ratios[j] * impulses[j]) if np.ndim(ratios[j]) == 0
+                                           else np.asarray(ratios[j], float) * impulses[j])))
     return out
 
 

@@ -9,7 +9,8 @@ import numpy as np
 
 from ...discretise.contact.elements import ContactMechanics
 from ...discretise.contact.transcription import ALPHA_MIN
-from ...models.impact import frictional_impact, sequential_frictional_impact, sequential_impact
+from ...models.impact import (frictional_impact, frictional_impact_plane, sequential_frictional_impact,
+                               sequential_impact)
 from .. import jit
 
 #: Newton iterations of one step solve, and the largest row residual accepted (each row divided by
@@ -28,6 +29,8 @@ O, H, R, I, C, N, F, T, P = "O", "H", "R", "I", "C", "N", "F", "T", "P"
 FREE, STICK, UP, DOWN = "-", "S", "U", "D"
 #: ... and a ratio fixed by the frictional impact law (its tangential impulse over its normal one)
 FIX = "X"
+#: ... and, on a tangent plane (3-D), sliding against the slip's direction at the circular cone's edge
+SLIDE = "L"
 #: A contact approaching faster than this many steps' worth of its normal acceleration arrives with an
 #: impact (resting contact approaches at about ½ step's worth): touching at a step's first node it takes the
 #: impact there (mode N), and an answer lists its impulse as an impact (solution.py).
@@ -55,7 +58,8 @@ class _Step:
         self.n, self.c, self.m = cm.n, cm.c, cm.m
         # friction: two ratios ρ per contact (node force, sub-node impulse) at the end of the unknowns, and
         # the friction modes of the previous step (the march sets them: a contact that stuck starts sticking)
-        self.nf = 2 * cm.c if cm.friction else 0
+        self.nf = 2 * cm.c * cm.fd if cm.friction else 0
+        self.fd = cm.fd
         self.fprev = [FREE] * (2 * cm.c)
 
     def chunk(self, K: int, q, p, h, held):
@@ -69,7 +73,7 @@ class _Step:
             sc = [ca.MX.sym(name) for name in ("ell", "snu", "smu", "vref")]
             zero = ca.DM.zeros(c)
             zf = ca.DM.zeros(2 * c)
-            fz = [zf] * 4 + [zero] if self.nf else []   # chunks carry no friction force (free flight only)
+            fz = [zf] * 3 + [ca.DM.zeros(2 * c * cm.fd), zero] if self.nf else []   # chunks carry no friction force
             v = ca.solve(cm.system.mass_matrix(qs), ps)
             qm_, qn_ = qs + 0.5 * hs * v, qs + hs * v
             x = ca.vertcat(qm_, qn_, ca.DM.zeros(1 + 2 * c + 2 * m + self.nf), _stage_line(cm, qs, qm_, qn_),
@@ -121,8 +125,8 @@ class _Step:
         if self.nf:
             fm = fmodes or [FREE] * (2 * c)
             args = args + (np.array([f == STICK for f in fm], float),
-                           np.array([1.0 if f == UP else -1.0 if f == DOWN else 0.0 for f in fm]),
-                           np.array([f == FIX for f in fm], float), np.zeros(2 * c) if rfix is None else rfix,
+                           np.array([1.0 if f in (UP, SLIDE) else -1.0 if f == DOWN else 0.0 for f in fm]),
+                           np.array([f == FIX for f in fm], float), np.zeros(2 * c * self.fd) if rfix is None else rfix,
                            np.array([m in (I, C, T, F) for m in modes], float))
         small = 0
         for _ in range(NEWTON_ITER):
@@ -319,15 +323,22 @@ def _friction(step: _Step, q, p, h, modes, x, mufix=None, rfix=None):
     # slots: the node's force of each contact (held or released: ν free), then its sub-node impulse (held)
     # (a caught arrival, C, holds its contact from the sub-node on: its impulse has friction like a held one's,
     # against the slip after the sub-node)
+    # (an arrival too slow to be an impact, I below IMPACT_SPEED_STEPS |a_n| h, is the discrete form of persistent
+    # contact: its impulse has a held one's friction too, and no impact law, _impact_law)
+    slow = _slow_arrivals(step, q, p, h) if any(mj == I for mj in modes) else np.zeros(c, bool)
     active = [mj in (H, R) and cm.mu_f[j] > 0 for j, mj in enumerate(modes)] + \
-        [mj in (H, C) and cm.mu_f[j] > 0 for j, mj in enumerate(modes)]
+        [(mj in (H, C) or (mj == I and slow[j])) and cm.mu_f[j] > 0 for j, mj in enumerate(modes)]
     muf = np.concatenate([cm.mu_f, cm.mu_f])
-    fm = [(step.fprev[i] if step.fprev[i] != FREE else STICK) if active[i] else FREE for i in range(2 * c)]
+    d = step.fd
+    # (a slot starts as it ended the previous step; free, or fixed there by an impact's law, it starts sticking)
+    fm = [(step.fprev[i] if step.fprev[i] not in (FREE, FIX) else STICK) if active[i] else FREE for i in range(2 * c)]
     if rfix is not None:
-        fm = [FIX if np.isfinite(rfix[i]) else f for i, f in enumerate(fm)]
+        fixed = np.isfinite(np.asarray(rfix, float).reshape(2 * c, d)[:, 0])
+        fm = [FIX if fixed[i] else f for i, f in enumerate(fm)]
         rfix = np.where(np.isfinite(rfix), rfix, 0.0)
     tol = 1e-12 * step.vref
     slips = np.array([m in (I, C, T, F) for m in modes], float)
+    choices = (STICK, UP, DOWN) if d == 1 else (STICK, SLIDE)
 
     def judge(fm, x0):
         """Solve in the friction modes ``fm``: ``(x, the most violated slot and its new mode)``; ``None`` if
@@ -338,6 +349,20 @@ def _friction(step: _Step, q, p, h, modes, x, mufix=None, rfix=None):
         rho = xf[cm.layout["fratio"]]
         slip = np.asarray(cm.slip_row(q, xf[:n], xf[n:2 * n], xf[2 * n], h, slips)).reshape(-1)
         worst, pick = 0.0, None
+        if d == 2:
+            # the circular cone: sticking fails outside it (it then slides), sliding where the slip has vanished
+            rn = np.linalg.norm(rho.reshape(2 * c, d), axis=1)
+            sn = np.linalg.norm(slip.reshape(2 * c, d), axis=1)
+            for j, f in enumerate(fm):
+                if f == STICK and rn[j] > muf[j] * (1 + 1e-10):
+                    viol, new = rn[j] - muf[j], SLIDE
+                elif f == SLIDE and sn[j] <= 1e-10 * step.vref:     # the slip has (all but) vanished: sticks
+                    viol, new = muf[j], STICK
+                else:
+                    continue
+                if viol > worst:
+                    worst, pick = viol, (j, new)
+            return xf, pick
         for j, f in enumerate(fm):
             if f == STICK and abs(rho[j]) > muf[j] * (1 + 1e-10):
                 viol, new = abs(rho[j]) - muf[j], (DOWN if rho[j] > 0 else UP)
@@ -372,7 +397,7 @@ def _friction(step: _Step, q, p, h, modes, x, mufix=None, rfix=None):
     # node and the sub-node interact): every combination of the free slots' modes, fewest changes first
     slots = [i for i in range(2 * c) if active[i] and fm[i] != FIX]
     base = [f for f in fm]
-    combos = sorted(product((STICK, UP, DOWN), repeat=len(slots)),
+    combos = sorted(product(choices, repeat=len(slots)),
                     key=lambda ch: sum(a != base[i] for a, i in zip(ch, slots)))
     for ch in combos[:MAX_COMBINATIONS]:
         trial = list(base)
@@ -387,13 +412,22 @@ def _friction(step: _Step, q, p, h, modes, x, mufix=None, rfix=None):
     return None
 
 
+def _slow_arrivals(step: _Step, q, p, h):
+    """Per contact: approaching the surface slower than ``IMPACT_SPEED_STEPS`` steps' worth of its normal
+    acceleration at the step's node (the arrivals an answer does not list as impacts, :mod:`.solution`)."""
+    cm = step.cm
+    v = np.linalg.solve(np.asarray(cm.system.mass_matrix(q)), p)
+    an = np.abs(np.asarray(cm.acc_normal(q, v)).reshape(-1))
+    return -(np.asarray(cm.system.gap(q)[1]) @ v) <= IMPACT_SPEED_STEPS * an * h
+
+
 def _result(step: _Step, x, modes, gn, fmodes=None):
     """The step's values by the transcription's names (:attr:`ContactMechanics.layout`), its modes, the gaps at
     its end node and its friction modes."""
     out = {name: x[sl] for name, sl in step.cm.layout.items()}
     out["beta"] = float(x[2 * step.n])
     if not step.nf:
-        out["fratio"] = np.zeros(2 * step.c)
+        out["fratio"] = np.zeros(2 * step.c * step.fd)
     out.update(modes=list(modes), gn=gn, fmodes=list(fmodes) if fmodes is not None else [FREE] * (2 * step.c))
     return out
 
@@ -505,30 +539,39 @@ def _impact_law(step: _Step, q, p, h, x, modes, cascade: bool):
             return None                  # no impact
         qs, b = x[:n], float(x[2 * n])
         pm = np.asarray(cm.p_minus(q, qs, b, h, *cm.stage_parts(x[cm.layout["zs"]])[0])).reshape(-1)
-    # (a caught arrival waives the law: no frictional impact there)
-    fric = step.nf and any(cm.mu_f[j] > 0 for j in involved) and (at_node or any(modes[j] == I for j in involved))
+    # (a caught arrival waives the law: no frictional impact there; nor at a slow arrival, persistent contact)
+    fric = step.nf and any(cm.mu_f[j] > 0 for j in involved) and \
+        (at_node or any(modes[j] == I for j in involved)) and \
+        not (not cascade and not at_node and np.all(_slow_arrivals(step, q, p, h)[[j for j in involved if modes[j] == I]]))
     if not involved or (len(involved) >= 2) != cascade or (cascade and not seq) or (not cascade and not fric):
         return None
     # the law in the contacts' velocities: Π = M⁻¹ on the constraints' tangent space (velocities)
     Jx = np.asarray(cm.system.gap(qs)[1])[involved]
     v = cm.dm.velocities(qs[None, :], pm[None, :])[0]
+    d = step.fd
     if fric:
-        Wr = np.vstack([Jx, np.asarray(cm.system.tangent(qs))[involved]])
+        Dall = np.asarray(cm.system.tangent(qs)).reshape(c, d, -1)
+        Wr = np.vstack([Jx] + [Dall[involved, a] for a in range(d)])     # normals, then each tangent component
         G = Wr @ cm.dm.velocities(np.repeat(qs[None, :], Wr.shape[0], axis=0), Wr).T
         if len(involved) == 1:
-            imp = frictional_impact(G, Wr @ v, cm.mu_f[involved[0]], cm.e)
-            Pn, Pt = imp.P[:1], imp.P[1:]
-        else:
+            law = frictional_impact if d == 1 else frictional_impact_plane
+            imp = law(G, Wr @ v, cm.mu_f[involved[0]], cm.e)
+            Pn, Pt = imp.P[:1], imp.P[1:].reshape(1, d)
+        elif d == 1:
             Pn, Pt = sequential_frictional_impact(G, Wr @ v, cm.mu_f[involved], cm.e)
+            Pt = Pt.reshape(-1, 1)
+        else:
+            return "failed"          # a cascade on tangent planes: not modelled (the step fails, and says so)
     else:
         PiJt = cm.dm.velocities(np.repeat(qs[None, :], len(involved), axis=0), Jx)
         Pn, _ = sequential_impact(Jx @ PiJt.T, Jx @ v, cm.e)
-        Pt = np.zeros_like(Pn)
-    mufix, rfix = np.zeros(c), np.full(2 * c, np.nan)
+        Pt = np.zeros((Pn.size, d))
+    mufix, rfix = np.zeros(c), np.full((2 * c, d), np.nan)
     slot = 0 if at_node else c
     for j, pn, pt in zip(involved, Pn, Pt):
         if fric and cm.mu_f[j] > 0:
             rfix[slot + j] = pt / pn if pn > 0 else 0.0
+    rfix = rfix.reshape(-1)
     if at_node:
         mufix[involved] = Pn / h                  # the node's force: impulse per step
         new = [P if j in involved else m for j, m in enumerate(modes)]

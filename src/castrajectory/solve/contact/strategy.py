@@ -141,6 +141,15 @@ def _solve_once(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str
         attempts.append(_attempt("march", res))
         if res.success:
             return _finish(cm, marched, res, int(np.sum(base < N)), h, attempts, march_time, p0)
+    # friction and the sequential law are resolved by the march only: the fallback's program holds neither
+    # (its answer would be refused), so it is not tried, and the march's failure is the answer
+    needs = (("Friction_Needs_The_March", "Coulomb friction is resolved by the discrete march, which failed on "
+              "this problem") if cm.friction else
+             ("Sequential_Law_Needs_The_March", "the sequential impact law is resolved by the discrete march, which "
+              "failed on this problem") if system.contact.law == "sequential" else None)
+    if needs is not None and point is not None:
+        res.fail(needs[0], f"{needs[1]} (its point was not certified: {res.message})")
+        return _finish(cm, marched, res, int(np.sum(base < N)), h, attempts, march_time, p0)
     # the march failed (or its branch did not certify): the branch of the event-located guess on the
     # uniform grid, then the penalty continuation from that guess
     t_guess = time.perf_counter()
@@ -148,19 +157,19 @@ def _solve_once(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str
     guess = event_guess(cm.guide, q0, qd0, N + LOOKAHEAD, h, length, _v_zeno(cm, h, scales))
     guess_time = time.perf_counter() - t_guess + march_time
     whole = ContactNLP(cm, N + LOOKAHEAD, h, scales)
+    if needs is not None:
+        init = whole._start(q0, p0, guess)
+        for name in whole.nlp.variable_names:
+            init.setdefault(name, np.zeros(whole.nlp.index(name).size))
+        res = NLPResult(values=init, multipliers={}, bound_multipliers={}, objective=float("nan"), success=False,
+                        solver_status=needs[0], message=f"{needs[1]}; the answer is the event-located guess, not a "
+                        "solution", complementarity_residual=float("nan"))
+        return _finish(cm, whole, res, N, h, attempts, guess_time, p0)
     res = whole.solve_branch(q0, p0, guess, options, verbose, co.branch_max_iter, co.penalties)
     attempts.append(_attempt("branch", res))
     if not res.success:
         res = whole.solve(q0, p0, guess, co.penalties, options, verbose)
         attempts.append(_attempt("penalty", res))
-    if cm.friction and res.success:
-        # the fallback's program has no friction modes (its complementarity is not written): not an answer
-        res.fail("Friction_Needs_The_March", "Coulomb friction is resolved by the discrete march, which failed on "
-                 "this problem; the fallback's answer is not reported as one")
-    elif system.contact.law == "sequential" and res.success:
-        # the fallback's program holds the simultaneous law only: its answer is not one of this law
-        res.fail("Sequential_Law_Needs_The_March", "the sequential impact law is resolved by the discrete march, "
-                 "which failed on this problem; the fallback's answer (simultaneous law) is not reported as one")
     return _finish(cm, whole, res, N, h, attempts, guess_time, p0)
 
 
