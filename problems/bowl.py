@@ -15,8 +15,7 @@ import numpy as np
 from castrajectory import cli
 from castrajectory.models import collision
 from castrajectory.solve import trajectory
-from castrajectory.problems.rectangle_drop import (add_body_flags, friction, friction_lines, friction_summary,
-                                                   impact_panel, initial_state)
+from castrajectory.problems.rectangle_drop import add_body_flags, friction, impact_panel, initial_state
 from castrajectory.validation import finite, positive
 
 
@@ -39,8 +38,8 @@ def run(args):
     lines = [f"bowl: R = {R:g}, body {args.width:g} x {args.height:g}, e = {args.restitution:g}, "
              f"scheme {args.scheme}, N = {args.n}, T = {args.T:g} s",
              f"{len(tr.impacts)} impacts; energy drift max |E - E0| = {np.max(np.abs(tr.energy - tr.energy[0])):.2e}"]
-    fr = friction_summary(system, tr, args.friction)
-    lines += friction_lines(fr)
+    fr = cli.friction_summary(system, tr, args.friction)
+    lines += cli.friction_lines(fr)
     for imp in tr.impacts[:6]:
         lines.append(f"  t = {imp.t:.5f} s  {system.contact.names[imp.contact]:11s} μ = {imp.mu:.6g}")
     data = {"t": tr.t, "q": tr.q, "gap": tr.gap.min(axis=1), "mu": tr.node_impulse, "mu_sub": tr.mu,

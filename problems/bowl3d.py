@@ -36,6 +36,8 @@ def parser():
     p.add_argument("--omega", type=float, nargs=3, default=[2.0, -1.0, 3.0], metavar=("W1", "W2", "W3"),
                    help="initial angular velocity in the body frame, rad/s")
     p.add_argument("--restitution", type=float, default=1.0, help="restitution coefficient e in [0, 1]")
+    p.add_argument("--friction", type=float, default=0.0,
+                   help="Coulomb friction at the corners, on the bowl's tangent plane (>= 0; 0: frictionless)")
     p.add_argument("--g", type=float, default=9.81, help="gravity along -z (0 drops the gravity term)")
     p.add_argument("--T", type=float, default=1.5, help="duration T in s (> 0)")
     p.add_argument("--n", type=int, default=1000, help="number of time steps N (>= 2)")
@@ -61,7 +63,10 @@ def initial_state(args):
 def run(args):
     cli.check_animation_path(args.animate)
     R = positive("radius", args.radius)
-    system = rb.box_in_bowl(args.mass, args.size, R, finite("g", args.g), args.restitution)
+    mu = finite("friction", args.friction)
+    if mu < 0:
+        raise InputError(f"--friction must be >= 0 (got {mu:g})")
+    system = rb.box_in_bowl(args.mass, args.size, R, finite("g", args.g), args.restitution, friction=mu)
     q0, qd0 = initial_state(args)
     tr = trajectory.solve_initial_value(system, q0, qd0, args.T, args.n, args.scheme,
                                         options=cli.ipopt_options(args), verbose=args.verbose, **cli.accuracy(args))
@@ -72,14 +77,16 @@ def run(args):
              f"refinement), T = {args.T:g} s",
              f"{len(tr.impacts)} impacts; energy drift max |E - E0| = {drift:.2e}; "
              f"|quaternion| - 1 at most {np.max(np.abs(np.linalg.norm(tr.q[:, 3:], axis=1) - 1)):.1e}"]
+    fr = cli.friction_summary(system, tr, mu)
+    lines += cli.friction_lines(fr)
     for imp in tr.impacts[:6]:
         lines.append(f"  t = {imp.t:.5f} s  corner {names[imp.contact]}  μ = {imp.mu:.6g}"
                      + ("  (caught)" if imp.caught else ""))
     data = {"t": tr.t, "position": tr.q[:, :3], "quaternion": tr.q[:, 3:], "q": tr.q,
             "gap": tr.gap.min(axis=1), "mu": tr.node_impulse, "mu_sub": tr.mu, "t_sub": tr.t_sub,
-            "energy": tr.energy, "radius": R, "corners": names,
+            "energy": tr.energy, "radius": R, "corners": names, "friction": mu, **fr,
             "impacts": [{"t": i.t, "corner": names[i.contact], "contact": i.contact, "mu": i.mu,
-                         "q": i.q, "v_before": i.v_before, "v_after": i.v_after, "caught": i.caught}
+                         "q": i.q, "v_before": i.v_before, "v_after": i.v_after, "caught": i.caught, "mu_t": i.mu_t}
                         for i in tr.impacts]}
     out = cli.contact_outcome("box in a 3-D bowl", system, tr, data, lines)
 

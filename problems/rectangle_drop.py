@@ -24,7 +24,7 @@ import numpy as np
 from castrajectory import cli
 from castrajectory.models import collision
 from castrajectory.solve import trajectory
-from castrajectory.models.impact import frictional_impact, simultaneous_impact
+from castrajectory.models.impact import simultaneous_impact
 from castrajectory.validation import InputError, finite
 
 CORNER_NAMES = ["lower left", "lower right", "upper right", "upper left"]
@@ -72,35 +72,6 @@ def initial_state(args):
     return q0, qd0
 
 
-def friction_summary(system, tr, mu_f: float) -> dict:
-    """With friction: per bounce (not caught) the kinetic energy's change (never positive) and the tangential
-    impulse against the cone, and the frictional law on the bounce's own arrival against its outcome."""
-    if mu_f <= 0:
-        return {}
-    gains, cone, law = [], [], []
-    for imp in tr.impacts:
-        if imp.caught:
-            continue
-        M = np.asarray(system.mass_matrix(imp.q))
-        K0, K1 = 0.5 * imp.v_before @ M @ imp.v_before, 0.5 * imp.v_after @ M @ imp.v_after
-        gains.append((K1 - K0) / max(K0, 1e-300))
-        cone.append(abs(imp.mu_t) - mu_f * imp.mu)
-        if np.count_nonzero(tr.mu[imp.step] > 1e-9 * max(1.0, imp.mu)) == 1:
-            W = np.vstack([np.asarray(system.gap(imp.q)[1])[imp.contact], np.asarray(system.tangent(imp.q))[imp.contact]])
-            P = frictional_impact(W @ np.linalg.solve(M, W.T), W @ imp.v_before, mu_f, system.contact.restitution).P
-            law.append(float(np.max(np.abs(imp.v_before + np.linalg.solve(M, W.T @ P) - imp.v_after))))
-    return {"impact_energy_gain": max(gains) if gains else None, "friction_cone": max(cone) if cone else None,
-            "frictional_law_error": max(law) if law else None}
-
-
-def friction_lines(fr: dict) -> list:
-    if not fr:
-        return []
-    return [f"friction: largest relative kinetic-energy change at a bounce {cli.fmt(fr['impact_energy_gain'], '.3g')} "
-            f"(never positive), |μ_t| − μ μ_n at most {cli.fmt(fr['friction_cone'], '.3g')}, "
-            f"against the frictional law {cli.fmt(fr['frictional_law_error'], '.3g')}"]
-
-
 def impact_table(tr, body, e):
     """Impacts with the closed-form corner law's post-impact velocity (rectangle on flat ground).
 
@@ -145,13 +116,13 @@ def run(args):
     q0, qd0 = initial_state(args)
     tr = trajectory.solve_initial_value(system, q0, qd0, args.T, args.n, args.scheme,
                                         options=cli.ipopt_options(args), verbose=args.verbose, **cli.accuracy(args))
-    fr = friction_summary(system, tr, args.friction)
+    fr = cli.friction_summary(system, tr, args.friction)
     # (with friction the frictionless corner law is not the oracle: friction_summary's law is)
     rows, worst = impact_table(tr, body, e) if not fr else ([], 0.0)
     lines = [f"rectangle drop: {args.width:g} x {args.height:g}, m = {args.mass:g}, e = {e:g}, "
              f"friction {args.friction:g}, scheme {args.scheme}, N = {args.n}, T = {args.T:g} s"]
     if fr:
-        lines += [f"{len(tr.impacts)} impacts ({sum(i.caught for i in tr.impacts)} caught, plastic)"] + friction_lines(fr)
+        lines += [f"{len(tr.impacts)} impacts ({sum(i.caught for i in tr.impacts)} caught, plastic)"] + cli.friction_lines(fr)
         lines += [f"  t = {i.t:.5f} s  {CORNER_NAMES[i.contact]:11s} θ = {i.q[2]:+.4f}  μ = {i.mu:.6g}  μ_t = {i.mu_t:+.6g}"
                   f"{'  (caught)' if i.caught else ''}" for i in tr.impacts[:8]]
     else:

@@ -8,12 +8,14 @@ u0/(3 μ g) for the disk; the final speed is (5 v0 + 2 R ω0)/7 and (2 v0 + R ω
 
 The contact is the gap y − R ≥ 0 of the centre's height with the contact point's slip velocity
 ẋ + R θ̇ (θ counter-clockwise); ``rolling_time`` is the first node from which the slip stays zero (a
-resolution of one step: the transition inside a step is not timed yet).  The sphere moves in the plane:
-its rotation is about the axis normal to it (the sphere on SO(3), with its tangent plane of friction,
-is not modelled yet).
+resolution of one step: the transition inside a step is not timed yet).  ``--body sphere`` moves in the plane
+(its rotation about the axis normal to it); ``--body sphere3d`` is the sphere on SO(3) (a unit quaternion)
+with friction on its tangent plane (the isotropic cone), launched the same way and with an optional spin
+about the vertical (``--top-spin``), which friction at the contact point cannot change.
 
     python problems/rolling_ball.py --body disk --mu 0.3 --v0 2 --spin 0
     python problems/rolling_ball.py --body sphere --v0 1 --spin 30 --json      # topspin: it speeds up to 11/7
+    python problems/rolling_ball.py --body sphere3d --top-spin 10            # on SO(3): the same, ω_z kept
 """
 import sys
 
@@ -27,11 +29,14 @@ from castrajectory.solve import trajectory
 from castrajectory.validation import InputError
 
 SHAPES = collision.ROLLING_SHAPES     # I / (m R²)
+BODIES = tuple(SHAPES) + ("sphere3d",)
 
 
 def parser():
     p = cli.scene_parser("rolling_ball.py", __doc__.splitlines()[0])
-    p.add_argument("--body", choices=tuple(SHAPES), default="sphere", help="the body: disk or sphere")
+    p.add_argument("--body", choices=BODIES, default="sphere",
+                   help="the body: disk or sphere (in the plane), or sphere3d (on SO(3), friction on its tangent plane)")
+    p.add_argument("--top-spin", type=float, default=0.0, help="sphere3d: spin about the vertical in rad/s")
     p.add_argument("--mu", type=float, default=0.3, help="friction coefficient (> 0)")
     p.add_argument("--v0", type=float, default=2.0, help="launch speed in m/s")
     p.add_argument("--spin", type=float, default=0.0, help="launch spin ω0 in rad/s, clockwise (rolling for v0 = R ω0)")
@@ -57,7 +62,11 @@ def oracle(shape, v0, w0, R, mu, g):
 
 def run(args):
     cli.check_animation_path(args.animate)
-    cli.finite_flags(args, "mu", "v0", "spin", "radius", "mass", "g", "T")
+    cli.finite_flags(args, "mu", "v0", "spin", "radius", "mass", "g", "T", "top_spin")
+    if args.body == "sphere3d":
+        return run3d(args)
+    if args.top_spin:
+        raise InputError("--top-spin needs --body sphere3d (a planar body has no vertical spin)")
     for flag in ("mu", "radius", "mass", "g", "T"):
         if getattr(args, flag) <= 0:
             raise InputError(f"--{flag} must be positive (got {getattr(args, flag):g})")
@@ -93,6 +102,42 @@ def run(args):
                                 ground=np.array([[lo, 0.0], [hi, 0.0]]), title=f"rolling {args.body}")
 
     return cli.Outcome.of(tr, data, lines, writers={"plot": plot, "animate": animate})
+
+
+def run3d(args):
+    """The sphere on SO(3): the same launch, its slip (v − R ω_y, R ω_x) on the tangent plane."""
+    from castrajectory.models import rigidbody as rb
+    for flag in ("mu", "radius", "mass", "g", "T"):
+        if getattr(args, flag) <= 0:
+            raise InputError(f"--{flag} must be positive (got {getattr(args, flag):g})")
+    R = args.radius
+    system = rb.sphere_on_floor(args.mass, R, args.mu, args.g)
+    quat = np.array([1.0, 0.0, 0.0, 0.0])
+    w0 = np.array([0.0, args.spin, args.top_spin])         # clockwise seen from +y: ω_y = spin rolls along +x
+    q0 = np.concatenate([[0.0, 0.0, R], quat])
+    qd0 = np.concatenate([[args.v0, 0.0, 0.0], rb.quaternion_rate(quat, w0)])
+    tr = trajectory.solve_initial_value(system, q0, qd0, args.T, args.n, args.scheme,
+                                        options=cli.ipopt_options(args), verbose=args.verbose, **cli.accuracy(args))
+    t = tr.t
+    w = rb.angular_velocity(tr.q[:, 3:], tr.v[:, 3:], frame="space")
+    v = tr.v[:, 0]
+    slip = np.linalg.norm(tr.slip[:, 0, 0, :], axis=1)
+    t_ex, v_ex = oracle("sphere", args.v0, args.spin, R, args.mu, args.g)
+    scale = max(abs(args.v0), R * abs(args.spin), 1e-12)
+    rolling = slip <= 1e-9 * scale
+    sliding = np.where(~rolling)[0]
+    t_roll = None if not rolling[-1] else float(t[min(sliding[-1] + 1, t.size - 1)] if sliding.size else 0.0)
+    data = {"t": t, "q": tr.q, "v": v, "omega": w, "slip": slip, "rolling_time": t_roll, "rolling_time_exact": t_ex,
+            "final_speed": float(v[-1]), "final_speed_exact": v_ex,
+            "error_vs_exact": abs(float(v[-1]) - v_ex) if t_ex < args.T else None,
+            "top_spin_final": float(w[-1, 2]), "quaternion_norm_error": float(np.max(np.abs(
+                np.linalg.norm(tr.q[:, 3:], axis=1) - 1.0)))}
+    lines = [f"rolling sphere on SO(3): v0 = {args.v0:g} m/s, spin {args.spin:g} rad/s, top spin {args.top_spin:g} rad/s, "
+             f"μ = {args.mu:g}, R = {R:g} m, scheme {args.scheme}, N = {args.n}, T = {args.T:g} s",
+             f"rolls from t = {cli.fmt(t_roll, '.6g')} s (exact {t_ex:.6g} s; one step is {args.T / args.n:.3g} s)",
+             f"final speed {v[-1]:.12g} m/s (exact {v_ex:.12g}); top spin {w[-1, 2]:.12g} rad/s (kept: {args.top_spin:g})",
+             cli.status_line(tr.status, tr)]
+    return cli.Outcome.of(tr, data, lines)
 
 
 def main(argv=None):

@@ -745,3 +745,26 @@ def test_friction_on_the_rectangle_scenes(name, extra):
     assert d["impact_energy_gain"] <= 1e-12
     assert d["friction_cone"] <= 1e-12
     assert d["frictional_law_error"] <= 1e-8
+
+
+def test_bowl3d_with_friction():
+    """--friction on the box in the 3-D bowl (μ = 0.5, e = 0.5): friction on each corner's tangent plane, every
+    bounce loses kinetic energy (measured at least 0.71 of it), the tangential impulses inside the
+    circular cone, each bounce the plane's frictional law on its own arrival (measured 9.7e-12 m/s)."""
+    p = run([script("bowl3d"), "--friction", "0.5", "--restitution", "0.5", "--T", "0.7", "--n", "200", "--json"])
+    assert p.returncode == 0, p.stderr
+    d = json.loads(p.stdout)
+    assert d["impact_energy_gain"] <= 1e-12 and d["friction_cone"] <= 1e-12
+    assert d["frictional_law_error"] <= 1e-9
+
+
+def test_rolling_sphere_on_so3():
+    """rolling_ball.py --body sphere3d: the sphere on SO(3) rolls at 5 v0/7 (measured 9.7e-5 m/s at N = 200,
+    second order: the quaternion's midpoint rule), from within two steps of 2 v0/(7 μ g), its spin about the
+    vertical kept (10 rad/s to 1e-12) and its quaternion on the unit sphere."""
+    p = run([script("rolling_ball"), "--body", "sphere3d", "--top-spin", "10", "--n", "200", "--json"])
+    assert p.returncode == 0, p.stderr
+    d = json.loads(p.stdout)
+    assert d["error_vs_exact"] < 1e-3
+    assert 0 <= d["rolling_time"] - d["rolling_time_exact"] <= 2 * 1.0 / 200
+    assert abs(d["top_spin_final"] - 10.0) <= 1e-10 and d["quaternion_norm_error"] <= 1e-13

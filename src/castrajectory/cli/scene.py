@@ -258,6 +258,48 @@ def control_outcome(title: str, system, sol, extra: Optional[dict] = None, extra
     return Outcome.of(sol, extra, lines, writers={"plot": plot, "animate": animate})
 
 
+def friction_summary(system, tr, mu_f: float) -> dict:
+    """With friction (``mu_f`` > 0): per bounce (not caught) the kinetic energy's relative change (never
+    positive under Stronge's law), the tangential impulse against the cone (``|μ_t| − μ μ_n``, at most 0), and
+    the frictional law applied to the bounce's own arrival against its outcome (one contact per impact; the
+    planar law, or the tangent plane's); empty without friction."""
+    import numpy as np
+    from ..models.impact import frictional_impact, frictional_impact_plane
+    if mu_f <= 0:
+        return {}
+    d = system.contact.slip_dim
+    gains, cone, law = [], [], []
+    for imp in tr.impacts:
+        if imp.caught:
+            continue
+        M = np.asarray(system.mass_matrix(imp.q))
+        K0, K1 = 0.5 * imp.v_before @ M @ imp.v_before, 0.5 * imp.v_after @ M @ imp.v_after
+        gains.append((K1 - K0) / max(K0, 1e-300))
+        cone.append(float(np.linalg.norm(np.atleast_1d(imp.mu_t))) - mu_f * imp.mu)
+        if np.count_nonzero(tr.mu[imp.step] > 1e-9 * max(1.0, imp.mu)) == 1:
+            D = np.asarray(system.tangent(imp.q)).reshape(system.ncontact, d, -1)[imp.contact]
+            W = np.vstack([np.asarray(system.gap(imp.q)[1])[imp.contact], D])
+            # Π: the inverse mass on the holonomic constraints' tangent space (M⁻¹ without constraints)
+            Pi = np.linalg.inv(M)
+            if system.nc:
+                C = np.asarray(system.constraint(imp.q)[1])
+                Pi = Pi - Pi @ C.T @ np.linalg.solve(C @ Pi @ C.T, C @ Pi)
+            fn = frictional_impact if d == 1 else frictional_impact_plane
+            P = fn(W @ Pi @ W.T, W @ imp.v_before, mu_f, system.contact.restitution).P
+            law.append(float(np.max(np.abs(imp.v_before + Pi @ W.T @ P - imp.v_after))))
+    return {"impact_energy_gain": max(gains) if gains else None, "friction_cone": max(cone) if cone else None,
+            "frictional_law_error": max(law) if law else None}
+
+
+def friction_lines(fr: dict) -> List[str]:
+    """The summary line of :func:`friction_summary` (none without friction)."""
+    if not fr:
+        return []
+    return [f"friction: largest relative kinetic-energy change at a bounce {fmt(fr['impact_energy_gain'], '.3g')} "
+            f"(never positive), |μ_t| − μ μ_n at most {fmt(fr['friction_cone'], '.3g')}, "
+            f"against the frictional law {fmt(fr['frictional_law_error'], '.3g')}"]
+
+
 def contact_outcome(title: str, system, tr, data: dict, lines: List[str], ground=None,
                     series: Optional[dict] = None, ylabel: str = "height") -> "Outcome":
     """Outcome of a contact scene: summary lines, JSON data, a contact plot and an animation.
