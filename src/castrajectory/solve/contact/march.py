@@ -34,7 +34,7 @@ import numpy as np
 
 from ...discretise.contact.elements import ContactMechanics
 from ...discretise.contact.transcription import TOUCH_TOL
-from .step import FREE, C, H, I, O, _march_step, _Step
+from .step import FIX, FREE, STICK, C, H, I, O, _march_step, _Step
 
 #: Steps that keep their modes (open or held) marched in one call (step.CHUNK_NEWTON Newton steps
 #: each; its rows are those of the march step, each checked after).
@@ -68,7 +68,16 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
     k, span = 0, 8
     while k < L:
         touch = g_q <= tol
-        if L - k >= 2 and np.all(~touch | held_prev) and not (cm.friction and np.any(touch & held_prev)):
+        # (with friction the held contacts' slots keep the modes they ended the previous step in: sticking or
+        # sliding, each step checked)
+        held_now = touch & held_prev
+        fm = [FREE] * (2 * cm.c)
+        if cm.friction:
+            act = [bool(held_now[j % cm.c]) and cm.mu_f[j % cm.c] > 0 for j in range(2 * cm.c)]
+            fm = [(step.fprev[i] if step.fprev[i] not in (FREE, FIX) else STICK) if act[i] else FREE
+                  for i in range(2 * cm.c)]
+        Qn = None
+        if L - k >= 2 and np.all(~touch | held_prev):
             # steps that keep their modes (open contacts stay open, held ones held: free flight, a body
             # resting or sliding), many in one call: the march's step with those modes (the same rows,
             # Newton to rounding), accepted up to the first step that touches or crosses with an open
@@ -77,7 +86,19 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
             # (chunks of 8 to CHUNK_STEPS steps: doubled after a chunk accepted whole, back to 8 after a
             # break; one function per length and system, the steps past L not used)
             K = min(span, L - k)
-            Qn, Pn, X, Gs, Gn, Rr = (a[:, :K] if a.ndim == 2 else a[:K] for a in step.chunk(span, q, p, h, held))
+            x0 = np.zeros(cm.nx)
+            for name, sl in cm.layout.items():       # the last step's values start the chunk's first Newton
+                if rows.get(name) and name not in ("q", "qs", "beta", "zs"):
+                    x0[sl] = np.asarray(rows[name][-1], float).reshape(-1)[:sl.stop - sl.start]
+            try:
+                Qn, Pn, X, Gs, Gn, Rr, SL = (a[:, :K] if a.ndim == 2 else a[:K]
+                                             for a in step.chunk(span, q, p, h, held, fm, x0))
+            except RuntimeError:
+                # a singular Newton system (friction rows at zero force: no step before the chunk yet)
+                Qn = None
+        if L - k >= 2 and np.all(~touch | held_prev) and Qn is not None:
+            held = touch & held_prev
+            K = min(span, L - k)
             c = cm.c
             lay = cm.layout
             NU, MU = X[lay["nu"]], X[lay["mu"]]
@@ -85,15 +106,18 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
             ok = (Rr <= CHUNK_TOL * (1.0 + np.max(np.abs(X), axis=0)))
             ok &= np.all((Gs > tol) & (Gn > tol) | held[:, None], axis=0)
             ok &= np.all((NU >= 0.0) & (MU >= 0.0) | ~held[:, None], axis=0)
+            if cm.friction:
+                ok &= step.friction_holds(fm, X[lay["fratio"]], SL)
             i = int(np.argmin(ok)) if not np.all(ok) else K
             span = min(2 * span, CHUNK_STEPS) if i == K else 8
             if i:
                 modes = [H if hj else O for hj in held]
                 for j in range(i):
                     vals = {name: X[sl, j] for name, sl in lay.items()}
-                    vals.update(q=Qn[:, j], beta=0.0, nu=NU[:, j], mu=MU[:, j], fratio=np.zeros(2 * c * cm.fd))
-                    _record(rows, vals, np.zeros(c, bool), h, k + j, modes, [FREE] * (2 * c))
-                step.fprev = [FREE] * (2 * c)
+                    vals.update(q=Qn[:, j], beta=0.0, nu=NU[:, j], mu=MU[:, j],
+                                fratio=X[lay["fratio"], j] if cm.friction else np.zeros(2 * c))
+                    _record(rows, vals, np.zeros(c, bool), h, k + j, modes, list(fm))
+                step.fprev = list(fm)
                 q, p, g_q = Qn[:, i - 1].copy(), Pn[:, i - 1].copy(), Gn[:, i - 1].copy()
                 held_prev = held.copy()
                 k += i

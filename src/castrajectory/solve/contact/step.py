@@ -62,22 +62,28 @@ class _Step:
         self.fd = cm.fd
         self.fprev = [FREE] * (2 * cm.c)
 
-    def chunk(self, K: int, q, p, h, held):
+    def chunk(self, K: int, q, p, h, held, fmodes=None, x0=None):
         """``K`` steps from ``(q, p)`` in one call, the ``held`` contacts held (mode H) and the others
-        open (β = 0): columns of the nodes ``q_{k+1}``, momenta ``p_{k+1}⁻``, unknowns, sub-node and node
-        gaps, and each step's largest row residual in units of the unknowns (as :meth:`solve` measures
-        it).  ``CHUNK_NEWTON`` Newton steps from the previous step's flight."""
+        open (β = 0), with friction the slots in the friction modes ``fmodes`` (stick or slide, kept through
+        the chunk): columns of the nodes ``q_{k+1}``, momenta ``p_{k+1}⁻``, unknowns, sub-node and node
+        gaps, each step's largest row residual in units of the unknowns (as :meth:`solve` measures it), and
+        the slip velocities.  ``CHUNK_NEWTON`` Newton steps from the previous step's flight and its forces
+        (``x0``, the step before the chunk's: its forces and friction ratios start the first step's Newton,
+        whose friction rows are singular at zero force)."""
         if K not in self._chunks:
             cm, n, c, m = self.cm, self.n, self.c, self.m
             qs, ps, hs, hm = ca.MX.sym("q", n), ca.MX.sym("p", n), ca.MX.sym("h"), ca.MX.sym("held", c)
             sc = [ca.MX.sym(name) for name in ("ell", "snu", "smu", "vref")]
             zero = ca.DM.zeros(c)
-            zf = ca.DM.zeros(2 * c)
-            fz = [zf] * 3 + [ca.DM.zeros(2 * c * cm.fd), zero] if self.nf else []   # chunks carry no friction force
+            st, sg = ca.MX.sym("stick", 2 * c), ca.MX.sym("sgn", 2 * c)
+            fin = [st, sg] if self.nf else []
+            fz = [st, sg, ca.DM.zeros(2 * c), ca.DM.zeros(2 * c * cm.fd), zero] if self.nf else []
+            xs = ca.MX.sym("x0", cm.nx)
             v = ca.solve(cm.system.mass_matrix(qs), ps)
             qm_, qn_ = qs + 0.5 * hs * v, qs + hs * v
-            x = ca.vertcat(qm_, qn_, ca.DM.zeros(1 + 2 * c + 2 * m + self.nf), _stage_line(cm, qs, qm_, qn_),
-                           ca.DM.zeros(2 * cm.ms))
+            # the flight's guess of the positions (and stages), the previous step's forces, ratios, multipliers
+            x = ca.vertcat(qm_, qn_, ca.DM.zeros(1), xs[2 * n + 1:2 * n + 1 + 2 * c + 2 * m + self.nf],
+                           _stage_line(cm, qs, qm_, qn_), xs[cm.layout["lam_stage"]])
             for _ in range(CHUNK_NEWTON):
                 r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero, zero, zero, zero, zero, *fz)
                 x = x - ca.solve(J, r)
@@ -86,11 +92,39 @@ class _Step:
             res = ca.mmax(ca.fabs(ca.solve(J, r)))
             qn, qt = x[n:2 * n], x[:n]
             zp = [x[cm.layout["zs"]][cm.s:]] if cm.s else []
-            one = ca.Function("chunk_step", [qs, ps, hs, hm] + sc,
-                              [qn, cm.p_node_minus(qt, 0.0, qn, hs, *zp), x, cm.gap_row(qt), cm.gap_row(qn), res])
-            self._chunks[K] = one.mapaccum("chunk_steps", K, [0, 1], [0, 1])
-        out = self._chunks[K](q, p, h, held.astype(float), self.ell, self.pref / h, self.pref, self.vref)
+            slip = cm.slip_row(qs, qt, qn, 0.0, hs, zero) if self.nf else ca.DM.zeros(1)
+            one = ca.Function("chunk_step", [qs, ps, xs, hs, hm] + sc + fin,
+                              [qn, cm.p_node_minus(qt, 0.0, qn, hs, *zp), x, cm.gap_row(qt), cm.gap_row(qn), res, slip])
+            self._chunks[K] = one.mapaccum("chunk_steps", K, [0, 1, 2], [0, 1, 2])
+        fargs = []
+        if self.nf:
+            fm = fmodes or [FREE] * (2 * self.c)
+            fargs = [np.array([f == STICK for f in fm], float),
+                     np.array([1.0 if f in (UP, SLIDE) else -1.0 if f == DOWN else 0.0 for f in fm])]
+        x0 = np.zeros(self.cm.nx) if x0 is None else x0
+        out = self._chunks[K](q, p, x0, h, held.astype(float), self.ell, self.pref / h, self.pref, self.vref, *fargs)
         return tuple(np.asarray(a) for a in out)
+
+    def friction_holds(self, fm, rho, slip) -> np.ndarray:
+        """Per column (step) of ratios ``rho`` and slips ``slip``: every slot's friction mode holds (sticking
+        inside the cone; sliding with the slip's sign, on a tangent plane a slip that has not vanished)."""
+        c, d = self.c, self.fd
+        muf = np.concatenate([self.cm.mu_f, self.cm.mu_f])[:, None]
+        K = rho.shape[1]
+        R, S = rho.reshape(2 * c, d, K), slip.reshape(2 * c, d, K)
+        rn, sn = np.linalg.norm(R, axis=1), np.linalg.norm(S, axis=1)
+        tol = 1e-12 * self.vref
+        ok = np.ones(K, bool)
+        for i, f in enumerate(fm):
+            if f == STICK:
+                ok &= rn[i] <= muf[i] * (1 + 1e-10)
+            elif f == UP:
+                ok &= S[i, 0] >= -tol
+            elif f == DOWN:
+                ok &= S[i, 0] <= tol
+            elif f == SLIDE:
+                ok &= sn[i] > 1e-10 * self.vref
+        return ok
 
     def masks(self, modes):
         c = self.c
