@@ -7,8 +7,9 @@ rolls from then on.  Oracles (u0 = v0 − R ω0): rolling starts at t* = 2 u0/(7
 u0/(3 μ g) for the disk; the final speed is (5 v0 + 2 R ω0)/7 and (2 v0 + R ω0)/3.
 
 The contact is the gap y − R ≥ 0 of the centre's height with the contact point's slip velocity
-ẋ + R θ̇ (θ counter-clockwise); ``rolling_time`` is the first node from which the slip stays zero (a
-resolution of one step: the transition inside a step is not timed yet).  ``--body sphere`` moves in the plane
+ẋ + R θ̇ (θ counter-clockwise); ``rolling_time`` is the time the slip ends, inside its step, read from the
+impulses (``ContactTrajectory.slip_stops``: the friction impulse until then is μ times the normal impulse over
+the sliding time, exact here); ``rolling_node_time`` is the first node from which the slip stays zero.  ``--body sphere`` moves in the plane
 (its rotation about the axis normal to it); ``--body sphere3d`` is the sphere on SO(3) (a unit quaternion)
 with friction on its tangent plane (the isotropic cone), launched the same way and with an optional spin
 about the vertical (``--top-spin``), which friction at the contact point cannot change.
@@ -81,13 +82,16 @@ def run(args):
     t_ex, v_ex = oracle(args.body, args.v0, args.spin, R, args.mu, args.g)
     rolling = np.abs(slip) <= 1e-9 * max(abs(args.v0), R * abs(args.spin), 1e-12)
     sliding = np.where(~rolling)[0]
-    t_roll = None if not rolling[-1] else float(t[sliding[-1] + 1] if sliding.size else 0.0)
+    t_node = None if not rolling[-1] else float(t[sliding[-1] + 1] if sliding.size else 0.0)
+    stops = tr.slip_stops(0)          # the slip's end inside its step, from the impulses
+    t_roll = stops[-1] if t_node is not None and t_node > 0 and stops else t_node
     data = {"t": t, "q": tr.q, "v": v, "omega": w, "slip": slip, "rolling_time": t_roll, "rolling_time_exact": t_ex,
+            "rolling_node_time": t_node,
             "final_speed": float(v[-1]), "final_speed_exact": v_ex,
             "error_vs_exact": abs(float(v[-1]) - v_ex) if t_ex < args.T else None}
     lines = [f"rolling {args.body}: v0 = {args.v0:g} m/s, spin {args.spin:g} rad/s (clockwise), μ = {args.mu:g}, "
              f"R = {R:g} m, scheme {args.scheme}, N = {args.n}, T = {args.T:g} s",
-             f"rolls from t = {cli.fmt(t_roll, '.6g')} s (exact {t_ex:.6g} s; one step is {args.T / args.n:.3g} s)",
+             f"rolls from t = {cli.fmt(t_roll, '.12g')} s (exact {t_ex:.12g} s; one step is {args.T / args.n:.3g} s)",
              f"final speed {v[-1]:.12g} m/s (exact {v_ex:.12g})", cli.status_line(tr.status, tr)]
 
     def plot(path):
@@ -126,15 +130,18 @@ def run3d(args):
     scale = max(abs(args.v0), R * abs(args.spin), 1e-12)
     rolling = slip <= 1e-9 * scale
     sliding = np.where(~rolling)[0]
-    t_roll = None if not rolling[-1] else float(t[min(sliding[-1] + 1, t.size - 1)] if sliding.size else 0.0)
+    t_node = None if not rolling[-1] else float(t[min(sliding[-1] + 1, t.size - 1)] if sliding.size else 0.0)
+    stops = tr.slip_stops(0)
+    t_roll = stops[-1] if t_node is not None and t_node > 0 and stops else t_node
     data = {"t": t, "q": tr.q, "v": v, "omega": w, "slip": slip, "rolling_time": t_roll, "rolling_time_exact": t_ex,
+            "rolling_node_time": t_node,
             "final_speed": float(v[-1]), "final_speed_exact": v_ex,
             "error_vs_exact": abs(float(v[-1]) - v_ex) if t_ex < args.T else None,
             "top_spin_final": float(w[-1, 2]), "quaternion_norm_error": float(np.max(np.abs(
                 np.linalg.norm(tr.q[:, 3:], axis=1) - 1.0)))}
     lines = [f"rolling sphere on SO(3): v0 = {args.v0:g} m/s, spin {args.spin:g} rad/s, top spin {args.top_spin:g} rad/s, "
              f"μ = {args.mu:g}, R = {R:g} m, scheme {args.scheme}, N = {args.n}, T = {args.T:g} s",
-             f"rolls from t = {cli.fmt(t_roll, '.6g')} s (exact {t_ex:.6g} s; one step is {args.T / args.n:.3g} s)",
+             f"rolls from t = {cli.fmt(t_roll, '.12g')} s (exact {t_ex:.12g} s; one step is {args.T / args.n:.3g} s)",
              f"final speed {v[-1]:.12g} m/s (exact {v_ex:.12g}); top spin {w[-1, 2]:.12g} rad/s (kept: {args.top_spin:g})",
              cli.status_line(tr.status, tr)]
     return cli.Outcome.of(tr, data, lines)

@@ -10,7 +10,9 @@ friction coefficient μ.  Oracles:
 
 The contact is the plane's gap y >= 0 with its slip velocity ṡ; the friction's stick and slide are modes
 of the contact march (docs/derivations.md, "Contact trajectories").  ``stop_time`` is the first node from
-which the block stays at rest (a resolution of one step: a stop inside a step is not timed yet).
+which the block stays at rest, timed inside its step from the impulses: the friction impulse until the stop is
+μ times the normal impulse over the sliding time (``ContactTrajectory.slip_stops``; ``stop_node_time`` is the
+first node at rest).
 
     python problems/sliding_block.py --mu 0.5 --v0 2
     python problems/sliding_block.py --incline 0.6 --mu 0.5 --v0 2 --json
@@ -71,9 +73,13 @@ def run(args):
     rest = np.abs(v) <= 1e-12 * max(abs(args.v0), args.g * h)
     # the first node from which the block stays at rest
     moving = np.where(~rest)[0]
-    stop = None if rest.size == 0 or not rest[-1] else float(t[moving[-1] + 1] if moving.size else 0.0)
+    stop_node = None if rest.size == 0 or not rest[-1] else float(t[moving[-1] + 1] if moving.size else 0.0)
+    # the stop itself, inside its step: read from the friction and normal impulses (ContactTrajectory.slip_stops)
+    stops = tr.slip_stops(0)
+    stop = stops[-1] if stop_node is not None and stop_node > 0 and stops else stop_node
     err = float(np.max(np.abs(s - s_ex)))
-    data = {"t": t, "s": s, "v": v, "stop_time": stop, "stop_time_exact": stop_ex, "s_exact": s_ex,
+    data = {"t": t, "s": s, "v": v, "stop_time": stop, "stop_time_exact": stop_ex, "stop_node_time": stop_node,
+            "s_exact": s_ex,
             "error_vs_exact": err, "energy": tr.energy}
     lines = [f"sliding block: μ = {args.mu:g}, incline {args.incline:g} rad, v0 = {args.v0:g} m/s, "
              f"scheme {args.scheme}, N = {args.n}, T = {args.T:g} s",

@@ -304,9 +304,12 @@ def _friction_castrajectory(N):
     wall = time.perf_counter() - t0
     if not tr.success:
         return wall, None, float("nan"), tr.status
-    # as problems/rolling_ball.py reads it: the first node from which the slip v - R w stays ~0
+    # as problems/rolling_ball.py reads it: the slip's end inside its step, from the impulses (slip_stops), once
+    # the slip stays ~0 at the nodes
     v, w = tr.v[:, 0], -tr.v[:, 2]
-    t_roll = _rolls_from(tr.t, v - R * w, 1e-9 * max(abs(v0), R * abs(spin), 1e-12))
+    t_node = _rolls_from(tr.t, v - R * w, 1e-9 * max(abs(v0), R * abs(spin), 1e-12))
+    stops = tr.slip_stops(0)
+    t_roll = stops[-1] if t_node is not None and stops else t_node
     return wall, t_roll, float(v[-1]), tr.status
 
 
@@ -417,8 +420,8 @@ def friction(repeats: int) -> None:
     _friction_castrajectory(FRICTION_GRIDS[0])                      # warm-up (compiles, loads Ipopt)
     ours = [(f"N = {N} (h = {T / N:.3g} s)", err(single(lambda N=N: _friction_castrajectory(N))))
             for N in FRICTION_GRIDS]
-    table("castrajectory (problems/rolling_ball.py's model, midpoint; the rolling time read at the nodes: its "
-          "error is bounded below by ~h)", ours)
+    table("castrajectory (problems/rolling_ball.py's model, midpoint; the rolling time timed inside its step from "
+          "the impulses, ContactTrajectory.slip_stops)", ours)
     peers = {}
     if _peer_available("mujoco"):
         import mujoco
@@ -487,16 +490,14 @@ def friction(repeats: int) -> None:
           f"on the friction oracles (rolling time {'met' if met['rolling time'] else 'not met'}, final speed "
           f"{'met' if met['final speed'] else 'not met'}; {unmatched} of {total} peer runs are cheaper than "
           f"castrajectory's cheapest solve, {cheapest:.3f} s, and have no equal-time comparison)")
-    steps = [r[1] * N / T for N, (_, r) in zip(FRICTION_GRIDS, ours) if np.isfinite(r[1])]
     n_fine, (_, fine) = FRICTION_GRIDS[-1], ours[-1]
     best_peer = min(((r[1], r[0], p, lab) for p, rows in peers.items() for lab, r in rows if np.isfinite(r[1])),
                     default=None)
-    print(f"  ceiling: castrajectory reads the rolling start at the nodes (the transition inside a step is not "
-          f"timed yet), so its rolling-time error is bounded below by ~h = T/N, first order (here "
-          f"{min(steps, default=float('nan')):.2f} to {max(steps, default=float('nan')):.2f} steps: "
-          f"{fine[1]:.1e} s at N = {n_fine}, h = {T / n_fine:.1e} s, in {fine[0]:.1f} s)"
-          + (f"; the time-steppers resolve it to their own step: {best_peer[0]:.1e} s ({best_peer[2]}, "
-             f"{best_peer[3]}) in {best_peer[1]:.2f} s" if best_peer else ""))
+    print(f"  rolling time: castrajectory times the slip's end inside its step from the impulses (slip_stops: the "
+          f"friction impulse until then is mu times the normal impulse over the sliding time), {fine[1]:.1e} s at "
+          f"N = {n_fine} in {fine[0]:.1f} s; its nodes alone resolve it to 1-2 steps"
+          + (f"; the time-steppers to their own step: {best_peer[0]:.1e} s ({best_peer[2]}, {best_peer[3]}) in "
+             f"{best_peer[1]:.2f} s" if best_peer else ""))
     cas_v = max(r[2] for _, r in ours)
     print(f"  final speed: castrajectory's is exact to rounding at every N (at most {cas_v:.1e} m/s off)"
           + (f", and so is pymunk's (at most {max(r[2] for _, r in peers['pymunk']):.1e} m/s off): the closed form's "

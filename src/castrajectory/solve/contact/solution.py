@@ -76,6 +76,53 @@ class ContactTrajectory(Result):
     #: velocities each opposes (same shape: D(q_k)(q̃_k − q_k)/(αh), D(q̃_k)(q_{k+1} − q_k)/h); None without
     friction_ratio: Optional[np.ndarray] = None
     slip: Optional[np.ndarray] = None
+    #: the friction impulse per node, lumped as ``node_impulse`` is (the node's ρ h ν and its shares of the
+    #: sub-node impulses' ρ μ): (N + 1, contacts), or (N + 1, contacts, 2) on tangent planes; None without friction
+    friction_impulse: Optional[np.ndarray] = None
+    #: the friction coefficients per contact (None without friction)
+    friction_coefficients: Optional[np.ndarray] = None
+
+    def slip_stops(self, contact: int = 0) -> List[float]:
+        """The times at which contact ``contact`` stops sliding (and sticks or rolls), read from the discrete
+        solution's impulses: the friction is impulsive, acting at the nodes and sub-nodes, so the slip stops
+        inside the cells from the first node that does not slide until the sticking ratio settles, after the
+        fraction ``f`` of them in which Coulomb's full ``μ`` acted, ``ΣΦ/ΣΛ = f (−μ ŝ) + (1 − f) r_s`` (``Φ``, ``Λ``
+        the nodes' friction and normal impulses, ``ŝ`` the slip's direction before, ``r_s`` the settled
+        sticking ratio after; where it has not settled within 20 nodes, the first cell alone, and the ringing
+        is skipped).  For a constant normal force the total friction impulse up to the stop is exact in the discrete solution
+        (the slip's balance), so the time is too; the nodes themselves resolve the stop to a step only."""
+        if self.friction_impulse is None:
+            return []
+        mu = float(self.friction_coefficients[contact])
+        Lam = np.asarray(self.node_impulse, float)[:, contact]
+        Phi = np.asarray(self.friction_impulse, float)[:, contact]
+        Phi = Phi.reshape(Lam.size, -1)
+        t = np.asarray(self.t, float)
+        edges = np.concatenate([[t[0]], 0.5 * (t[1:] + t[:-1]), [t[-1]]])        # the nodes' cells
+        ratio = np.where(Lam[:, None] > 0, Phi / np.where(Lam > 0, Lam, 1.0)[:, None], 0.0)
+        rn = np.linalg.norm(ratio, axis=1)
+        sliding = (Lam > 1e-12 * max(float(np.max(Lam)), 1e-300)) & (rn >= mu * (1 - 1e-9))
+        out, skip = [], 0
+        for k in range(1, Lam.size):
+            if k <= skip:
+                continue
+            if sliding[k - 1] and not sliding[k] and Lam[k] > 0:
+                d = ratio[k - 1] / max(rn[k - 1], 1e-300)                      # −ŝ: the sliding ratio's direction
+                # the stop's cells: from k until the sticking ratio has settled (two stuck nodes agree: a stop
+                # on an incline rings for two nodes about tan α; up to 20 nodes, a slip back within them included), the settled ratio r_s after them
+                K, r_s, skip = k, np.zeros_like(d), k + 20     # (unsettled: the first cell alone, the ringing skipped)
+                for K2 in range(k, min(k + 20, Lam.size - 2)):
+                    a1, a2 = ratio[K2 + 1], ratio[K2 + 2]
+                    if not (sliding[K2 + 1] or sliding[K2 + 2]) and np.max(np.abs(a1 - a2)) <= 1e-9 * mu:
+                        K, r_s, skip = K2, a1, K2
+                        break
+                cells = slice(k, K + 1)
+                mean = Phi[cells].sum(axis=0) / max(float(Lam[cells].sum()), 1e-300)
+                a = mu * d - r_s
+                f = float(np.dot(mean - r_s, a) / max(np.dot(a, a), 1e-300))
+                f = min(max(f, 0.0), 1.0)
+                out.append(float(edges[k] + f * (edges[K + 1] - edges[k])))
+        return out
 
     def as_dict(self) -> dict:
         return {**super().as_dict(), "solver_status": self.solver_status,
@@ -172,8 +219,15 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     lam[1:] += alpha_full[:N, None] * mu_full[:N]
     nu = nu_full[:N + 1].copy()
     total_iter = sum(a["iterations"] for a in attempts)
-    fratio = slip = None
+    fratio = slip = fimp = None
     if cm.friction:
+        # the friction impulses per node, lumped like Λ: the node's ρ h ν and the hat-function shares of ρ μ
+        fdim = cm.fd
+        RF = res.values["fratio"][:NL * 2 * c * fdim].reshape(NL, 2, c, fdim)
+        fimp = RF[:N + 1, 0] * nu_full[:N + 1, :, None] + (1.0 - alpha_full[:N + 1, None, None]) * RF[:N + 1, 1] \
+            * mu_full[:N + 1, :, None]
+        fimp[1:] += alpha_full[:N, None, None] * RF[:N, 1] * mu_full[:N, :, None]
+        fimp = fimp[..., 0] if fdim == 1 else fimp
         fd = cm.fd
         fratio = res.values["fratio"][:N * 2 * c * fd].reshape(N, 2, c, fd).transpose(0, 2, 1, 3)
         arrive = getattr(tn, "arrive", np.zeros((tn.L, c)))[:N]
@@ -191,7 +245,8 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
         build_time_s=float(sum(a["build_time_s"] for a in attempts)),
         solve_time_s=float(guess_time + sum(a["solve_time_s"] for a in attempts)),
         scheme=cm.dm.scheme.name, homotopy=list(res.homotopy), attempts=attempts, n=int(round(float(t[-1]) / h)),
-        friction_ratio=fratio, slip=slip,
+        friction_ratio=fratio, slip=slip, friction_impulse=fimp,
+        friction_coefficients=cm.mu_f.copy() if cm.friction else None,
         program={"terms": sysm.terms(), "steps": int(tn.L), **tn.nlp.anatomy()})
 
 
