@@ -128,8 +128,8 @@ FIELDS = ["id", "family", "N", "e", "status", "solved", "checks", "iterations", 
 
 FRICTION_FIELDS = ["id", "family", "N", "T", "e", "mu", "body", "centred", "status", "solved", "failed", "iterations",
                    "time_s", "impacts", "caught", "oracle_impacts", "first_arrival", "min_gap", "complementarity", "cone",
-                   "dissipation", "stick", "impact_energy", "impact_cone", "impact_time_error", "oracle_error", "twin_of",
-                   "twin_ok", "command"]
+                   "dissipation", "stick", "impact_energy", "impact_cone", "impact_time_error", "stop_time_error",
+                   "oracle_error", "twin_of", "twin_ok", "command"]
 
 SCHEME_FIELDS = ["id", "family", "scheme", "order", "N", "T", "e", "limit", "wall", "q0", "v0", "status", "solved",
                  "failed", "iterations", "time_s", "impacts", "oracle_impacts", "caught", "impact_time_error", "time_tol",
@@ -190,7 +190,8 @@ def summarise_friction(rows, seconds):
     lines += ["", "Columns: the worst over each family's successful solves (a check that does not apply is -); cone "
               "|ρ| − μ; ρ·s and the stick slip off the impacts' own slots; a bounce's kinetic energy change over its "
               "kinetic energy (not caught); an impulse's (|P_t| − μ P_n)/P_n; the impact times (s) against the closed "
-              "form (spin-drop, centred corner) or the event-driven reference's first impact (rectangle, bowl); the "
+              "form (spin-drop, centred corner) or the event-driven reference's first impact (rectangle, bowl), and "
+              "the stop or rolling start read from the impulses (incline, rolling; ContactTrajectory.slip_stops); the "
               "closed form's error (incline: path, m; rolling: speed, m/s; spin-drop and centred corner: velocities "
               "after the bounces over the scene's speed)."]
     arrivals = [r.get("first_arrival") for r in rows if r.get("first_arrival")]

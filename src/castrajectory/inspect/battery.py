@@ -236,22 +236,32 @@ def run_friction_scene(sc) -> dict:
     cone, work, stick = coulomb_residuals(tr, sc["mu"])
     out.update(cone=cone, dissipation=work, stick=stick)
     if sc["family"] == "incline":
-        s_ex, _ = col.sliding_block_oracle(sc["v0"], sc["mu"], sc["alpha"], G, tr.t)
+        s_ex, t_stop = col.sliding_block_oracle(sc["v0"], sc["mu"], sc["alpha"], G, tr.t)
         err = float(np.max(np.abs(tr.q[:, 0] - s_ex)))
         scale = FRICTION_PATH_STEPS * h * (abs(sc["v0"]) + G * sc["T"])
     else:
-        t_roll, v_ex = col.rolling_oracle(sc["body"], sc["v0"], sc["spin"], 0.1, sc["mu"], G)
-        err = abs(float(tr.v[-1, 0]) - v_ex) if t_roll < sc["T"] - 3 * h else 0.0
+        t_stop, v_ex = col.rolling_oracle(sc["body"], sc["v0"], sc["spin"], 0.1, sc["mu"], G)
+        err = abs(float(tr.v[-1, 0]) - v_ex) if t_stop < sc["T"] - 3 * h else 0.0
         scale = 1e-9 * max(abs(sc["v0"]), 1.0)
     out["oracle_error"] = err
+    # the stop (or the rolling start) timed inside its step from the impulses (ContactTrajectory.slip_stops)
+    terr = math.nan
+    if t_stop is not None and 0.0 < t_stop < sc["T"] - 3 * h:
+        stops = tr.slip_stops(0)
+        terr = min((abs(x - t_stop) for x in stops), default=math.inf)
+    out["stop_time_error"] = out["impact_time_error"] = terr      # (the summary's time column)
     vref = max(abs(sc["v0"]), math.sqrt(G), 0.1 * abs(sc.get("spin", 0.0)))
     failed = [name for name, bad in (
         ("gap", out["min_gap"] < -GAP_TOL), ("cone", cone > FRICTION_CONE * sc["mu"]),
         ("dissipation", work > FRICTION_TOL * vref),
         ("stick", stick > FRICTION_TOL * vref + STICK_ROUNDING * max(1.0, abs(sc["v0"]) * sc["T"]) / h),
-        ("closed form", not err <= scale)) if bad]
+        ("closed form", not err <= scale), ("stop time", terr > STOP_TIME_TOL)) if bad]
     out.update(checks=not failed, solved=not failed, failed=", ".join(failed))
     return out
+
+
+#: the stop or rolling start read from the impulses against the closed form (s; exact for a constant normal force)
+STOP_TIME_TOL = 1e-10
 
 
 # ----------------------------------------------------------------------------- bouncing with friction
