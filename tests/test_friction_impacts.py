@@ -9,14 +9,11 @@ from __future__ import annotations
 
 import math
 
-import casadi as ca
 import numpy as np
 import pytest
 
 from castrajectory.models import collision as col
-from castrajectory.models.contact import Contact
 from castrajectory.models.impact import frictional_impact
-from castrajectory.models.mechanics import LagrangianSystem, MassMatrix, Potential, velocity
 from castrajectory.solve import trajectory
 
 G = 9.81
@@ -94,12 +91,8 @@ def test_frictionless_is_newton():
         assert imp.P[1] == 0.0 and imp.w_after[0] == pytest.approx(-e * w[0], rel=1e-12)
 
 
-def _disk(mu, e, m=1.0, R=0.5, k=0.5):
-    q = ca.SX.sym("q", 3)
-    qd = velocity(q)
-    return LagrangianSystem(q, MassMatrix(ca.diag(ca.vertcat(m, m, k * m * R * R))), [Potential(m * G * q[1], "gravity")],
-                            names=["x", "y", "theta"],
-                            contact=Contact([q[1] - R], restitution=e, friction=mu, slip=[qd[0] + R * qd[2]]))
+def _disk(mu, e):
+    return col.rolling_body("disk", 1.0, 0.5, mu, G, restitution=e)
 
 
 @pytest.mark.parametrize("scheme", ["midpoint", "galerkin4"])

@@ -428,9 +428,11 @@ def sliding_block(mass: float, mu: float, alpha: float, g: float) -> LagrangianS
                                             names=["floor"]))
 
 
-def rolling_body(shape: str, mass: float, radius: float, mu: float, g: float) -> LagrangianSystem:
+def rolling_body(shape: str, mass: float, radius: float, mu: float, g: float,
+                 restitution: float = 0.0) -> LagrangianSystem:
     """A disk or a sphere (``ROLLING_SHAPES``) moving in the plane on the floor: ``q = (x, y, θ)``
-    (θ counter-clockwise), the gap ``y − R ≥ 0`` with friction ``mu`` and the contact point's slip ``ẋ + R θ̇``."""
+    (θ counter-clockwise), the gap ``y − R ≥ 0`` with friction ``mu``, the contact point's slip ``ẋ + R θ̇`` and
+    Newton's ``restitution`` for a bounce (the body dropped with spin)."""
     from .mechanics import velocity
     q = ca.SX.sym("q", 3)
     k = ROLLING_SHAPES[shape]
@@ -440,7 +442,7 @@ def rolling_body(shape: str, mass: float, radius: float, mu: float, g: float) ->
            for a in np.linspace(0, 2 * np.pi, 9)[:-1]]
     return LagrangianSystem(q, MassMatrix(ca.diag(ca.vertcat(mass, mass, k * mass * R * R))),
                             [Potential(mass * g * q[1], "gravity")], names=["x", "y", "theta"], points_expr=rim,
-                            contact=Contact([q[1] - R], restitution=0.0, friction=mu, slip=[qd[0] + R * qd[2]],
+                            contact=Contact([q[1] - R], restitution=restitution, friction=mu, slip=[qd[0] + R * qd[2]],
                                             names=["floor"]))
 
 

@@ -157,11 +157,12 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     # look-ahead step supplies ν_N.
     NL = N + LOOKAHEAD
     nu_full = H[:NL, None] * res.values["nu"][:NL * c].reshape(NL, c)
-    Jn = np.asarray(sysm.gap.map(N + 1)(q.T)[1])                    # (c, (N + 1) n)
+    gN, Jn = (np.asarray(x) for x in sysm.gap.map(N + 1)(q.T))    # gaps (c, N + 1) and Jacobians (c, (N + 1) n)
+    gap = gN.reshape(c, N + 1).T
     Jn = Jn.reshape(c, N + 1, n).transpose(1, 0, 2)                  # (N + 1, c, n)
     # only closed contacts (gap within TOUCH_TOL): on an open one ν is interior-point noise below the
     # complementarity tolerance, left on p⁺ as before
-    closed = np.asarray(sysm.gap.map(N + 1)(q.T)[0]).reshape(c, N + 1).T <= TOUCH_TOL * tn.scales_ell
+    closed = gap <= TOUCH_TOL * tn.scales_ell
     force = np.where(closed, nu_full[:N + 1], 0.0)
     half = 0.5 * np.einsum("kcn,kc->kn", Jn, force)
     if cm.friction:
@@ -188,13 +189,12 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     RS = RS[..., 0] if fd == 1 else RS
     # a contact that arrives from flight (open at the step's node) and is open at one of the two nodes after its
     # impulse (beyond a resting body's hop, a h²/8): the impulse sent it off
-    gaps_next = np.asarray(sysm.gap.map(N + 1)(q.T)[0]).reshape(c, N + 1).T
     for k in np.flatnonzero(np.any(MU > tol, axis=1)):
         pm = np.asarray(cm.p_minus(q[k], S[k], B[k], H[k], *[z[k] for z in ZM])).reshape(-1)
         pl = np.asarray(cm.p_plus(S[k], q[k + 1], B[k], H[k], *[z[k] for z in ZP])).reshape(-1)
         impacts += _impacts_at(cm, k, float(t_sub[k]), S[k], pm, pl, MU[k], tol, H[k], at_node=False,
-                               ratios=RS[k, c:], leaves=(np.max(gaps_next[k + 1:k + 3], axis=0) > tn.open_gap)
-                               & (gaps_next[k] > TOUCH_TOL * tn.scales_ell))
+                               ratios=RS[k, c:], leaves=(np.max(gap[k + 1:k + 3], axis=0) > tn.open_gap)
+                               & (gap[k] > TOUCH_TOL * tn.scales_ell))
     for k in np.flatnonzero(np.any(force[1:N] > tol, axis=1)) + 1:
         at = _impacts_at(cm, k, float(t[k]), q[k], pp[k] - 2 * half[k], pp[k], force[k], tol, H[k], at_node=True,
                          ratios=RS[k, :c] if k < N else np.zeros_like(RS[0, :c]))
@@ -206,7 +206,6 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     # velocities M⁻¹p, tangent to the holonomic constraints where there are any
     v = cm.dm.velocities(q, p)
     energy = sysm.energies(q, v)
-    gap = np.asarray(sysm.gap.map(N + 1)(q.T)[0]).reshape(c, N + 1).T
     gap_sub = np.asarray(sysm.gap.map(N)(S.T)[0]).reshape(c, N).T
     # Impulse per node: Λ_k = h ν_k + (1 − α_k) μ_k + α_{k−1} μ_{k−1}, each sub-node impulse shared
     # between its two nodes by linear (hat-function) interpolation of its time; node N takes the
