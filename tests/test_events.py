@@ -233,3 +233,91 @@ def test_joint_limit_impact_times_to_rounding_with_a_high_order():
         assert abs(imp.v_after[0] + 0.5 * imp.v_before[0]) <= 1e-10 * abs(imp.v_before[0])
     est = tr.error_estimate.errors["impact_times"]
     assert err <= est < 1e-10
+
+
+# --------------------------------------------------------------------------- persistent contact, Coulomb friction
+@pytest.mark.parametrize("shape,k", [("disk", 0.5), ("sphere", 0.4)])
+def test_rolling_starts_at_the_closed_form_time(shape, k):
+    """A disk or sphere launched sliding with back-spin: the slip stops at 2u0/(7μg) (sphere), u0/(3μg) (disk),
+    and it rolls on at (v0 − kRω0)/(1 + k) (momentum about the contact point kept)."""
+    R, mu, v0, w0 = 0.1, 0.3, 2.0, 5.0
+    ref = event_driven(col.rolling_body(shape, 1.0, R, mu, G), [0.0, R, 0.0], [v0, 0.0, w0], 2.0)
+    u0 = v0 + R * w0                  # the slip ẋ + R θ̇
+    t_roll = u0 / ((1 + 1 / k) * mu * G)
+    stops = ref.switch_times("stop", 0)
+    assert ref.reason == "horizon" and len(stops) == 1 and not ref.events
+    assert abs(stops[0] - t_roll) < 1e-14            # measured 9e-16 and 3e-16 s (the phases are parabolas)
+    q, v = ref.state(2.0)
+    assert abs(v[0] - (v0 - k * R * w0) / (1 + k)) < 1e-13 and abs(v[0] + R * v[2]) < 1e-13   # measured 6e-15
+
+
+@pytest.mark.parametrize("v0,mu", [(2.0, 0.5), (2.0, 0.2), (-1.0, 0.5), (0.0, 0.2), (0.0, 0.5)])
+def test_the_block_on_an_incline_against_its_closed_form(v0, mu):
+    """Launched up, down or from rest on tan α ≈ 0.31: it sticks where tan α ≤ μ, else slides back; the path
+    and the stop time against :func:`~castrajectory.models.collision.sliding_block_oracle`."""
+    alpha = 0.3
+    ref = event_driven(col.sliding_block(1.0, mu, alpha, G), [0.0, 0.0], [v0, 0.0], 2.0)
+    t = np.linspace(0.0, 2.0, 17)
+    path, stop = col.sliding_block_oracle(v0, mu, alpha, G, t)
+    assert max(abs(ref.state(tt)[0][0] - s) for tt, s in zip(t, path)) < 1e-13        # measured 4.4e-15 m
+    stops = ref.switch_times("stop", 0)
+    if v0 != 0.0:   # launched: the slip stops once (then sticks, or reverses where tan α > μ)
+        assert len(stops) == 1
+        up_or_down = stop if stop is not None else v0 / (G * (np.sin(alpha) + mu * np.cos(alpha)))
+        assert abs(stops[0] - up_or_down) < 1e-14
+    else:
+        assert len(stops) == 0
+
+
+def test_the_rimless_wheel_against_its_touchdown_map():
+    """Each touchdown: the new spoke sticks (Stronge's law, e = 0), the old one lifts without an impulse, and the
+    angular momentum about the new tip is kept; the stance between is a pivot (a sticking phase, flown by the
+    extrapolation).  The rates after each touchdown against the closed-form map."""
+    s = col.rimless_wheel(8, 1.0, 0.08, 1.0, 9.8, 0.01, 1.0)
+    q0, v0 = col.rimless_wheel_start(8, 1.0, 1.5)
+    ref = event_driven(s, q0, v0, 3.0)
+    rates, _ = col.rimless_wheel_oracle(8, 1.0, 0.08, 9.8, 0.01, 1.5, len(ref.events))
+    assert ref.reason == "horizon" and len(ref.events) == 3
+    assert all(len(ev.contacts) == 1 and ev.frictional for ev in ref.events)
+    np.testing.assert_allclose([-ev.v_after[2] for ev in ref.events], rates, rtol=0, atol=1e-12)
+
+
+def test_a_corner_that_sticks_then_slips():
+    """The rectangle lands on a corner with e = 0, μ = 0.5: the corner sticks (Stronge's law) and the body pivots,
+    keeping its energy, until the friction reaches the cone and the corner slips; then the other corner lands
+    while the first slides, an impact that two contacts with friction take, where the reference stops."""
+    s = col.rectangle_drop(1.0, 1.0, 0.5, G, 0.0, friction=0.5)
+    ref = event_driven(s, [0.0, 1.0, 0.4], [0.5, 0.0, 1.0], 1.2)
+    assert len(ref.events) == 1 and ref.events[0].frictional and [w.kind for w in ref.switches] == ["slip"]
+    assert "several contacts" in ref.reason and ref.horizon > ref.switches[0].t
+    E = s.energy
+    t_imp, t_slip = ref.events[0].t, ref.switches[0].t
+    energy = [float(E(*ref.state(t), 0.0)) for t in np.linspace(t_imp + 1e-9, t_slip, 7)]
+    assert max(energy) - min(energy) < 1e-12 * abs(energy[0])          # the pivot keeps its energy
+    # at the switch the sticking force lies on the cone: |τ| = μλ
+    ph = ref.segments[1][4]
+    from castrajectory.baselines.phases import Parts, Phase
+    lam, tau = (np.asarray(x).ravel() for x in Phase(Parts(s), ph, 0.0).forces(ref.switches[0].q,
+                                                                                ref.switches[0].v))
+    assert abs(abs(tau[0]) - 0.5 * lam[0]) < 1e-12 * lam[0]
+
+
+@pytest.mark.parametrize("mu", [1.0, 1.5, 3.0])
+def test_painleves_rod_is_refused_where_the_classical_criterion_says(mu):
+    """A thin rod (a 1 × 1e-4 rectangle) sliding on one end at θ from the floor, the friction pushing it down:
+    its normal acceleration per unit normal force is ``(1 + 3cos²θ − 3μ sinθ cosθ)/m`` (Painlevé); where that is
+    negative no contact mode is consistent, and the reference stops there instead of inventing a motion."""
+    for th in np.linspace(0.15, 1.45, 12):
+        s = col.rectangle_drop(1.0, 1.0, 1e-4, G, 0.0, friction=mu)
+        q = np.array([0.0, 0.0, th])
+        phi = np.asarray(s.gap(q)[0]).ravel()
+        j = int(np.argmin(phi))
+        q[1] -= phi[j]
+        J = np.asarray(s.gap(q)[1])
+        v = np.array([-2.0, 0.0, 0.0])
+        v[1] = -J[j] @ v / J[j][1]
+        B = 1 + 3 * np.cos(th) ** 2 - 3 * mu * np.sin(th) * np.cos(th)
+        if abs(B) < 0.05:
+            continue
+        ref = event_driven(s, q, v, 0.05)
+        assert ("Painlevé" in ref.reason and ref.horizon == 0.0) == (B < 0), (th, B, ref.reason)
