@@ -20,7 +20,8 @@ error on the ball from 1.3 m (scripts/nosnoc_ball.py) beside castrajectory's, wi
 equal accuracy (goal: at least 50x).  One untimed warm-up per scene compiles the element functions
 (castrajectory.solve.jit's disk cache makes later runs load them).  Last, issue #25's pendulum against a
 joint limit: impact-time error against the event-driven reference and wall time, for every scheme family
-(goal: 1e-10 in under 1 s).  Then issue #25's friction goal: the sliding sphere that starts to roll
+(goal: 1e-10 in under 1 s), and for nosnoc when installed (scripts/nosnoc_joint_limit.py), with the ratio of
+wall times at equal accuracy.  Then issue #25's friction goal: the sliding sphere that starts to roll
 (problems/rolling_ball.py's model: m = 1, R = 0.1, mu = 0.3, g = 9.81, v0 = 2 m/s, no spin, T = 1 s;
 closed form t* = 2 v0/(7 mu g), v(T) = 5 v0/7), its rolling-start time and final speed against the closed
 form, error against wall time, for castrajectory (a sweep of N), MuJoCo (a sphere on a plane: its
@@ -125,6 +126,8 @@ def main(argv=None) -> int:
 
 #: Issue #25's pendulum with a joint limit: θ ≤ 0.5, e = 0.5, from θ = −1 at rest, T = 3 (two impacts).
 JOINT_LIMIT = (0.5, 0.5, -1.0, 3.0)
+#: Its gravity g and rod length l (a unit point mass on a massless rod).
+PENDULUM = (9.81, 1.0)
 
 
 #: Grids per scheme of the joint-limit sweep (each stops once a run takes more than 5 s).
@@ -139,20 +142,31 @@ JOINT_LIMIT_GRIDS = {
 }
 
 
+def joint_limit_scene():
+    """Issue #25's pendulum against a joint limit (``JOINT_LIMIT``, ``PENDULUM``): the scene as a dict
+    (limit, e, th0, T, g, l), the castrajectory system and its event-driven reference over [0, T]."""
+    import casadi as ca
+    import castrajectory as ct
+    from castrajectory.baselines.events import event_driven
+    limit, e, th0, T = JOINT_LIMIT
+    g, l = PENDULUM
+    th = ca.SX.sym("th", 1)
+    system = ct.LagrangianSystem(th, ct.Atoms([l * ca.vertcat(ca.sin(th[0]), -ca.cos(th[0]))], [1.0]),
+                                 [ct.Gravity(g)], names=["theta"], contact=ct.Contact([limit - th[0]], restitution=e))
+    scene = dict(limit=limit, e=e, th0=th0, T=T, g=g, l=l)
+    return scene, system, event_driven(system, [th0], [0.0], T)
+
+
 def joint_limit(repeats: int) -> None:
     """Impact-time error against the event-driven reference (baselines/events.py: Gragg–Bulirsch–Stoer of
     order 16, within 3e-14 s of the elliptic quadrature here) against wall time, per scheme; goal (issue
     #25): 1e-10 in under 1 s.  Every scheme takes contact: each part of a step split at an impact carries the
-    scheme's stages, so the impact times converge at the scheme's order."""
-    import casadi as ca
+    scheme's stages, so the impact times converge at the scheme's order.  Then nosnoc on the same scene against
+    the same reference (``_joint_limit_nosnoc``)."""
     import castrajectory as ct
-    from castrajectory.baselines.events import event_driven
     from castrajectory.inspect.study import time_to_error
+    scene, system, ref = joint_limit_scene()
     limit, e, th0, T = JOINT_LIMIT
-    th = ca.SX.sym("th", 1)
-    system = ct.LagrangianSystem(th, ct.Atoms([ca.vertcat(ca.sin(th[0]), -ca.cos(th[0]))], [1.0]),
-                                 [ct.Gravity(9.81)], names=["theta"], contact=ct.Contact([limit - th[0]], restitution=e))
-    ref = event_driven(system, [th0], [0.0], T)
     print(f"\npendulum against a joint limit (θ ≤ {limit}, e = {e}, from θ = {th0} at rest, T = {T}): "
           f"impact times against the event-driven reference ({', '.join(f'{t:.14f}' for t in ref.times)} s)")
     rows = []
@@ -188,11 +202,65 @@ def joint_limit(repeats: int) -> None:
     mid = time_to_error(rows, "midpoint", 1e-8, key="error", cost="time_s")
     if best10 is not None:
         print(f"  {'PASS' if best10[1] < 1.0 else 'MISS'}: impact times to 1e-10 in under 1 s (issue #25): "
-              f"{best10[0]} in {best10[1]:.3f} s (N = {best10[2]:.0f}); the issue's nosnoc run reached 1.35e-9 in 4.3 s")
+              f"{best10[0]} in {best10[1]:.3f} s (N = {best10[2]:.0f})")
     else:
         print("  MISS: no scheme reached 1e-10")
     if np.isfinite(mid["cost"]) and best10 is not None:
         print(f"  midpoint needs {mid['cost']:.3f} s for 1e-8; {best10[0]} reaches 1e-10 in {best10[1]:.3f} s")
+    _joint_limit_nosnoc(rows, scene, ref.times, repeats)
+
+
+def _joint_limit_nosnoc(rows, scene, reference, repeats: int) -> None:
+    """nosnoc on the joint-limit pendulum (scripts/nosnoc_joint_limit.py: FESD on its time-freezing
+    reformulation), in this run: per setting its impact-time error against the same event-driven reference
+    and its wall time (build + march, best of ``repeats`` for runs under FAST_RUN s); then the ratio of wall
+    times at equal accuracy, nosnoc's time over that of castrajectory's cheapest run (any scheme, among
+    ``rows``) reaching nosnoc's error, for each nosnoc run and for its most accurate one."""
+    import nosnoc_joint_limit
+
+    if not nosnoc_joint_limit.available():
+        print("  nosnoc: not installed (pip install '.[bench]'); the comparison is skipped")
+        return
+    print("  nosnoc 0.2 (time-freezing FESD, Radau IIA, Stewart; each impact read at the element boundary on the "
+          f"switch; wall: build + march, best of {repeats} for runs under {FAST_RUN:g} s):")
+    theirs = []
+    for st in nosnoc_joint_limit.SETTINGS:
+        r = None
+        for _ in range(repeats):
+            try:
+                again = nosnoc_joint_limit.solve(reference, scene, **st)
+            except Exception as exc:  # a build or solve error counts as a failed setting
+                again = {"status": f"error: {exc}", "wall_time_s": float("nan"), "error": float("nan")}
+            r = again if r is None or again["wall_time_s"] < r["wall_time_s"] else r
+            if not again["wall_time_s"] < FAST_RUN:
+                break
+        label = (f"n_s = {st['n_stages']}, {st['n_fe']} elements per {st['step']:g} step, tol "
+                 f"{st.get('tol', 1e-9):g}" + (f", k_tf = {st['k_tf']:g}" if "k_tf" in st else ""))
+        err = f"impact-time error {r['error']:.2e} s" if np.isfinite(r["error"]) else "no error"
+        print(f"  {'nosnoc':10s} {label:56s} {r['wall_time_s']:7.3f} s  {err} ({r['status']})")
+        if r["status"] == "ok":
+            theirs.append((r["error"], r["wall_time_s"], label))
+    if not theirs:
+        print("  nosnoc: no run succeeded; no ratio")
+        return
+
+    def cheapest(target):  # castrajectory's cheapest run reaching an impact-time error <= target
+        ours = [r for r in rows if r["success"] and r["error"] <= target]
+        return min(ours, key=lambda r: r["time_s"]) if ours else None
+
+    print("  at equal accuracy (castrajectory's cheapest run reaching nosnoc's error; ratio of wall times nosnoc / "
+          "castrajectory):")
+    for err, wall, label in theirs:
+        c = cheapest(err)
+        print(f"    nosnoc {label:56s} {err:.1e} s in {wall:.3f} s: "
+              + (f"castrajectory {c['label']} N = {c['n']} ({c['error']:.1e} s) in {c['time_s']:.3f} s: "
+                 f"{wall / c['time_s']:.1f}x" if c else "castrajectory does not reach it"))
+    err, wall, label = min(theirs)
+    c = cheapest(err)
+    print(f"  nosnoc's most accurate run: {err:.2e} s in {wall:.3f} s ({label}); "
+          + (f"castrajectory's cheapest run reaching it: {c['label']} N = {c['n']} ({c['error']:.1e} s) in "
+             f"{c['time_s']:.3f} s: wall-time ratio nosnoc / castrajectory {wall / c['time_s']:.1f}" if c
+             else "no castrajectory run reaches it"))
 
 
 #: The ball of the nosnoc comparison: dropped from 1.3 m at rest, e = 1, over 3.8 s (4 impacts).
