@@ -68,7 +68,7 @@ def _sphere_start(v0, w0, height=0.0, R=0.1):
 
 def test_a_sphere_on_so3_slides_then_rolls():
     """A sphere (R = 0.1, μ = 0.3) launched at (2, 0.5) m/s with spin (5, −3, 7) rad/s: its slip (2.3, 1) keeps its
-    direction, it rolls from t* = 0.2435 s on at v0 − μ g t* û (measured 7.0e-5 and 1.75e-5 m/s at N = 200, 400:
+    direction, it rolls from t* = 0.2435 s on at v0 − μ g t* û (measured 3.5e-5, 8.8e-6 and 2.2e-6 m/s at N = 100, 200, 400:
     order 2), its vertical spin is kept (4e-14), the friction stays in the circular cone, and the rolling starts
     within two steps of t*."""
     m, R, mu = 1.0, 0.1, 0.3

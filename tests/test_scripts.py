@@ -760,8 +760,8 @@ def test_bowl3d_with_friction():
 
 
 def test_rolling_sphere_on_so3():
-    """rolling_ball.py --body sphere3d: the sphere on SO(3) rolls at 5 v0/7 (measured 9.7e-5 m/s at N = 200,
-    second order: the quaternion's midpoint rule), from 2 v0/(7 μ g) (read from the impulses: measured 3.3e-5 s,
+    """rolling_ball.py --body sphere3d: the sphere on SO(3) rolls at 5 v0/7 (measured 4.9e-5 m/s at N = 200,
+    second order: the quaternion's midpoint rule), from 2 v0/(7 μ g) (read from the impulses: measured 1.6e-5 s,
     the planar sphere's 3e-17; its nodes within two steps), its spin about the
     vertical kept (10 rad/s to 1e-12) and its quaternion on the unit sphere."""
     p = run([script("rolling_ball"), "--body", "sphere3d", "--top-spin", "10", "--n", "200", "--json"])

@@ -73,7 +73,7 @@ class ContactTrajectory(Result):
     program: dict = field(default_factory=dict)
     #: Coulomb friction (a contact with a positive coefficient): per step and contact the ratio of the
     #: tangential to the normal force, (N, contacts, 2) for [node force, sub-node impulse], and the slip
-    #: velocities each opposes (same shape: D(q_k)(q̃_k − q_k)/(αh), D(q̃_k)(q_{k+1} − q_k)/h); None without
+    #: velocities each opposes (same shape: ContactMechanics.slip: each part's displacement with D at its midpoint); None without
     friction_ratio: Optional[np.ndarray] = None
     slip: Optional[np.ndarray] = None
     #: the friction impulse per node, lumped as ``node_impulse`` is (the node's ρ h ν and its shares of the
