@@ -2,11 +2,16 @@
 
 Solves the discretised free-surface problem with Ipopt and compares it with the
 analytic circular cap (Young's angle, Laplace pressure).  ``--span A_FIXED``
-pins the contact span instead of leaving it free.
+pins the contact span instead of leaving it free.  ``--gravity RHO_G`` adds the
+drop's weight (the oracle is then the heavy drop in elliptic integrals, and the
+area multiplier the pressure at the table); ``--pendant`` hangs it under a
+ceiling: beyond the fold of the pendant family there is no stable drop, and the
+run says so and exits 1.
 
     python problems/droplet.py                       # default scene, summary table
     python problems/droplet.py --json                # one JSON object on stdout
     python problems/droplet.py --formulation graph --n 2000 --plot drop.png
+    python problems/droplet.py --gravity 1 --gamma-sl 1 --area 2 --pendant
 """
 import math
 import sys
@@ -27,16 +32,23 @@ def parser():
                    help="curve: polyline, any angle; graph: y(x), angles below 90°")
     p.add_argument("--span", type=float, default=None, metavar="A_FIXED",
                    help="pin the contact span to this value (fixed-span mode)")
+    p.add_argument("--gravity", type=float, default=0.0, metavar="RHO_G",
+                   help="weight density ρg (>= 0; capillary length sqrt(γ_gl/ρg)); 0: the weightless drop")
+    p.add_argument("--pendant", action="store_true",
+                   help="reverse gravity: the drop hangs under a ceiling (needs --gravity > 0)")
     cli.add_plot(p)
     return p
 
 
 def run(args):
     # describe
-    drop = droplet.Droplet(args.gamma_gl, args.gamma_sl, args.gamma_sg, args.area, args.span)
+    drop = droplet.Droplet(args.gamma_gl, args.gamma_sl, args.gamma_sg, args.area, args.span, args.gravity,
+                           args.pendant)
     # discretise + solve
     sol = droplet.solve(drop, args.n, args.formulation, options=cli.ipopt_options(args), verbose=args.verbose)
     # inspect
+    if drop.rho_g > 0.0:
+        return _heavy_outcome(sol)
     cap, e = sol.analytic, sol.errors
     deg = math.degrees
     summary = cli.table([
@@ -56,6 +68,52 @@ def run(args):
     summary = [f"droplet: {sol.formulation} formulation, N = {sol.n}, {mode}", *summary, young,
                cli.status_line(sol.status, sol)]
     return cli.Outcome.of(sol, summary=summary, writers={"plot": lambda path: plotting.droplet_shape(sol, path)})
+
+
+def _heavy_outcome(sol):
+    """The summary of a drop under gravity: its readings against the closed form (when there is one)."""
+    drop, cap, e = sol.drop, sol.analytic, sol.errors
+    deg = math.degrees
+    kind = "pendant (under a ceiling)" if drop.pendant else "sessile"
+    head = [f"droplet under gravity, {kind}: {sol.formulation} formulation, N = {sol.n}, ρg = {drop.rho_g:g}, "
+            f"l_c = {drop.capillary_length:.6g}, Bond number A/l_c² = {drop.bond_number:.6g}"]
+    fold = (sol.stability or {}).get("fold")
+    if fold is not None:
+        rows = [["fold of the pendant family", "discrete", "closed form", "error"],
+                ["largest stable area A*", cli.fmt(fold["area"]), cli.fmt(fold["analytic_area"]),
+                 cli.fmt(e.get("fold_area"), ".3e") + " rel"],
+                ["first area refused", cli.fmt(fold["refused_area"]), "", ""],
+                ["A* extrapolated (λ_min² → 0)", cli.fmt(fold["extrapolated_area"]), "", ""]]
+        return cli.Outcome.of(sol, summary=head + cli.table(rows) + [cli.status_line(sol.status, sol)],
+                              writers={"plot": lambda path: plotting.droplet_shape(sol, path)})
+
+    def row(name, mine, key, rel=True):
+        ref = None if cap is None else getattr(cap, key)
+        err = e.get("pressure" if key == "pressure_at_table" else key)
+        scale = deg if key == "contact_angle" else (lambda v: v)
+        return [name, cli.fmt(scale(mine)), cli.fmt(None if ref is None else scale(ref)),
+                "" if err is None else cli.fmt(scale(err), ".3e") + (" rel" if rel else "")]
+
+    rows = [["quantity", "discrete", "closed form", "error"],
+            row("contact angle (deg)", sol.contact_angle, "contact_angle", rel=False),
+            row("height h", sol.height, "height"),
+            row("span a", sol.span, "span"),
+            row("apex curvature κ_a", sol.apex_curvature, "apex_curvature"),
+            row("pressure at the table (area multiplier)", sol.pressure_at_table, "pressure_at_table"),
+            row("energy", sol.energy, "energy"),
+            ["shape (max dist / h)", "", "", "" if "shape" not in e else cli.fmt(e["shape"], ".3e")]]
+    lines = head + cli.table(rows)
+    lines.append("P = γκ_a " + ("−" if drop.pendant else "+") + " ρg h from the discrete readings: "
+                 + cli.fmt(drop.gamma_gl * sol.apex_curvature + drop.gravity_sign * drop.rho_g * sol.height))
+    if not drop.pendant:
+        lines.append(f"puddle limit of the height, 2 l_c sin(θ/2) = {cli.fmt(droplet.puddle_height(drop))}")
+    hess = (sol.stability or {}).get("reduced_hessian")
+    if hess is not None:
+        lines.append(f"stability: reduced Hessian Zᵀ∇²L Z {'positive definite' if hess['positive_definite'] else 'indefinite'}"
+                     f" (smallest eigenvalue {hess['min_eigenvalue']:.3e}, dimension {hess['dimension']}): "
+                     + ("a stable drop" if hess["positive_definite"] else "not a minimum"))
+    lines.append(cli.status_line(sol.status, sol))
+    return cli.Outcome.of(sol, summary=lines, writers={"plot": lambda path: plotting.droplet_shape(sol, path)})
 
 
 def main(argv=None):

@@ -6,7 +6,8 @@ A problem script defines ``parser()`` and ``run(args) -> Outcome`` and calls
 * ``--json`` prints one JSON object on stdout and nothing else: while the
   scene runs, file descriptor 1 is pointed at stderr, so nothing a C++ library
   prints can leak into the JSON;
-* exit code ``0`` solved, ``1`` the solver failed (message on stderr),
+* exit code ``0`` solved, ``1`` the solver failed, or it converged and a check after it refused the
+  answer (a pendant drop beyond its fold: no stable drop); the message on stderr says which,
   ``2`` bad input (one line on stderr, no traceback; output paths are checked before the solve),
   ``3`` solved and printed, but a requested file could not be written, ``130`` interrupted (SIGINT:
   one line, no traceback; :mod:`castrajectory.solve.interrupt` keeps a strategy from retrying);
@@ -32,7 +33,7 @@ import numpy as np
 
 from ..inspect.files import write_atomically
 from ..solve import budget
-from ..result import Result
+from ..result import SUCCESS_STATUSES, Result
 from ..validation import InputError
 from .registry import scene_modules
 
@@ -451,7 +452,9 @@ def run_scene(parser: argparse.ArgumentParser, run: Callable[[argparse.Namespace
             print("\n".join(outcome.summary + estimate_lines(outcome) + [f"warning: {w}" for w in outcome.warnings]))
         sys.stdout.flush()
         if not outcome.success:
-            print(f"{prog}: solver failed: {outcome.message}", file=sys.stderr)
+            # a converged solve whose answer a later check refused is no solver failure: the message says why
+            failed = "" if outcome.solver_status in SUCCESS_STATUSES else "solver failed: "
+            print(f"{prog}: {failed}{outcome.message}", file=sys.stderr)
             return 1
         for flag, writer in outcome.writers.items():
             path = getattr(args, flag, None)

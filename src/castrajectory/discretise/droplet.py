@@ -6,7 +6,8 @@
 Each writes its unknowns and rows (surface length, equal chords, the area) into a
 :class:`~castrajectory.discretise.program.Program` in scaled units (``A = 1``,
 ``gamma_gl = 1``) and returns the :class:`Geometry` that reads the vertices back.
-:func:`contact_angle_estimate` reads the contact angle off the vertices to second order.
+A scene adds the terms it needs on top: :func:`add_gravity` (the weight, over the same pieces
+as the area).  :func:`contact_angle_estimate` reads the contact angle off the vertices to second order.
 """
 from __future__ import annotations
 
@@ -18,7 +19,7 @@ import casadi as ca
 import numpy as np
 
 from ..models.droplet import arc_points, segment_area_factor
-from .program import Constraint, Program, X
+from .program import Constraint, P, Program, X
 
 #: The discretisations by name (:data:`DISCRETISATIONS` holds their classes).
 FORMULATIONS = ("curve", "graph")
@@ -42,6 +43,10 @@ class Geometry:
     span_index: int
     span: object  # the span's symbol (for the wetting term of the energy)
     graph_n: Optional[int] = None  # graph form: x_i = i a / n (x is not stored)
+    #: the element arguments of the area's pieces (one per chord or cell), and the element that gives a
+    #: piece's first moment ``∫∫ y dA`` (times a weight): what a term weighted by the liquid's height needs
+    pieces: tuple = ()
+    moment: str = ""
 
     def vertices(self, res):
         """``(x, y, span)`` in scaled units from a result of this NLP."""
@@ -73,6 +78,10 @@ def _element(name: str) -> ca.Function:
             "cell": ([y0, y1, a, n], ca.sqrt((a / n) ** 2 + (y1 - y0) ** 2)),
             "graph_link": ([c0, c1, y0, y1, a, n], n * (c1 - c0 - trap)),
             "graph_last": ([c0, y0, y1, a, n], c0 + trap),
+            # first moments ∫∫ y dA of a piece, times the weight w: exact for the polygon (the shoelace
+            # triangle's centroid height, (y0 + y1)/3; the trapezoid cell's ∫ y²/2 dx)
+            "curve_moment": ([p0, p1, s], s * tri * (p0[1] + p1[1]) / 3.0),
+            "graph_moment": ([y0, y1, a, n, s], s * (a / n) * (y0 * y0 + y0 * y1 + y1 * y1) / 6.0),
         }
         for key, (args, out) in fns.items():
             _ELEMENTS[key] = ca.Function(key, args, [out])
@@ -170,7 +179,8 @@ class Curve:
         gx, gy = guess[:, 0], guess[:, 1]
         _cumulative_area(nlp, "curve_link", "curve_last", lambda r: [X(P[r]), X(P[r + 1])],
                          0.5 * (gx[1:] * gy[:-1] - gx[:-1] * gy[1:]))
-        return Geometry(P[:, 0], P[:, 1], int(P[-1, 0]), xs[n])
+        return Geometry(P[:, 0], P[:, 1], int(P[-1, 0]), xs[n], pieces=(X(P[k]), X(P[k + 1])),
+                        moment="curve_moment")
 
 
 class Graph:
@@ -217,10 +227,25 @@ class Graph:
         nlp.minimize_elements("length", _element("cell"), [X(Y[k]), X(Y[k + 1]), X(A), nn])
         _cumulative_area(nlp, "graph_link", "graph_last", lambda r: [X(Y[r]), X(Y[r + 1]), X(A)],
                          0.5 * (a0 / n) * (ys[:-1] + ys[1:]))
-        return Geometry(None, Y[:, 0], int(A[0]), a, graph_n=n)
+        return Geometry(None, Y[:, 0], int(A[0]), a, graph_n=n, pieces=(X(Y[k]), X(Y[k + 1]), X(A), nn),
+                        moment="graph_moment")
 
 
 DISCRETISATIONS = {"curve": Curve, "graph": Graph}
+
+
+# ---------------------------------------------------------------------------- terms a scene adds
+def add_gravity(nlp: Program, geo: Geometry, weight: float) -> None:
+    """The weight ``weight ∫∫ y dA`` in the objective: one element family over the geometry's pieces.
+
+    In scaled units ``weight`` is the signed Bond number ``±rho g A / gamma_gl`` (``+`` sessile, ``-``
+    pendant).  It is a parameter of the program (``"gravity"``), so a continuation in the area changes
+    it between solves without rebuilding the solver.  The term asks the geometry only for its pieces and
+    their moment element: a discretisation whose liquid is weighted otherwise (a body of revolution,
+    ``2 pi r``) supplies its own moment element, and this term does not change.
+    """
+    nlp.parameter("gravity", 1, weight)
+    nlp.minimize_elements("gravity", _element(geo.moment), [*geo.pieces, P(nlp.parameter_index("gravity"))])
 
 
 # ---------------------------------------------------------------------------- inspect helpers

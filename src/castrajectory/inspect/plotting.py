@@ -42,27 +42,38 @@ def _mark_contact_angle(ax, point, theta: float, size: float, digits: int = 4, c
 
 
 def droplet_figure(sol) -> Figure:
-    """The discrete drop over the analytic circle, with the contact angle drawn and labelled at the left contact."""
+    """The discrete drop over the analytic profile (the circle, or the heavy drop's closed form), with the
+    contact angle drawn and labelled at the left contact.  A pendant drop is drawn hanging (y downwards)."""
     cap = sol.analytic
+    heavy = sol.drop.rho_g > 0.0
     fig = Figure(figsize=(8.4, 4.2), layout="constrained")
     ax = fig.add_subplot()
-    pts = cap.points(720)
-    ax.plot(pts[:, 0], pts[:, 1], "-", color="0.6", lw=3, label="analytic arc")
+    if cap is not None:
+        pts = cap.points(720)
+        ax.plot(pts[:, 0], pts[:, 1], "-", color="0.6", lw=3,
+                label="closed form (elliptic integrals)" if heavy else "analytic arc")
     stride = max(1, len(sol.x) // 200)
     ax.plot(sol.x, sol.y, "-", color="C0", lw=1.2, label=f"discrete ({sol.formulation}, N = {sol.n})")
     ax.plot(sol.x[::stride], sol.y[::stride], ".", color="C0", ms=3)
-    lo, hi = min(sol.x.min(), 0.0), max(sol.x.max(), cap.span)
+    lo, hi = min(sol.x.min(), 0.0), max(sol.x.max(), sol.span if cap is None else cap.span)
     pad = 0.08 * (hi - lo)
     ax.axhline(0.0, color="k", lw=1)
     ax.fill_between([lo - pad, hi + pad], [0, 0], [-0.04 * (hi - lo)] * 2, color="0.85")
     _mark_contact_angle(ax, (sol.x[0], sol.y[0]), sol.contact_angle, 0.15 * (hi - lo))
     ax.set_aspect("equal")
     ax.set_xlabel("x")
-    ax.set_ylabel("y")
-    mode = "free span (Young)" if sol.drop.span is None else f"pinned span a = {sol.drop.span:g}"
+    ax.set_ylabel("y (down from the ceiling)" if sol.drop.pendant else "y")
+    if sol.drop.pendant:
+        ax.invert_yaxis()
+    if heavy:
+        mode = (f"{'pendant' if sol.drop.pendant else 'sessile'} under gravity, Bond number "
+                f"{sol.drop.bond_number:.4g}")
+    else:
+        mode = "free span (Young)" if sol.drop.span is None else f"pinned span a = {sol.drop.span:g}"
+    closed = "" if cap is None else f" (analytic {math.degrees(cap.contact_angle):.4f}°)"
+    shape = f", shape error {sol.errors['shape']:.1e}" if "shape" in sol.errors else ""
     ax.set_title(f"Droplet, {mode}, {sol.formulation}, N = {sol.n}\n"
-                 f"θ = {math.degrees(sol.contact_angle):.4f}° (analytic {math.degrees(cap.contact_angle):.4f}°), "
-                 f"shape error {sol.errors['shape']:.1e}", fontsize=10)
+                 f"θ = {math.degrees(sol.contact_angle):.4f}°{closed}{shape}", fontsize=10)
     ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8)
     return fig
 

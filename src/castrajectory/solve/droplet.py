@@ -6,25 +6,34 @@ see its docstring) and returns a :class:`DropletSolution` with the errors agains
 (:func:`castrajectory.models.droplet.analytic`).  :func:`solve_angle` minimises the reduced
 energy ``E(theta)``.
 
+A heavy drop (``Droplet.rho_g > 0``) adds the weight (:func:`~castrajectory.discretise.droplet.add_gravity`);
+the area multiplier is then the pressure at the wall.  A pendant drop is followed from the weightless
+drop by continuation in the area (the Bond number), and every step's reduced Hessian
+(:mod:`castrajectory.solve.second_order`) says whether it is still a minimum: beyond the family's fold
+there is no stable drop, and the result says so (status ``No_Stable_Drop``).
+
 All NLPs are posed in units where ``A = 1`` and ``gamma_gl = 1`` (length unit
 ``sqrt(A)``, energy unit ``gamma_gl sqrt(A)``); results are converted back.
 """
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Dict, Optional
 
 import casadi as ca
 import numpy as np
 
 from ..discretise.droplet import (  # noqa: F401  (the discretisations, re-exported with the model)
-    DISCRETISATIONS, FORMULATIONS, MIN_N, Curve, Geometry, Graph, contact_angle_estimate, resample_polyline)
+    DISCRETISATIONS, FORMULATIONS, MIN_N, Curve, Geometry, Graph, add_gravity, contact_angle_estimate,
+    resample_polyline)
 from ..models.droplet import (  # noqa: F401
-    CircularCap, Droplet, analytic, arc_points, reduced_energy, segment_area_factor, young_angle)
+    BeyondFold, CircularCap, Droplet, HeavyDrop, analytic, arc_points, pendant_fold, puddle_height,
+    reduced_energy, segment_area_factor, young_angle)
 from ..result import NLPResult, Result
 from ..validation import InputError, integer_at_least, one_of
 from .nlp import NLP
+from .second_order import reduced_hessian
 
 
 #: Ipopt options for the droplet NLPs.  ``constr_mult_init_max = 0`` starts every constraint multiplier
@@ -66,10 +75,22 @@ class DropletSolution(Result):
     errors: Dict[str, float] = field(default_factory=dict)
     #: what the NLP carries: its terms and the program's anatomy
     program: dict = field(default_factory=dict)
+    #: the largest ``y`` of the vertices (from the wall into the liquid)
+    height: float = math.nan
+    #: the curvature of the circle through the three vertices at the top
+    apex_curvature: float = math.nan
+    #: a pendant drop's stability: the reduced Hessian at the answer and the continuation that led there
+    #: (the fold, when the family ended before the requested area); None where it was not checked
+    stability: Optional[dict] = None
+
+    @property
+    def pressure_at_table(self) -> float:
+        """The area multiplier ``dE*/dA``: the pressure at the wall (the Laplace pressure without gravity)."""
+        return self.pressure
 
     def as_dict(self) -> dict:
         """The JSON object of ``problems/droplet.py --json``."""
-        return {
+        out = {
             **super().as_dict(),
             "formulation": self.formulation,
             "n": self.n,
@@ -79,12 +100,21 @@ class DropletSolution(Result):
             "pressure": self.pressure,
             "energy": self.energy,
             "young_residual": self.young_residual,
-            "analytic": self.analytic.as_dict(),
+            "height": self.height,
+            "apex_curvature": self.apex_curvature,
+            "pressure_at_table": self.pressure_at_table,
+            "analytic": None if self.analytic is None else self.analytic.as_dict(),
             "errors": dict(self.errors),
             "x": self.x.tolist(),
             "y": self.y.tolist(),
             "program": self.program,
         }
+        if self.drop.rho_g > 0.0:
+            out.update(gravity=self.drop.rho_g, pendant=self.drop.pendant, bond_number=self.drop.bond_number,
+                       capillary_length=self.drop.capillary_length)
+        if self.stability is not None:
+            out["stability"] = self.stability
+        return out
 
 
 #: Coarse grid of the fallback ladder (see :func:`solve`).
@@ -98,11 +128,17 @@ PRESOLVE_N = 200
 
 def _check_formulation(drop: Droplet, formulation: str) -> None:
     one_of("formulation", formulation, FORMULATIONS)
-    cap = analytic(drop)
-    if formulation == "graph" and cap.contact_angle >= 0.5 * math.pi:
+    if formulation != "graph":
+        return
+    if drop.pendant:
+        raise InputError("the graph formulation y(x) cannot represent a pendant drop's neck (it overhangs); "
+                         "use the curve formulation")
+    theta = young_angle(drop.gamma_gl, drop.gamma_sl, drop.gamma_sg) if drop.rho_g > 0.0 else \
+        analytic(drop).contact_angle
+    if theta >= 0.5 * math.pi:
         raise InputError(
             f"the graph formulation y(x) cannot represent contact angles of 90 degrees or more "
-            f"(this drop's angle is {math.degrees(cap.contact_angle):.4g} degrees); use the curve formulation")
+            f"(this drop's angle is {math.degrees(theta):.4g} degrees); use the curve formulation")
 
 
 def make_nlp(drop: Droplet, n: int, formulation: str = "curve", guess: Optional[np.ndarray] = None):
@@ -118,6 +154,9 @@ def make_nlp(drop: Droplet, n: int, formulation: str = "curve", guess: Optional[
     w = drop.wetting / drop.gamma_gl
     if drop.span is None and w != 0.0:
         nlp.minimize(w * geo.span)
+    # gravity only for a heavy drop (a weightless drop builds exactly the program it had before)
+    if drop.rho_g > 0.0:
+        add_gravity(nlp, geo, drop.gravity_sign * drop.bond_number)
     return nlp, geo, nlp.constraint("area")
 
 
@@ -140,28 +179,220 @@ def solve(drop: Droplet, n: int = 400, formulation: str = "curve", *, options: O
     n = integer_at_least("n", n, MIN_N)
     _check_formulation(drop, formulation)
     opts = {**SOLVER_OPTIONS, **(options or {})}
+    if drop.pendant:
+        return _solve_pendant(drop, n, formulation, opts, verbose)
     res, nlp, geo = _solve_scaled(drop, n, formulation, opts, verbose)
-    r = _readings(drop, res, geo)
-    cap = analytic(drop)
-    errors = {
-        "shape": float(np.max(np.abs(cap.distance(r["x"], r["y"])))) / cap.radius,
-        "contact_angle": abs(r["contact_angle"] - cap.contact_angle),
-        "span": abs(r["span"] - cap.span) / cap.span,
-        "energy": abs(r["energy"] - cap.energy) / abs(cap.energy),
-        "pressure": abs(r["pressure"] - cap.pressure) / cap.pressure,
-    }
-    young = None if drop.span is not None else drop.gamma_gl * math.cos(r["contact_angle"]) + drop.wetting
+    cap, note = _oracle(drop)
+    sol = _solution(drop, n, formulation, opts, verbose, res, nlp, geo, cap)
+    if note and sol.success:
+        sol.warnings.append(note)
+    return sol
+
+
+def _oracle(drop: Droplet):
+    """``(oracle, None)``, or ``(None, why)`` where the closed form has no answer (a pendant drop between
+    the closed form's fold and the discrete family's, or a puddle beyond the closed form's range)."""
+    try:
+        return analytic(drop), None
+    except ValueError as exc:
+        return None, f"no errors against the closed form: {exc}"
+
+
+def _terms(drop: Droplet) -> list:
+    """The scene's terms, as the NLP carries them."""
     terms = ["surface tension γ_gl × length", "area constraint"]
     if drop.span is None and drop.wetting != 0.0:
         terms.insert(1, "wetting (γ_sl − γ_sg) × span")
     elif drop.span is not None:
         terms.append("span pinned")
+    if drop.rho_g > 0.0:
+        terms.append("gravity −ρg ∫∫ y dA (pendant: hanging under the wall)" if drop.pendant else
+                     "gravity ρg ∫∫ y dA (sessile)")
+    return terms
+
+
+def _errors(r: dict, cap) -> Dict[str, float]:
+    """The readings' errors against the oracle (relative, but the contact angle's, in radians)."""
+    errors = {
+        "shape": float(np.max(np.abs(cap.distance(r["x"], r["y"])))) / (
+            cap.height if isinstance(cap, HeavyDrop) else cap.radius),
+        "contact_angle": abs(r["contact_angle"] - cap.contact_angle),
+        "span": abs(r["span"] - cap.span) / cap.span,
+        "energy": abs(r["energy"] - cap.energy) / abs(cap.energy),
+        "pressure": abs(r["pressure"] - cap.pressure) / cap.pressure,
+    }
+    if isinstance(cap, HeavyDrop):
+        # a pendant drop's pressure passes through zero: its scale is that of its two parts, γκ_a and ρg h
+        errors["pressure"] = abs(r["pressure"] - cap.pressure) / (
+            cap.gamma_gl * cap.apex_curvature + cap.rho_g * cap.height)
+        errors["height"] = abs(r["height"] - cap.height) / cap.height
+        # (a puddle's apex curvature vanishes exponentially with its span: the scale is at least 1/l_c)
+        errors["apex_curvature"] = abs(r["apex_curvature"] - cap.apex_curvature) / (
+            cap.apex_curvature + 1.0 / cap.capillary_length)
+    return errors
+
+
+def _solution(drop: Droplet, n: int, formulation: str, opts: dict, verbose: bool, res: NLPResult, nlp, geo,
+              cap, stability: Optional[dict] = None, estimate: bool = True) -> DropletSolution:
+    """The solution of the drop from its final solve: readings, errors against ``cap`` (None: no oracle),
+    and on success (and ``estimate``) the error estimate."""
+    r = _readings(drop, res, geo)
+    errors = {} if cap is None else _errors(r, cap)
+    young = None if drop.span is not None else drop.gamma_gl * math.cos(r["contact_angle"]) + drop.wetting
     sol = DropletSolution(drop, formulation, n, res, r["x"], r["y"], r["contact_angle"], r["span"], r["pressure"],
-                          r["energy"], young, cap, errors, {"terms": terms, "steps": int(n), **nlp.anatomy()},
+                          r["energy"], young, cap, errors, {"terms": _terms(drop), "steps": int(n), **nlp.anatomy()},
+                          height=r["height"], apex_curvature=r["apex_curvature"], stability=stability,
                           **res.contract())
-    if sol.success:
+    if sol.success and estimate:
         sol.error_estimate = _estimate(drop, n, formulation, opts, verbose, r, sol)
         sol.warnings += sol.error_estimate.warnings()
+    return sol
+
+
+def _add_costs(res: NLPResult, spent) -> NLPResult:
+    """Add the iterations and times of the solves ``spent`` to ``res`` (the reported cost is the whole run's)."""
+    for r in spent:
+        res.build_time_s += r.build_time_s
+        res.solve_time_s += r.solve_time_s
+        res.iterations += r.iterations
+    return res
+
+
+# ---------------------------------------------------------------------------- continuation in the area
+#: The first step of the continuation in the Bond number, as a fraction of the target (then doubled
+#: after each accepted step, halved after each refused one).
+CONTINUATION_FIRST_STEP = 0.25
+#: The continuation stops refining the last step when it is below this fraction of the Bond number
+#: reached: the fold is then bracketed to this relative width.
+FOLD_RTOL = 1e-7
+#: Ipopt iterations per continuation step (a step from the last drop takes a few, 4-7 measured up to 1e-7
+#: below the fold of a pendant drop; a step beyond the fold does not converge, and should not cost long).
+CONTINUATION_MAX_ITER = 20
+#: Steps of one continuation at most (reaching a fold to FOLD_RTOL takes about 30).
+CONTINUATION_MAX_STEPS = 200
+#: The status of a pendant drop asked for beyond the fold of its family.
+NO_STABLE_DROP = "No_Stable_Drop"
+
+
+@dataclass
+class _Continuation:
+    """Where a continuation in the area ended: the last accepted solve, its program, and the record."""
+
+    result: NLPResult
+    nlp: object
+    geo: Geometry
+    bond: float  # the Bond number reached
+    hessian: object  # its ReducedHessian (None when stability was not checked)
+    steps: list  # one dict per step tried
+    refused: Optional[float]  # the smallest Bond number refused beyond the last accepted one
+
+
+def _continuation(drop: Droplet, n: int, formulation: str, opts: dict, verbose: bool,
+                  stability: bool = True) -> _Continuation:
+    """Follow the drop's family from the weightless drop (Bond number 0) to ``drop.bond_number``.
+
+    One program, whose weight is a parameter: each step sets it and starts Ipopt from the last accepted
+    drop and its multipliers.  A step is accepted when Ipopt converges and (``stability``) the reduced
+    Hessian ``Zᵀ∇²L Z`` is positive definite: the drop is a minimum.  A refused step is bisected between
+    the last accepted drop and it; once that bracket is below ``FOLD_RTOL`` of the Bond number reached, the
+    refused value is tried once more from the bracket's lower end (an earlier refusal may only have been
+    too long a step), and if it fails again the family has ended there (a fold) and the continuation
+    stops.  Every solve's iterations and times are counted in the returned result.
+    """
+    target, sign = drop.bond_number, drop.gravity_sign
+    nlp, geo, _ = make_nlp(drop, n, formulation)
+    nlp.set_parameter("gravity", 0.0)
+    res = nlp.solve(options=opts, verbose=verbose)
+    spent = []
+    hess = reduced_hessian(nlp, res) if (stability and res.success) else None
+    steps = [_step_record(drop, 0.0, res, hess)]
+    bond, step, refused = 0.0, CONTINUATION_FIRST_STEP * target, None
+    step_opts = {**opts, "max_iter": min(int(opts.get("max_iter", CONTINUATION_MAX_ITER)), CONTINUATION_MAX_ITER)}
+    if not res.success or (hess is not None and not hess.positive_definite):
+        return _Continuation(res, nlp, geo, bond, hess, steps, 0.0)
+    refused_from = None
+    while bond < target:
+        if len(steps) > CONTINUATION_MAX_STEPS:
+            res.fail("Continuation_Stalled", f"the continuation in the area took more than {CONTINUATION_MAX_STEPS} "
+                     f"steps and reached the Bond number {bond:.6g} of {target:.6g}; supply other Ipopt options")
+            return _Continuation(res, nlp, geo, bond, hess, steps, None)
+        if refused is not None and refused - bond <= FOLD_RTOL * max(bond, FOLD_RTOL):
+            if refused_from == bond:  # refused from within the tolerance: the family ends in this bracket
+                break
+            trial = refused  # a refusal from further away may only have been too long a step: try again
+        else:
+            trial = min(bond + step, target)
+            if refused is not None:  # bisect the bracket [accepted, refused]
+                trial = min(trial, 0.5 * (bond + refused))
+        nlp.set_parameter("gravity", sign * trial)
+        r = nlp.solve(warm=res, options=step_opts, verbose=verbose)
+        r.build_time_s = 0.0  # the same program: built once, counted once
+        h = reduced_hessian(nlp, r) if (stability and r.success) else None
+        steps.append(_step_record(drop, trial, r, h))
+        if r.success and (h is None or h.positive_definite):
+            spent.append(res)
+            bond, res, hess = trial, r, h
+            step *= 2.0
+            if refused is not None and bond >= refused:
+                refused = None
+            continue
+        spent.append(r)
+        refused, refused_from = trial, bond
+        step = 0.5 * (trial - bond)
+    nlp.set_parameter("gravity", sign * bond)
+    return _Continuation(_add_costs(res, spent), nlp, geo, bond, hess, steps, refused if bond < target else None)
+
+
+def _step_record(drop: Droplet, bond: float, res: NLPResult, hess) -> dict:
+    return {"bond_number": bond, "area": bond * drop.gamma_gl / drop.rho_g, "status": res.status,
+            "iterations": res.iterations,
+            "min_eigenvalue": None if hess is None else hess.min_eigenvalue,
+            "positive_definite": None if hess is None else hess.positive_definite}
+
+
+def _fold_estimate(steps: list) -> Optional[float]:
+    """The fold's area from the two last stable steps: near a fold the reduced Hessian's smallest
+    eigenvalue vanishes like ``sqrt(A* − A)``, so its square is extrapolated linearly to zero."""
+    ok = [s for s in steps if s["positive_definite"]]
+    if len(ok) < 2:
+        return None
+    (a1, l1), (a2, l2) = [(s["area"], s["min_eigenvalue"]) for s in ok[-2:]]
+    if not l1 ** 2 > l2 ** 2:
+        return None
+    return a2 + l2 ** 2 * (a2 - a1) / (l1 ** 2 - l2 ** 2)
+
+
+def _solve_pendant(drop: Droplet, n: int, formulation: str, opts: dict, verbose: bool) -> DropletSolution:
+    """A pendant drop by continuation in the area (see :func:`_continuation`); beyond the fold, the last
+    stable drop with the status ``No_Stable_Drop``."""
+    cont = _continuation(drop, n, formulation, opts, verbose)
+    res = cont.result
+    try:
+        fold = pendant_fold(drop)
+    except ValueError:  # a contact angle whose family closes its neck first: no closed form
+        fold = None
+    stability = {"reduced_hessian": None if cont.hessian is None else cont.hessian.as_dict(),
+                 "continuation": cont.steps, "fold": None}
+    if not res.success or cont.bond >= drop.bond_number:
+        cap, note = _oracle(drop)
+        sol = _solution(drop, n, formulation, opts, verbose, res, cont.nlp, cont.geo, cap, stability)
+        if note and sol.success:
+            sol.warnings.append(note)
+        return sol
+    # the family ended before the requested area: the answer is the last stable drop, and the verdict
+    last = replace(drop, area=cont.bond * drop.gamma_gl / drop.rho_g)
+    found = {"area": last.area, "refused_area": cont.refused * drop.gamma_gl / drop.rho_g,
+             "extrapolated_area": _fold_estimate(cont.steps),
+             "analytic_area": None if fold is None else fold.area}
+    stability["fold"] = found
+    sol = _solution(last, n, formulation, opts, verbose, res, cont.nlp, cont.geo, fold, stability, estimate=False)
+    closed = "" if fold is None else f"; the closed form's fold is A* = {fold.area:.7g}"
+    sol.fail(NO_STABLE_DROP,
+             f"no stable pendant drop of area {drop.area:g}: following the family by continuation in the area, "
+             f"the reduced Hessian of the Lagrangian stays positive definite up to A = {last.area:.7g} and no "
+             f"stable drop exists beyond it (the fold of the family at N = {n}){closed}")
+    if fold is not None:
+        sol.errors = {"fold_area": abs(last.area - fold.area) / fold.area}
     return sol
 
 
@@ -177,8 +408,23 @@ def _readings(drop: Droplet, res: NLPResult, geo) -> dict:
     xs, ys, span = geo.vertices(res)
     x, y = L * xs, L * ys
     span, length = L * span, L * float(np.sum(np.hypot(np.diff(xs), np.diff(ys))))
+    energy = g * length + drop.wetting * span
+    if drop.rho_g > 0.0:  # the polygon's first moment ∫∫ y dA, exactly (its edges' ∫ y²/2 dx)
+        moment = float(np.sum(np.diff(x) * (y[:-1] ** 2 + y[:-1] * y[1:] + y[1:] ** 2))) / 6.0
+        energy += drop.gravity_sign * drop.rho_g * moment
     return {"x": x, "y": y, "xs": xs, "ys": ys, "contact_angle": contact_angle_estimate(x, y), "span": span,
-            "pressure": g / L * float(res.multipliers["area"][0]), "energy": g * length + drop.wetting * span}
+            "pressure": g / L * float(res.multipliers["area"][0]), "energy": energy,
+            "height": float(np.max(y)), "apex_curvature": apex_curvature(x, y)}
+
+
+def apex_curvature(x, y) -> float:
+    """The curvature of the circle through the highest vertex and its two neighbours (second order at the
+    apex of a symmetric drop, where the curvature is stationary)."""
+    i = int(np.clip(np.argmax(y), 1, len(y) - 2))
+    p = np.column_stack([x[i - 1:i + 2], y[i - 1:i + 2]])
+    a, b, c = p[1] - p[0], p[2] - p[1], p[2] - p[0]
+    cross = a[0] * b[1] - a[1] * b[0]
+    return float(-2.0 * cross / (np.hypot(*a) * np.hypot(*b) * np.hypot(*c)))
 
 
 def _estimate(drop: Droplet, n: int, formulation: str, opts: dict, verbose: bool, fine: dict,
@@ -202,6 +448,8 @@ def _estimate(drop: Droplet, n: int, formulation: str, opts: dict, verbose: bool
     errors = richardson({k: coarse[k] for k in ESTIMATED}, {k: fine[k] for k in ESTIMATED}, n / nc, ORDER)
     scales = {"contact_angle": 0.5 * math.pi, "span": abs(fine["span"]), "pressure": abs(fine["pressure"]),
               "energy": abs(fine["energy"])}
+    if drop.rho_g > 0.0:  # a pendant drop's pressure passes through zero: the scale of its two parts
+        scales["pressure"] = drop.gamma_gl * abs(fine["apex_curvature"]) + drop.rho_g * fine["height"]
     rel = max(errors[k] / scales[k] for k in errors if scales[k] > 0)
     return ErrorEstimate(available=True, note=f"Richardson extrapolation from N = {nc} and N = {n}, order {ORDER}",
                          levels=(nc, n), order=float(ORDER), errors=errors, scales=scales, relative=float(rel))
@@ -210,8 +458,9 @@ def _estimate(drop: Droplet, n: int, formulation: str, opts: dict, verbose: bool
 def _solve_scaled(drop: Droplet, n: int, formulation: str, opts: dict, verbose: bool):
     """The strategy of :func:`solve`; returns ``(result, nlp, geometry)`` in scaled units."""
     ladder = formulation == "curve" and n > COARSE_N
+    heavy = drop.rho_g > 0.0  # its fallback: continuation in the area from the weightless drop
     first = dict(opts)
-    if ladder:  # a good start converges in <= 15 iterations; do not spend a long failing run
+    if ladder or heavy:  # a good start converges in <= 15 iterations; do not spend a long failing run
         first["max_iter"] = min(int(opts.get("max_iter", 200)), FIRST_ATTEMPT_MAX_ITER)
     guess, spent = None, []
     if formulation == "curve" and n >= PRESOLVE_MIN_N:
@@ -222,13 +471,13 @@ def _solve_scaled(drop: Droplet, n: int, formulation: str, opts: dict, verbose: 
             guess = resample_polyline(xs, ys, n)
     nlp, geo, _ = make_nlp(drop, n, formulation, guess)
     res = nlp.solve(options=first, verbose=verbose)
-    if not res.success and ladder:
+    if not res.success and heavy:
+        spent.append(res)
+        cont = _continuation(drop, n, formulation, opts, verbose, stability=False)
+        res, nlp, geo = cont.result, cont.nlp, cont.geo
+    elif not res.success and ladder:
         res, nlp, geo = _coarse_to_fine(drop, n, opts, verbose, res)
-    for r in spent:
-        res.build_time_s += r.build_time_s
-        res.solve_time_s += r.solve_time_s
-        res.iterations += r.iterations
-    return res, nlp, geo
+    return _add_costs(res, spent), nlp, geo
 
 
 def _coarse_to_fine(drop: Droplet, n: int, opts: dict, verbose: bool, failed: NLPResult):
@@ -272,6 +521,8 @@ def solve_angle(drop: Droplet, *, options: Optional[dict] = None, verbose: bool 
     """Minimise ``E(theta)`` over ``theta`` in ``(0, pi)`` as a one-variable NLP (scaled: A = gamma_gl = 1)."""
     if drop.span is not None:
         raise InputError("the reduced problem in theta is posed for a free span; drop the span")
+    if drop.rho_g > 0.0:
+        raise InputError("the reduced problem in theta is the weightless drop's (a circular cap); drop the gravity")
     unit = Droplet(1.0, drop.wetting / drop.gamma_gl, 0.0, 1.0)
     E_unit, _ = reduced_energy(unit)
     nlp = NLP()
