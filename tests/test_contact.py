@@ -826,7 +826,13 @@ def test_plastic_box_in_a_3d_bowl(size, R, axis, angle, pos, omega, v):
     assert len(tr.impacts) >= 5
     for imp in tr.impacts:
         J = np.asarray(system.gap(imp.q)[1])
-        np.testing.assert_allclose(imp.v_after - imp.v_before, _tangent_map(system, imp.q) @ J.T @ tr.mu[imp.step],
+        # the jump is the sub-node's impulses, but for a contact held until the impact and released there (open
+        # at the next node, not an impact itself): its impulse is a share of its force before the impact, which
+        # the velocity before already carries
+        listed = [i.contact for i in tr.impacts if i.step == imp.step and i.at_node == imp.at_node]
+        released = (tr.gap[imp.step + 1] > 1e-12) & ~np.isin(np.arange(J.shape[0]), listed)
+        mu = np.where(released, 0.0, tr.mu[imp.step]) if not imp.at_node else tr.mu[imp.step]
+        np.testing.assert_allclose(imp.v_after - imp.v_before, _tangent_map(system, imp.q) @ J.T @ mu,
                                    rtol=0, atol=1e-9 * np.max(np.abs(imp.v_before)))
         assert J[imp.contact] @ imp.v_after >= -1e-9 * abs(J[imp.contact] @ imp.v_before)   # it does not go on in
     E = tr.energy

@@ -190,6 +190,13 @@ class Program:
                 return
         raise KeyError(name)
 
+    def parameter_value(self, name: str) -> np.ndarray:
+        """The current value of parameter block ``name``."""
+        for p in self._params:
+            if p.name == name:
+                return np.array(p.init, float).reshape(-1)
+        raise KeyError(name)
+
     def minimize(self, expr) -> None:
         if self._f is not None:
             raise ValueError("the objective is already set")

@@ -132,6 +132,8 @@ class ContactTranscription:
         self.law_exempt = np.zeros((L, cm.c), dtype=bool)
         #: the contacts that arrive at their sub-node, per step (friction: their slip is the one after it)
         self.arrive = np.zeros((L, cm.c))
+        #: the contacts released at their step's impact, per step (their sub-node impulse is a share, no impact)
+        self.release = np.zeros((L, cm.c))
         # weight length of the law where the guess has no bounce: W = φ(q_{k+1})/δ with δ = ℓ
         # (law_lengths sets a shorter δ at the guess's bounces)
         self.delta = ell
@@ -191,8 +193,14 @@ class ContactTranscription:
             i = np.arange(1, L)
             nlp.equal_elements("node", cm.node, [X(S[i - 1]), X(B[i - 1]), X(Q[i]), X(S[i]), X(B[i]),
                                                  X(NU[i]), Hc[i - 1], Hc[i]] + LAM(i) + RHO(i) + ZP(i - 1) + ZM(i))
-        nlp.equal_elements("sub", cm.sub, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), Hc] + LAMS(k) + RHO(k)
+        # the contacts released at an impact's sub-node (the march's modes, ContactNLP.solve_modes; 0 elsewhere): their
+        # sub-node impulse is their share of the first part's force, whose row is "release" (ContactMechanics.release_row)
+        nlp.parameter("release", L * c, value=0.0)
+        REL = P(nlp.parameter_index("release").reshape(L, c))
+        nlp.equal_elements("sub", cm.sub, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), Hc, REL] + LAMS(k) + RHO(k)
                            + ZM(k) + ZP(k))
+        nlp.inequality_elements("release", cm.release, [X(Q[k]), X(S[k]), X(B[k]), X(MU[k]), Hc, REL] + RHO(k) + ZM(k),
+                                lb=-np.inf, ub=np.inf)
         if s:
             LAMZ = [X(nlp.index("lam_stage").reshape(L, 2 * cm.ms))] if m else []
             nlp.equal_elements("stage", cm.stage, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), Hc] + ZM(k) + ZP(k) + LAMZ)
@@ -203,12 +211,14 @@ class ContactTranscription:
             # (which contacts arrive at their sub-node: their slip is the one after it, ContactMechanics.slip)
             nlp.parameter("arrive", L * c, value=0.0)
             AR = P(nlp.parameter_index("arrive").reshape(L, c))
-            nlp.inequality_elements("slip", cm.slip_row, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), Hc, AR],
+            nlp.inequality_elements("slip", cm.slip_row, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), Hc, AR, REL, X(MU[k])]
+                                    + RHO(k) + ZM(k),
                                     lb=-np.inf, ub=np.inf)
             if cm.fd == 2:
                 # the tangent plane's circular cone, and sliding against the slip (bounds by the modes)
                 nlp.inequality_elements("cone", cm.cone_row, RHO(k), lb=-np.inf, ub=np.inf)
-                nlp.inequality_elements("slide", cm.slide_row, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), Hc, AR] + RHO(k),
+                nlp.inequality_elements("slide", cm.slide_row, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), Hc, AR, REL,
+                                                                 X(MU[k])] + RHO(k) + ZM(k),
                                         lb=-np.inf, ub=np.inf)
         if m:
             nlp.equal_elements("node_constraint", cm.constraint_row, [X(Q[1:])])
@@ -217,8 +227,8 @@ class ContactTranscription:
         nlp.inequality_elements("sub_gap", cm.gap_row, [X(S)], lb=0.0)
         LL = P(nlp.parameter_index("law_length").reshape(L, c))
         nlp.equal_elements("impact_law", cm.law_slack,
-                           [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), X(SP[k]), X(SM[k]), Hc, LL]
-                           + ZM(k) + ZP(k) + [np.array([self.scales_law])])
+                           [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), X(SP[k]), X(SM[k]), Hc, LL, REL]
+                           + RHO(k) + ZM(k) + ZP(k) + [np.array([self.scales_law])])
         # exact (l1) penalties: complementarity products and the impact-law slacks
         nlp.minimize_elements("node_penalty", cm.product_penalty, [X(Q[k]), X(NU[k]), rho, ell * pref / Hc])
         nlp.minimize_elements("sub_penalty", cm.product_penalty, [X(S[k]), X(MU[k]), rho, np.array([ell * pref])])
@@ -269,7 +279,7 @@ class ContactTranscription:
         B = values["beta"].reshape(L)
         zm, zp = self._stages(values)
         raw, nxt = (np.asarray(v).reshape(c, L).T for v in cm.law_check.map(L)(Q[:-1].T, S.T, Q[1:].T, B, MU.T, H,
-                                                                               *[z.T for z in zm + zp]))
+                                                                               *self._law_extras(values), *[z.T for z in zm + zp]))
         nxt2 = np.vstack([nxt[1:], nxt[-1:]])
         leaves = (nxt > self.open_gap) | (nxt2 > self.open_gap)
         # ... if the contact arrived faster than the grid resolves (v_z = a h / e): a slower arrival
@@ -297,6 +307,13 @@ class ContactTranscription:
                 leaves[k, j] = True
         return raw, leaves
 
+    def _law_extras(self, values):
+        """The law's inputs after ``h`` (and ``δ``): the released contacts and the friction ratios (columns)."""
+        cm, L = self.cm, self.L
+        rel = np.asarray(self.nlp.parameter_value("release"), float).reshape(L, cm.c).T
+        rho = [np.asarray(values["fratio"], float).reshape(L, -1).T] if cm.friction else []
+        return [rel] + rho
+
     def _stages(self, values):
         """``([Z⁻], [Z⁺])`` per step, ``(L, s)`` each (both empty for a two-point scheme)."""
         if not self.cm.s:
@@ -316,7 +333,8 @@ class ContactTranscription:
         gs = np.asarray(cm.gap_row.map(L)(S.T)).reshape(c, L).T
         zm, zp = self._stages(values)
         law = np.asarray(cm.impact_law.map(L)(Q[:-1].T, S.T, Q[1:].T, B, MU.T, H,
-                                              self._law_length.T, *[z.T for z in zm + zp])).reshape(c, L).T
+                                              self._law_length.T, *self._law_extras(values),
+                                              *[z.T for z in zm + zp])).reshape(c, L).T
         # Newton's law of every impact after which the body leaves, unweighted (_raw_law)
         raw, leaves = self._raw_law(values)
         law = np.where(self.law_exempt, 0.0, law)

@@ -255,7 +255,7 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
     # one has no motion at all between the nodes (docs/derivations.md, "Contact trajectories", §2, "A resting ball")
     for k in np.where(~event & (np.min(gq[:-1], axis=1) <= tol) & (np.min(gq[1:], axis=1) <= tol))[0]:
         S[k] = 0.5 * (Q[k] + Q[k + 1])
-        r = np.asarray(cm.sub(Q[k], S[k], Q[k + 1], B[k], np.zeros(c), h, *lam0)).reshape(-1) * h
+        r = np.asarray(cm.sub(Q[k], S[k], Q[k + 1], B[k], np.zeros(c), h, np.zeros(c), *lam0)).reshape(-1) * h
         Js = np.asarray(gapf(S[k])[1])
         act = np.asarray(gapf(S[k])[0]).reshape(-1) <= tol
         if np.any(act):

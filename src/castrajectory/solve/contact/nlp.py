@@ -62,7 +62,12 @@ class ContactNLP(ContactTranscription):
         law = (modes == "I") & np.asarray(point["bounced"], bool).reshape(L, c)
         node = np.isin(modes, ("N", "P")).reshape(-1)
         fixed = np.isin(modes, ("F", "T")).reshape(-1)
-        self.law_exempt = np.isin(modes, ("F", "T", "P"))
+        # a contact released at its step's impact (R with an impact at the sub-node) takes its share of the first
+        # part's force there: its impulse free, its release row zero, its law waived (it leaves, and is no impact)
+        release = (modes == "R") & np.any(np.isin(modes, ("I", "C", "T", "F")), axis=1, keepdims=True)
+        self.release = release.astype(float)
+        self.nlp.set_parameter("release", self.release.reshape(-1))
+        self.law_exempt = np.isin(modes, ("F", "T", "P")) | release
         mu_march = np.asarray(point["mu"], float).reshape(-1)
         nu_march = np.asarray(point["nu"], float).reshape(-1)
         zero = np.zeros(L * c)
@@ -76,7 +81,9 @@ class ContactNLP(ContactTranscription):
             "nu": (np.where(node, nu_march, 0.0), np.where(held.reshape(-1), np.inf, np.where(node, nu_march, 0.0))),
             # the sequential law's impulses (modes F and T) are the march's cascade
             "mu": (np.where(fixed, mu_march, 0.0),
-                   np.where(np.isin(modes, ("H", "I", "C")).reshape(-1), np.inf, np.where(fixed, mu_march, 0.0))),
+                   np.where((np.isin(modes, ("H", "I", "C")) | release).reshape(-1), np.inf,
+                            np.where(fixed, mu_march, 0.0))),
+            "release": (np.where(release.reshape(-1), 0.0, -np.inf), np.where(release.reshape(-1), 0.0, np.inf)),
             "s_plus": (zero, zero), "s_minus": (zero, zero),
             "node_gap": (zero, np.where(closes.reshape(-1), 0.0, np.inf)),
             "sub_gap": (zero, np.where((held | first).reshape(-1), 0.0, np.inf)),

@@ -189,10 +189,18 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     RS = RS[..., 0] if fd == 1 else RS
     # a contact that arrives from flight (open at the step's node) and is open at one of the two nodes after its
     # impulse (beyond a resting body's hop, a h²/8): the impulse sent it off
+    # (a contact released at its step's impact takes a share of its force there, not an impact: the momentum
+    # before the impact carries the shares, and their impulses are not impacts)
+    REL = getattr(tn, "release", np.zeros((tn.L, c)))[:N] > 0
     for k in np.flatnonzero(np.any(MU > tol, axis=1)):
         pm = np.asarray(cm.p_minus(q[k], S[k], B[k], H[k], *[z[k] for z in ZM])).reshape(-1)
         pl = np.asarray(cm.p_plus(S[k], q[k + 1], B[k], H[k], *[z[k] for z in ZP])).reshape(-1)
-        impacts += _impacts_at(cm, k, float(t_sub[k]), S[k], pm, pl, MU[k], tol, H[k], at_node=False,
+        if np.any(REL[k]):
+            sh = np.where(REL[k], MU[k], 0.0)
+            pm = pm + np.asarray(sysm.gap(S[k])[1]).T @ sh
+            if cm.friction:
+                pm = pm + np.asarray(sysm.tangent(S[k])).T @ (RS[k, c:].reshape(-1) * np.repeat(sh, cm.fd))
+        impacts += _impacts_at(cm, k, float(t_sub[k]), S[k], pm, pl, np.where(REL[k], 0.0, MU[k]), tol, H[k], at_node=False,
                                ratios=RS[k, c:], leaves=(np.max(gap[k + 1:k + 3], axis=0) > tn.open_gap)
                                & (gap[k] > TOUCH_TOL * tn.scales_ell))
     for k in np.flatnonzero(np.any(force[1:N] > tol, axis=1)) + 1:
@@ -230,7 +238,9 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
         fd = cm.fd
         fratio = res.values["fratio"][:N * 2 * c * fd].reshape(N, 2, c, fd).transpose(0, 2, 1, 3)
         arrive = getattr(tn, "arrive", np.zeros((tn.L, c)))[:N]
-        slip = np.asarray(cm.slip_row.map(N)(q[:-1].T, S.T, q[1:].T, B, hv, arrive.T)).reshape(2 * c * fd, N).T
+        slip = np.asarray(cm.slip_row.map(N)(q[:-1].T, S.T, q[1:].T, B, hv, arrive.T, REL.T.astype(float), MU.T,
+                                             res.values["fratio"][:N * 2 * c * fd].reshape(N, -1).T,
+                                             *[z.T for z in ZM])).reshape(2 * c * fd, N).T
         slip = slip.reshape(N, 2, c, fd).transpose(0, 2, 1, 3)
         if fd == 1:       # planar: (N, contacts, 2) for [node force, sub-node impulse]
             fratio, slip = fratio[..., 0], slip[..., 0]

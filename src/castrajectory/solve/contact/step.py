@@ -85,14 +85,16 @@ class _Step:
             x = ca.vertcat(qm_, qn_, ca.DM.zeros(1), xs[2 * n + 1:2 * n + 1 + 2 * c + 2 * m + self.nf],
                            _stage_line(cm, qs, qm_, qn_), xs[cm.layout["lam_stage"]])
             for _ in range(CHUNK_NEWTON):
-                r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero, zero, zero, zero, zero, *fz)
+                r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero, zero, zero, zero, zero, zero, *fz)
                 x = x - ca.solve(J, r)
             # the size of one more Newton step: the rows' residual in units of the unknowns
-            r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero, zero, zero, zero, zero, *fz)
+            r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero, zero, zero, zero, zero, zero, *fz)
             res = ca.mmax(ca.fabs(ca.solve(J, r)))
             qn, qt = x[n:2 * n], x[:n]
             zp = [x[cm.layout["zs"]][cm.s:]] if cm.s else []
-            slip = cm.slip_row(qs, qt, qn, 0.0, hs, zero) if self.nf else ca.DM.zeros(1)
+            zm = [x[cm.layout["zs"]][:cm.s]] if cm.s else []
+            slip = cm.slip_row(qs, qt, qn, 0.0, hs, zero, zero, zero, x[cm.layout["fratio"]], *zm) if self.nf \
+                else ca.DM.zeros(1)
             one = ca.Function("chunk_step", [qs, ps, xs, hs, hm] + sc + fin,
                               [qn, cm.p_node_minus(qt, 0.0, qn, hs, *zp), x, cm.gap_row(qt), cm.gap_row(qn), res, slip])
             self._chunks[K] = one.mapaccum("chunk_steps", K, [0, 1, 2], [0, 1, 2])
@@ -141,7 +143,7 @@ class _Step:
         timing = np.where(t > 0)[0]
         if timing.size > 1:
             t[timing[1:]] = 0.0
-        return t, held, closed, law, node, fixed, nfixed
+        return t, held, closed, law, node, fixed, nfixed, releases(modes)
 
     def solve(self, x, q, p, h, modes, bfix=None, mufix=None, fmodes=None, rfix=None):
         """Newton on the step's rows in the given modes (with ``bfix``: the sub-node's ``β`` fixed
@@ -149,13 +151,13 @@ class _Step:
         ``rfix``: the friction ratios of the slots in friction mode FIX); ``(x, ok)``."""
         n, c = self.n, self.c
         self.snu, self.smu = self.pref / h, self.pref
-        t, held, closed, law, node, fixed, nfixed = self.masks(modes)
+        t, held, closed, law, node, fixed, nfixed, release = self.masks(modes)
         if bfix is not None:
             t = np.zeros(c)
             x = x.copy()
             x[2 * n] = bfix
         args = (q, p, h, self.ell, self.snu, self.smu, self.vref, 0.0 if bfix is None else bfix,
-                t, held, closed, law, node, fixed, np.zeros(c) if mufix is None else mufix, nfixed)
+                t, held, closed, law, node, fixed, np.zeros(c) if mufix is None else mufix, nfixed, release)
         if self.nf:
             fm = fmodes or [FREE] * (2 * c)
             args = args + (np.array([f == STICK for f in fm], float),
@@ -195,6 +197,14 @@ class _Step:
         # 1/α near α = 0 are then held to the rounding of the point, not of their size
         r = np.asarray(r).reshape(-1) / np.maximum(np.max(np.abs(np.asarray(Jr)), axis=1), 1e-300)
         return x, bool(np.max(np.abs(r)) <= STEP_TOL * (1.0 + float(np.max(np.abs(x)))))
+
+def releases(modes) -> np.ndarray:
+    """Per contact, 1 where it is held until an impact's sub-node and released there (mode R in a step with an
+    impact at its sub-node: I, C, T or F): its sub-node impulse is then its share of the first part's force
+    (:meth:`ContactMechanics.release_row`)."""
+    impact = any(m in (I, C, T, F) for m in modes)
+    return np.array([float(impact and m == R) for m in modes])
+
 
 def _timed_by_bracket(step: _Step, x, q, p, h, modes, j: int):
     """The step with contact ``j`` timing its sub-node, by regula falsi (Illinois) on ``β``: each trial
@@ -359,9 +369,12 @@ def _friction(step: _Step, q, p, h, modes, x, mufix=None, rfix=None):
     # against the slip after the sub-node)
     # (an arrival too slow to be an impact, I below IMPACT_SPEED_STEPS |a_n| h, is the discrete form of persistent
     # contact: its impulse has a held one's friction too, and no impact law, _impact_law)
+    # (a contact released at the step's impact: its share of the first part's force has friction too, against the
+    # contact point's velocity at the sub-node, ContactMechanics.slip)
     slow = _slow_arrivals(step, q, p, h) if any(mj == I for mj in modes) else np.zeros(c, bool)
+    rel = releases(modes)
     active = [mj in (H, R) and cm.mu_f[j] > 0 for j, mj in enumerate(modes)] + \
-        [(mj in (H, C) or (mj == I and slow[j])) and cm.mu_f[j] > 0 for j, mj in enumerate(modes)]
+        [(mj in (H, C) or (mj == I and slow[j]) or rel[j]) and cm.mu_f[j] > 0 for j, mj in enumerate(modes)]
     muf = np.concatenate([cm.mu_f, cm.mu_f])
     d = step.fd
     # (a slot starts as it ended the previous step; free, or fixed there by an impact's law, it starts sticking)
@@ -381,7 +394,8 @@ def _friction(step: _Step, q, p, h, modes, x, mufix=None, rfix=None):
         if not ok:
             return None
         rho = xf[cm.layout["fratio"]]
-        slip = np.asarray(cm.slip_row(q, xf[:n], xf[n:2 * n], xf[2 * n], h, slips)).reshape(-1)
+        slip = np.asarray(cm.slip_row(q, xf[:n], xf[n:2 * n], xf[2 * n], h, slips, rel, xf[cm.layout["mu"]], rho,
+                                      *cm.stage_parts(xf[cm.layout["zs"]])[0])).reshape(-1)
         worst, pick = 0.0, None
         if d == 2:
             # the circular cone: sticking fails outside it (it then slides), sliding where the slip has vanished
@@ -568,11 +582,20 @@ def _impact_law(step: _Step, q, p, h, x, modes, cascade: bool):
         involved = [j for j, m in enumerate(modes) if (m == N or m in (H, R)) and nu[j] > 0.0]
         qs, pm = q, p
     else:
-        involved = [j for j, m in enumerate(modes) if m in (I, C, H, R) and mu[j] > 0.0]
+        # (a contact released at the impact takes its share of the first part's force, not a part of the impact:
+        # the momentum before the impact is p̃⁻ with those shares, ContactMechanics.release_row)
+        rel = releases(modes)
+        involved = [j for j, m in enumerate(modes) if m in (I, C, H, R) and mu[j] > 0.0 and not rel[j]]
         if not any(modes[j] in (I, C) for j in involved):
             return None                  # no impact
         qs, b = x[:n], float(x[2 * n])
         pm = np.asarray(cm.p_minus(q, qs, b, h, *cm.stage_parts(x[cm.layout["zs"]])[0])).reshape(-1)
+        if np.any(rel):
+            sh = rel * mu
+            pm = pm + np.asarray(cm.system.gap(qs)[1]).T @ sh
+            if step.nf:
+                D = np.asarray(cm.system.tangent(qs))
+                pm = pm + D.T @ (x[cm.layout["fratio"]][c * step.fd:] * np.repeat(sh, step.fd))
     # (a caught arrival waives the law: no frictional impact there; nor at a slow arrival, persistent contact)
     fric = step.nf and any(cm.mu_f[j] > 0 for j in involved) and \
         (at_node or any(modes[j] == I for j in involved)) and \
@@ -635,10 +658,11 @@ def _next_modes(modes, touch, g0, gs, gn, nu, mu, b, pen, tol, step, finest):
             viol = -nu[j] / step.snu
             if viol > worst:
                 worst, pick = viol, (j, O)
-        if m in (H, I, C) and mu[j] < 0.0:
+        if m in (H, I, C, R) and mu[j] < 0.0:
+            # (a released contact's share that pulls: it leaves at the step's node instead)
             viol = -mu[j] / step.smu
             if viol > worst:
-                worst, pick = viol, (j, {H: R, I: O, C: I}[m])
+                worst, pick = viol, (j, {H: R, I: O, C: I, R: O}[m])
     if worst > 1e-12:
         j, m = pick
         out = list(modes)
