@@ -401,9 +401,10 @@ def _unit_fold(theta: float) -> _UnitDrop:
             break
     fold = _unit_pendant(theta, 0.5 * (a + b))
     width = fold.profile(np.linspace(0.0, 1.0, 401))[0]
-    if j == 0 or np.min(width[np.argmax(width):]) <= 0.0:  # the neck, below the widest point, must stay open
-        raise ValueError(f"the pendant family at theta = {math.degrees(theta):.4g} degrees closes its neck "
-                         "before it folds; its closed form here does not cover it")
+    # below the widest point the profile must stay clear of the axis: the neck and the contact span open
+    if j == 0 or np.min(width[np.argmax(width):]) <= 0.0:
+        raise ValueError(f"the pendant family at theta = {math.degrees(theta):.4g} degrees pinches off (its neck "
+                         "or its contact span closes) before it folds; its closed form here does not cover it")
     return fold
 
 
