@@ -6,12 +6,15 @@ pins the contact span instead of leaving it free.  ``--gravity RHO_G`` adds the
 drop's weight (the oracle is then the heavy drop in elliptic integrals, and the
 area multiplier the pressure at the table); ``--pendant`` hangs it under a
 ceiling: beyond the fold of the pendant family there is no stable drop, and the
-run says so and exits 1.
+run says so and exits 1.  ``--axisymmetric`` makes it a drop of revolution
+(3-D; ``--area`` is then its volume): a spherical cap without gravity, the
+Young–Laplace profile with it.
 
     python problems/droplet.py                       # default scene, summary table
     python problems/droplet.py --json                # one JSON object on stdout
     python problems/droplet.py --formulation graph --n 2000 --plot drop.png
     python problems/droplet.py --gravity 1 --gamma-sl 1 --area 2 --pendant
+    python problems/droplet.py --axisymmetric --gravity 1 --gamma-sl 1 --area 10
 """
 import math
 import sys
@@ -36,6 +39,8 @@ def parser():
                    help="weight density ρg (>= 0; capillary length sqrt(γ_gl/ρg)); 0: the weightless drop")
     p.add_argument("--pendant", action="store_true",
                    help="reverse gravity: the drop hangs under a ceiling (needs --gravity > 0)")
+    p.add_argument("--axisymmetric", action="store_true",
+                   help="a drop of revolution (3-D): --area is then its volume; curve formulation only")
     cli.add_plot(p)
     return p
 
@@ -43,10 +48,12 @@ def parser():
 def run(args):
     # describe
     drop = droplet.Droplet(args.gamma_gl, args.gamma_sl, args.gamma_sg, args.area, args.span, args.gravity,
-                           args.pendant)
+                           args.pendant, args.axisymmetric)
     # discretise + solve
     sol = droplet.solve(drop, args.n, args.formulation, options=cli.ipopt_options(args), verbose=args.verbose)
     # inspect
+    if drop.axisymmetric:
+        return _revolution_outcome(sol)
     if drop.rho_g > 0.0:
         return _heavy_outcome(sol)
     cap, e = sol.analytic, sol.errors
@@ -114,6 +121,46 @@ def _heavy_outcome(sol):
                      + ("a stable drop" if hess["positive_definite"] else "not a minimum"))
     lines.append(cli.status_line(sol.status, sol))
     return cli.Outcome.of(sol, summary=lines, writers={"plot": lambda path: plotting.droplet_shape(sol, path)})
+
+
+def _revolution_outcome(sol):
+    """The summary of a drop of revolution: its readings against the spherical cap or the Young–Laplace shooting."""
+    drop, cap, e = sol.drop, sol.analytic, sol.errors
+    plot = {"plot": lambda path: plotting.droplet_shape(sol, path)}
+    kind = ("pendant (under a ceiling)" if drop.pendant else "sessile") if drop.rho_g > 0.0 else "weightless"
+    head = [f"drop of revolution, {kind}: N = {sol.n}, volume {drop.area:g}"
+            + (f", ρg = {drop.rho_g:g}, l_c = {drop.capillary_length:.6g}, Bond number V^(2/3)/l_c² = "
+               f"{drop.bond_number:.6g}" if drop.rho_g > 0.0 else "")]
+    fold = (sol.stability or {}).get("fold")
+    if fold is not None:
+        rows = [["fold of the pendant family", "discrete", "shooting", "error"],
+                ["largest stable volume V*", cli.fmt(fold["area"]), cli.fmt(fold["analytic_area"]),
+                 cli.fmt(e.get("fold_area"), ".3e") + " rel"],
+                ["first volume refused", cli.fmt(fold["refused_area"]), "", ""]]
+        return cli.Outcome.of(sol, summary=head + cli.table(rows) + [cli.status_line(sol.status, sol)], writers=plot)
+
+    def row(name, mine, key, scale=lambda v: v, rel=" rel"):
+        ref = None if cap is None else getattr(cap, key)
+        err = e.get(key)
+        return [name, cli.fmt(scale(mine)), cli.fmt(None if ref is None else scale(ref)),
+                "" if err is None else cli.fmt(scale(err), ".3e") + rel]
+
+    rows = [["quantity", "discrete", "spherical cap" if drop.rho_g == 0.0 else "shooting", "error"],
+            row("contact angle (deg)", sol.contact_angle, "contact_angle", math.degrees, ""),
+            row("height h", sol.height, "height"),
+            row("contact radius r_c", sol.contact_radius, "contact_radius"),
+            row("pressure at the table (volume multiplier)", sol.pressure_at_table, "pressure"),
+            row("apex curvature 1/b (P − g ρg h)/2γ", sol.apex_curvature, "apex_curvature"),
+            row("energy", sol.energy, "energy"),
+            ["volume of the polyline of revolution", cli.fmt(sol.volume), cli.fmt(drop.area), ""],
+            ["shape (max dist / h)", "", "", "" if "shape" not in e else cli.fmt(e["shape"], ".3e")]]
+    lines = head + cli.table(rows)
+    hess = (sol.stability or {}).get("reduced_hessian")
+    if hess is not None:
+        lines.append(f"stability: reduced Hessian Zᵀ∇²L Z {'positive definite' if hess['positive_definite'] else 'indefinite'}"
+                     f" (smallest eigenvalue {hess['min_eigenvalue']:.3e}, dimension {hess['dimension']})")
+    lines.append(cli.status_line(sol.status, sol))
+    return cli.Outcome.of(sol, summary=lines, writers=plot)
 
 
 def main(argv=None):

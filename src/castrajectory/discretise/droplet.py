@@ -1,7 +1,9 @@
 """The droplet's discretisations: the polyline ``curve`` and the height ``graph``, as element families.
 
 * :class:`Curve`: polyline ``(x_i, y_i)`` with equal segments, every contact angle in ``(0, pi)``;
-* :class:`Graph`: heights ``y(x_i)`` on a uniform grid, contact angles below 90°.
+* :class:`Graph`: heights ``y(x_i)`` on a uniform grid, contact angles below 90°;
+* :class:`Revolution`: the half profile ``(r_i, z_i)`` of a drop of revolution, from the apex on the axis
+  to the contact line, with equal chords; surface, volume and weight weighted by ``2 pi r`` (Pappus).
 
 Each writes its unknowns and rows (surface length, equal chords, the area) into a
 :class:`~castrajectory.discretise.program.Program` in scaled units (``A = 1``,
@@ -47,6 +49,9 @@ class Geometry:
     #: piece's first moment ``∫∫ y dA`` (times a weight): what a term weighted by the liquid's height needs
     pieces: tuple = ()
     moment: str = ""
+    #: the wetted measure as an expression of the span's symbol, where it is not the span itself (a drop of
+    #: revolution: the disc ``pi r_c²``); None: the span (2-D)
+    wetted: object = None
 
     def vertices(self, res):
         """``(x, y, span)`` in scaled units from a result of this NLP."""
@@ -82,6 +87,15 @@ def _element(name: str) -> ca.Function:
             # triangle's centroid height, (y0 + y1)/3; the trapezoid cell's ∫ y²/2 dx)
             "curve_moment": ([p0, p1, s], s * tri * (p0[1] + p1[1]) / 3.0),
             "graph_moment": ([y0, y1, a, n, s], s * (a / n) * (y0 * y0 + y0 * y1 + y1 * y1) / 6.0),
+            # a drop of revolution (p = (r, z)): the chord's frustum, pi (r0 + r1) l; the volume the shoelace
+            # triangle (0, p0, p1) sweeps about the axis, 2 pi tri (r0 + r1) / 3 (Pappus: its centroid is at
+            # r = (r0 + r1) / 3); its first moment 2 pi ∫∫ r z dA (the triangle's edge-midpoint rule, exact
+            # for the quadratic r z), times the weight s
+            "frustum": ([p0, p1], math.pi * (p0[0] + p1[0]) * ca.sqrt(sq(p0, p1))),
+            "revolution_link": ([c0, c1, p0, p1, n], n * (c1 - c0 - 2.0 * math.pi / 3.0 * tri * (p0[0] + p1[0]))),
+            "revolution_last": ([c0, p0, p1, n], c0 + 2.0 * math.pi / 3.0 * tri * (p0[0] + p1[0])),
+            "revolution_moment": ([p0, p1, s], s * math.pi / 6.0 * tri * (
+                2.0 * p0[0] * p0[1] + 2.0 * p1[0] * p1[1] + p0[0] * p1[1] + p1[0] * p0[1])),
         }
         for key, (args, out) in fns.items():
             _ELEMENTS[key] = ca.Function(key, args, [out])
@@ -231,6 +245,63 @@ class Graph:
                         moment="graph_moment")
 
 
+class Revolution:
+    """A drop of revolution: its half profile ``(r_i, z_i)``, ``i = 0..n``, from the apex ``(0, h)`` on the
+    axis to the contact line ``(r_c, 0)``, with equal chords (the :class:`Curve`'s gauge).
+
+    The axis: ``r_0 = 0`` is fixed by its bounds and ``z_0`` (the height) is free.  Nothing else is imposed
+    there: the symmetry condition (the profile horizontal at the apex) is natural, since every term carries
+    the weight ``2 pi r``, which vanishes on the axis (``docs/derivations.md``, Droplet §10).
+
+    Every term is a sum over chords, exact for the polyline of revolution (a stack of cone frusta): the
+    surface ``sum pi (r_i + r_{i+1}) l_i`` (the ``surface`` family), the volume as a running sum of the
+    swept shoelace triangles (the constraint keeps the name ``area``: its multiplier is ``dE*/dV``), and for a heavy drop the moment
+    element ``revolution_moment``.  The wetted disc ``pi r_c²`` is :attr:`Geometry.wetted`.
+
+    Default initial guess: the hemisphere of volume 1 (``theta = 90°``), equally spaced in arclength.
+    """
+
+    name = "curve"
+
+    def __init__(self, n: int, guess: Optional[np.ndarray] = None):
+        self.n = n
+        self.guess = guess  # (n + 1, 2) profile points (r, z) from the apex, scaled units, or None
+
+    def build(self, nlp: Program, span: Optional[float]) -> Geometry:
+        if span is not None:
+            raise ValueError("a drop of revolution with a pinned contact radius is not discretised")
+        n = self.n
+        if self.guess is not None:
+            guess = np.array(self.guess, dtype=float)
+        else:
+            radius = (1.5 / math.pi) ** (1.0 / 3.0)
+            alpha = 0.5 * math.pi * np.arange(n + 1) / n
+            guess = radius * np.column_stack([np.sin(alpha), np.cos(alpha)])
+        guess[0, 0] = 0.0
+        guess[-1, 1] = 0.0
+        seg0 = float(np.hypot(*np.diff(guess, axis=0).T).mean())
+        free_r = np.ones(n + 1, dtype=bool)
+        free_r[0] = False  # the apex on the axis
+        free_z = np.ones(n + 1, dtype=bool)
+        free_z[-1] = False  # the contact line on the table
+        lbr, ubr = _fixed(guess[:, 0], free_r)
+        lbr[-1] = 1e-8
+        rs = nlp.variable("r", n + 1, lb=lbr, ub=ubr, init=guess[:, 0])
+        nlp.variable("z", n + 1, *_fixed(guess[:, 1], free_z), init=guess[:, 1])
+        P = np.column_stack([nlp.index("r"), nlp.index("z")])
+        k = np.arange(n)
+        nlp.minimize_elements("surface", _element("frustum"), [X(P[k]), X(P[k + 1])])
+        j = np.arange(n - 1)
+        nlp.equal_elements("equal_segments", _element("equal_chords"),
+                           [X(P[j]), X(P[j + 1]), X(P[j + 2]), np.array([1.0 / (2.0 * seg0 ** 2)])])
+        gr, gz = guess[:, 0], guess[:, 1]
+        tri = 0.5 * (gr[1:] * gz[:-1] - gr[:-1] * gz[1:])
+        _cumulative_area(nlp, "revolution_link", "revolution_last", lambda r: [X(P[r]), X(P[r + 1])],
+                         2.0 * math.pi / 3.0 * tri * (gr[:-1] + gr[1:]))
+        return Geometry(P[:, 0], P[:, 1], int(P[-1, 0]), rs[n], pieces=(X(P[k]), X(P[k + 1])),
+                        moment="revolution_moment", wetted=math.pi * rs[n] ** 2)
+
+
 DISCRETISATIONS = {"curve": Curve, "graph": Graph}
 
 
@@ -249,6 +320,22 @@ def add_gravity(nlp: Program, geo: Geometry, weight: float) -> None:
 
 
 # ---------------------------------------------------------------------------- inspect helpers
+def _end_angle(px, py) -> float:
+    """The contact angle at the first vertex of ``(px, py)``: the first two chords' angles extrapolated
+    linearly in arclength to the contact point (see :func:`contact_angle_estimate`)."""
+    dx, dy = np.diff(px[:3]), np.diff(py[:3])
+    phi = np.arctan2(dy, dx)
+    l0, l1 = np.hypot(dx[0], dy[0]), np.hypot(dx[1], dy[1])
+    return phi[0] + (phi[0] - phi[1]) * l0 / (l0 + l1)
+
+
+def contact_angle_at_rim(r, z) -> float:
+    """The contact angle of a half profile from the apex (``r, z``) at its last vertex, the contact line
+    (the profile mirrored so that the contact comes first and the liquid lies to its right)."""
+    r, z = np.asarray(r, float), np.asarray(z, float)
+    return float(_end_angle(-(r[::-1] - r[-1]), z[::-1]))
+
+
 def contact_angle_estimate(x, y) -> float:
     """Contact angle from the vertices, second-order accurate in 1/N.
 
@@ -261,15 +348,8 @@ def contact_angle_estimate(x, y) -> float:
     averaged.
     """
     x, y = np.asarray(x, float), np.asarray(y, float)
-
-    def one_end(px, py):
-        dx, dy = np.diff(px[:3]), np.diff(py[:3])
-        phi = np.arctan2(dy, dx)
-        l0, l1 = np.hypot(dx[0], dy[0]), np.hypot(dx[1], dy[1])
-        return phi[0] + (phi[0] - phi[1]) * l0 / (l0 + l1)
-
-    left = one_end(x, y)
-    right = one_end(-(x[::-1] - x[-1]), y[::-1])
+    left = _end_angle(x, y)
+    right = _end_angle(-(x[::-1] - x[-1]), y[::-1])
     return 0.5 * (left + right)
 
 

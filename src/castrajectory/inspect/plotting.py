@@ -46,26 +46,39 @@ def droplet_figure(sol) -> Figure:
     contact angle drawn and labelled at the left contact.  A pendant drop is drawn hanging (y downwards)."""
     cap = sol.analytic
     heavy = sol.drop.rho_g > 0.0
+    revolution = sol.drop.axisymmetric
     fig = Figure(figsize=(8.4, 4.2), layout="constrained")
     ax = fig.add_subplot()
     if cap is not None:
         pts = cap.points(720)
-        ax.plot(pts[:, 0], pts[:, 1], "-", color="0.6", lw=3,
-                label="closed form (elliptic integrals)" if heavy else "analytic arc")
-    stride = max(1, len(sol.x) // 200)
-    ax.plot(sol.x, sol.y, "-", color="C0", lw=1.2, label=f"discrete ({sol.formulation}, N = {sol.n})")
-    ax.plot(sol.x[::stride], sol.y[::stride], ".", color="C0", ms=3)
-    lo, hi = min(sol.x.min(), 0.0), max(sol.x.max(), sol.span if cap is None else cap.span)
+        if revolution:  # the half profile from the apex, mirrored: the drop's section, left contact at 0
+            pts = np.column_stack([cap.contact_radius + np.concatenate([-pts[::-1, 0], pts[1:, 0]]),
+                                   np.concatenate([pts[::-1, 1], pts[1:, 1]])])
+        label = ("Young–Laplace shooting" if revolution else "closed form (elliptic integrals)") if heavy else (
+            "spherical cap" if revolution else "analytic arc")
+        ax.plot(pts[:, 0], pts[:, 1], "-", color="0.6", lw=3, label=label)
+    sx, sy = sol.x, sol.y
+    if revolution:
+        sx = sol.contact_radius + np.concatenate([-sol.x[::-1], sol.x[1:]])
+        sy = np.concatenate([sol.y[::-1], sol.y[1:]])
+    stride = max(1, len(sx) // 200)
+    ax.plot(sx, sy, "-", color="C0", lw=1.2, label=f"discrete ({sol.formulation}, N = {sol.n})")
+    ax.plot(sx[::stride], sy[::stride], ".", color="C0", ms=3)
+    lo, hi = min(sx.min(), 0.0), max(sx.max(), sol.span if cap is None else cap.span)
     pad = 0.08 * (hi - lo)
     ax.axhline(0.0, color="k", lw=1)
     ax.fill_between([lo - pad, hi + pad], [0, 0], [-0.04 * (hi - lo)] * 2, color="0.85")
-    _mark_contact_angle(ax, (sol.x[0], sol.y[0]), sol.contact_angle, 0.15 * (hi - lo))
+    _mark_contact_angle(ax, (sx[0], sy[0]), sol.contact_angle, 0.15 * (hi - lo))
     ax.set_aspect("equal")
-    ax.set_xlabel("x")
+    ax.set_xlabel("x (a section through the axis)" if revolution else "x")
     ax.set_ylabel("y (down from the ceiling)" if sol.drop.pendant else "y")
     if sol.drop.pendant:
         ax.invert_yaxis()
-    if heavy:
+    if revolution:
+        mode = (f"of revolution, volume {sol.drop.area:g}, "
+                + (f"{'pendant' if sol.drop.pendant else 'sessile'}, Bond number {sol.drop.bond_number:.4g}"
+                   if heavy else "weightless"))
+    elif heavy:
         mode = (f"{'pendant' if sol.drop.pendant else 'sessile'} under gravity, Bond number "
                 f"{sol.drop.bond_number:.4g}")
     else:

@@ -25,11 +25,11 @@ import casadi as ca
 import numpy as np
 
 from ..discretise.droplet import (  # noqa: F401  (the discretisations, re-exported with the model)
-    DISCRETISATIONS, FORMULATIONS, MIN_N, Curve, Geometry, Graph, add_gravity, contact_angle_estimate,
-    resample_polyline)
+    DISCRETISATIONS, FORMULATIONS, MIN_N, Curve, Geometry, Graph, Revolution, add_gravity, contact_angle_at_rim,
+    contact_angle_estimate, resample_polyline)
 from ..models.droplet import (  # noqa: F401
-    BeyondFold, CircularCap, Droplet, HeavyDrop, analytic, arc_points, pendant_fold, puddle_height,
-    reduced_energy, segment_area_factor, young_angle)
+    AxisymmetricDrop, BeyondFold, CircularCap, Droplet, HeavyDrop, SphericalCap, analytic, arc_points,
+    pendant_fold, puddle_height, reduced_energy, revolution_fold, segment_area_factor, young_angle)
 from ..result import NLPResult, Result
 from ..validation import InputError, integer_at_least, one_of
 from .nlp import NLP
@@ -82,6 +82,9 @@ class DropletSolution(Result):
     #: a pendant drop's stability: the reduced Hessian at the answer and the continuation that led there
     #: (the fold, when the family ended before the requested area); None where it was not checked
     stability: Optional[dict] = None
+    #: a drop of revolution: its volume (the polyline of revolution's, exactly) and contact radius
+    volume: float = math.nan
+    contact_radius: float = math.nan
 
     @property
     def pressure_at_table(self) -> float:
@@ -109,6 +112,8 @@ class DropletSolution(Result):
             "y": self.y.tolist(),
             "program": self.program,
         }
+        if self.drop.axisymmetric:  # x, y: the half profile (r, z) from the apex; span: the contact diameter
+            out.update(axisymmetric=True, volume=self.volume, contact_radius=self.contact_radius)
         if self.drop.rho_g > 0.0:
             out.update(gravity=self.drop.rho_g, pendant=self.drop.pendant, bond_number=self.drop.bond_number,
                        capillary_length=self.drop.capillary_length)
@@ -128,6 +133,9 @@ PRESOLVE_N = 200
 
 def _check_formulation(drop: Droplet, formulation: str) -> None:
     one_of("formulation", formulation, FORMULATIONS)
+    if drop.axisymmetric and formulation == "graph":
+        raise InputError("a drop of revolution is discretised as a curve (its half profile from the axis); the "
+                         "graph formulation is not offered for it: use the curve formulation")
     if formulation != "graph":
         return
     if drop.pendant:
@@ -147,13 +155,17 @@ def make_nlp(drop: Droplet, n: int, formulation: str = "curve", guess: Optional[
     _check_formulation(drop, formulation)
     L = drop.length_scale
     nlp = NLP()
-    disc = Curve(n, guess) if formulation == "curve" else DISCRETISATIONS[formulation](n)
+    if formulation == "curve":
+        disc = Revolution(n, guess) if drop.axisymmetric else Curve(n, guess)
+    else:
+        disc = DISCRETISATIONS[formulation](n)
     # The scene's terms: surface tension (the length elements, added by the discretisation) always;
-    # the wetting term only when the span is free and it is non-zero.
+    # the wetting term only when the span is free and it is non-zero (on the wetted disc pi r_c² for a drop
+    # of revolution, whose surface tension is its frustums' area).
     geo = disc.build(nlp, None if drop.span is None else drop.span / L)
     w = drop.wetting / drop.gamma_gl
     if drop.span is None and w != 0.0:
-        nlp.minimize(w * geo.span)
+        nlp.minimize(w * (geo.span if geo.wetted is None else geo.wetted))
     # gravity only for a heavy drop (a weightless drop builds exactly the program it had before)
     if drop.rho_g > 0.0:
         add_gravity(nlp, geo, drop.gravity_sign * drop.bond_number)
@@ -200,6 +212,14 @@ def _oracle(drop: Droplet):
 
 def _terms(drop: Droplet) -> list:
     """The scene's terms, as the NLP carries them."""
+    if drop.axisymmetric:
+        terms = ["surface tension γ_gl × area of revolution (Σ π(r_i + r_i+1) l_i)", "volume constraint"]
+        if drop.wetting != 0.0:
+            terms.insert(1, "wetting (γ_sl − γ_sg) × π r_c²")
+        if drop.rho_g > 0.0:
+            terms.append("gravity −ρg ∫ y dV (pendant: hanging under the wall)" if drop.pendant else
+                         "gravity ρg ∫ y dV (sessile)")
+        return terms
     terms = ["surface tension γ_gl × length", "area constraint"]
     if drop.span is None and drop.wetting != 0.0:
         terms.insert(1, "wetting (γ_sl − γ_sg) × span")
@@ -213,6 +233,17 @@ def _terms(drop: Droplet) -> list:
 
 def _errors(r: dict, cap) -> Dict[str, float]:
     """The readings' errors against the oracle (relative, but the contact angle's, in radians)."""
+    if isinstance(cap, (SphericalCap, AxisymmetricDrop)):
+        curv = cap.apex_curvature + 1.0 / cap.capillary_length  # (1/l_c = 0 without gravity)
+        return {"shape": float(np.max(np.abs(cap.distance(r["x"], r["y"])))) / cap.height,
+                "contact_angle": abs(r["contact_angle"] - cap.contact_angle),
+                "contact_radius": abs(r["contact_radius"] - cap.contact_radius) / cap.contact_radius,
+                "height": abs(r["height"] - cap.height) / cap.height,
+                "apex_curvature": abs(r["apex_curvature"] - cap.apex_curvature) / curv,
+                # (a pendant drop's pressure passes through zero: the scale of its two parts, 2γ/b and ρg h)
+                "pressure": abs(r["pressure"] - cap.pressure) / (2.0 * cap.gamma_gl * cap.apex_curvature + (
+                    0.0 if isinstance(cap, SphericalCap) else cap.rho_g * cap.height)),
+                "energy": abs(r["energy"] - cap.energy) / abs(cap.energy)}
     errors = {
         "shape": float(np.max(np.abs(cap.distance(r["x"], r["y"])))) / (
             cap.height if isinstance(cap, HeavyDrop) else cap.radius),
@@ -242,6 +273,7 @@ def _solution(drop: Droplet, n: int, formulation: str, opts: dict, verbose: bool
     sol = DropletSolution(drop, formulation, n, res, r["x"], r["y"], r["contact_angle"], r["span"], r["pressure"],
                           r["energy"], young, cap, errors, {"terms": _terms(drop), "steps": int(n), **nlp.anatomy()},
                           height=r["height"], apex_curvature=r["apex_curvature"], stability=stability,
+                          volume=r.get("volume", math.nan), contact_radius=r.get("contact_radius", math.nan),
                           **res.contract())
     if sol.success and estimate:
         sol.error_estimate = _estimate(drop, n, formulation, opts, verbose, r, sol)
@@ -344,7 +376,7 @@ def _continuation(drop: Droplet, n: int, formulation: str, opts: dict, verbose: 
 
 
 def _step_record(drop: Droplet, bond: float, res: NLPResult, hess) -> dict:
-    return {"bond_number": bond, "area": bond * drop.gamma_gl / drop.rho_g, "status": res.status,
+    return {"bond_number": bond, "area": drop.area_for_bond(bond), "status": res.status,
             "iterations": res.iterations,
             "min_eigenvalue": None if hess is None else hess.min_eigenvalue,
             "positive_definite": None if hess is None else hess.positive_definite}
@@ -368,7 +400,7 @@ def _solve_pendant(drop: Droplet, n: int, formulation: str, opts: dict, verbose:
     cont = _continuation(drop, n, formulation, opts, verbose)
     res = cont.result
     try:
-        fold = pendant_fold(drop)
+        fold = revolution_fold(drop) if drop.axisymmetric else pendant_fold(drop)
     except ValueError:  # a contact angle whose family closes its neck first: no closed form
         fold = None
     stability = {"reduced_hessian": None if cont.hessian is None else cont.hessian.as_dict(),
@@ -380,16 +412,18 @@ def _solve_pendant(drop: Droplet, n: int, formulation: str, opts: dict, verbose:
             sol.warnings.append(note)
         return sol
     # the family ended before the requested area: the answer is the last stable drop, and the verdict
-    last = replace(drop, area=cont.bond * drop.gamma_gl / drop.rho_g)
-    found = {"area": last.area, "refused_area": cont.refused * drop.gamma_gl / drop.rho_g,
+    last = replace(drop, area=drop.area_for_bond(cont.bond))
+    found = {"area": last.area, "refused_area": drop.area_for_bond(cont.refused),
              "extrapolated_area": _fold_estimate(cont.steps),
              "analytic_area": None if fold is None else fold.area}
     stability["fold"] = found
     sol = _solution(last, n, formulation, opts, verbose, res, cont.nlp, cont.geo, fold, stability, estimate=False)
-    closed = "" if fold is None else f"; the closed form's fold is A* = {fold.area:.7g}"
+    what, sym = drop.measure, "V" if drop.axisymmetric else "A"
+    closed = "" if fold is None else (f"; the closed form's fold is A* = {fold.area:.7g}" if not drop.axisymmetric
+                                      else f"; the Young–Laplace shooting's fold is V* = {fold.area:.7g}")
     sol.fail(NO_STABLE_DROP,
-             f"no stable pendant drop of area {drop.area:g}: following the family by continuation in the area, "
-             f"the reduced Hessian of the Lagrangian stays positive definite up to A = {last.area:.7g} and no "
+             f"no stable pendant drop of {what} {drop.area:g}: following the family by continuation in the {what}, "
+             f"the reduced Hessian of the Lagrangian stays positive definite up to {sym} = {last.area:.7g} and no "
              f"stable drop exists beyond it (the fold of the family at N = {n}){closed}")
     if fold is not None:
         sol.errors = {"fold_area": abs(last.area - fold.area) / fold.area}
@@ -404,6 +438,8 @@ ESTIMATED = ("contact_angle", "span", "pressure", "energy")
 
 def _readings(drop: Droplet, res: NLPResult, geo) -> dict:
     """The physical readings of a solve, in the drop's units."""
+    if drop.axisymmetric:
+        return _revolution_readings(drop, res, geo)
     L, g = drop.length_scale, drop.gamma_gl
     xs, ys, span = geo.vertices(res)
     x, y = L * xs, L * ys
@@ -415,6 +451,29 @@ def _readings(drop: Droplet, res: NLPResult, geo) -> dict:
     return {"x": x, "y": y, "xs": xs, "ys": ys, "contact_angle": contact_angle_estimate(x, y), "span": span,
             "pressure": g / L * float(res.multipliers["area"][0]), "energy": energy,
             "height": float(np.max(y)), "apex_curvature": apex_curvature(x, y)}
+
+
+def _revolution_readings(drop: Droplet, res: NLPResult, geo) -> dict:
+    """The readings of a drop of revolution: every integral is the polyline of revolution's, exactly (its
+    frustums' area, the swept triangles' volume and moment); the height is the apex vertex on the axis, the
+    contact angle read at the rim; ``span`` is the contact diameter ``2 r_c``.  The apex curvature is the
+    Laplace relation at the apex, ``(P − g ρg h) / 2γ``, not the vertices' own: their errors near the axis,
+    O(h² log h), are too large for a three-point curvature there (it stays 1/3 off; Droplet §10)."""
+    L, g = drop.length_scale, drop.gamma_gl
+    rs, zs, rc = geo.vertices(res)
+    r, y = L * rs, L * zs
+    tri = 0.5 * (r[1:] * y[:-1] - r[:-1] * y[1:])
+    surface = math.pi * float(np.sum((r[:-1] + r[1:]) * np.hypot(np.diff(r), np.diff(y))))
+    energy = g * surface + drop.wetting * math.pi * (L * rc) ** 2
+    if drop.rho_g > 0.0:
+        moment = math.pi / 6.0 * float(np.sum(tri * (2.0 * r[:-1] * y[:-1] + 2.0 * r[1:] * y[1:] + r[:-1] * y[1:]
+                                                     + r[1:] * y[:-1])))
+        energy += drop.gravity_sign * drop.rho_g * moment
+    pressure = g / L * float(res.multipliers["area"][0])
+    return {"x": r, "y": y, "xs": rs, "ys": zs, "contact_angle": contact_angle_at_rim(r, y), "span": 2.0 * L * rc,
+            "contact_radius": L * rc, "volume": 2.0 * math.pi / 3.0 * float(np.sum(tri * (r[:-1] + r[1:]))),
+            "pressure": pressure, "energy": energy, "height": float(y[0]),
+            "apex_curvature": (pressure - drop.gravity_sign * drop.rho_g * float(y[0])) / (2.0 * g)}
 
 
 def apex_curvature(x, y) -> float:
@@ -449,7 +508,8 @@ def _estimate(drop: Droplet, n: int, formulation: str, opts: dict, verbose: bool
     scales = {"contact_angle": 0.5 * math.pi, "span": abs(fine["span"]), "pressure": abs(fine["pressure"]),
               "energy": abs(fine["energy"])}
     if drop.rho_g > 0.0:  # a pendant drop's pressure passes through zero: the scale of its two parts
-        scales["pressure"] = drop.gamma_gl * abs(fine["apex_curvature"]) + drop.rho_g * fine["height"]
+        scales["pressure"] = (2.0 if drop.axisymmetric else 1.0) * drop.gamma_gl * abs(fine["apex_curvature"]) + \
+            drop.rho_g * fine["height"]
     rel = max(errors[k] / scales[k] for k in errors if scales[k] > 0)
     return ErrorEstimate(available=True, note=f"Richardson extrapolation from N = {nc} and N = {n}, order {ORDER}",
                          levels=(nc, n), order=float(ORDER), errors=errors, scales=scales, relative=float(rel))
