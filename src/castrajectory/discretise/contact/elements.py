@@ -108,15 +108,26 @@ class ContactMechanics:
         hp = sym("hp")
         self.node = ca.Function("c_node", [qsm, bm, qk, qs, b, nu, hp, h] + xl + xr + xzn,
                                 [self.node_row(D2(qsm, zpm, qk, (1 - am) * hp), qk, qs, b, nu, lam, h, frn, zm)])
-        # which contacts release at an impact's sub-node (held until it, open after): their sub-node impulse is
-        # the share of their force at the end of the first part (release_row), 0 elsewhere (a parameter)
+        # the sub-node's impulse from the first part, μ⁻ with its ratios ρ⁻ (0 but where the march's modes set it): a
+        # contact released at an impact's sub-node takes there its share of its force over the first part
+        # (release_row), and an arrival caught with friction there takes Stronge's impulse; μ is then the second
+        # part's (see sub_row)
+        mul = sym("mul", c)
+        rl = sym("rl", c * d)
+        # (rel: 1 for the contacts released at the step's impact, whose μ⁻ are shares, not impacts)
         rel = sym("rel", c)
-        sub_row, r = self.sub_row(qk, qs, qk1, b, mu, lams, h, frs, zm, zp, rel)
+        xleft = ([mul, rl] if self.friction else [mul]) + [rel]
+        rll = rl if self.friction else None
+        sub_row, r = self.sub_row(qk, qs, qk1, b, mu, lams, h, frs, zm, zp, mul, rll, rel)
         pm, pp = D2(qk, zm, qs, a * h), -D1(qs, zp, qk1, (1 - a) * h)          # the momenta on either side of q̃
-        self.sub = ca.Function("c_sub", [qk, qs, qk1, b, mu, h, rel] + xls + xr + xzs, [sub_row])
-        #: the released contacts' normal velocities at the end of the first part, after their shares
-        self.release = ca.Function("c_release", [qk, qs, b, mu, h, rel] + xr + xz1,
-                                   [self.release_row(qk, qs, b, mu, h, rel, frs, zm)])
+        self.sub = ca.Function("c_sub", [qk, qs, qk1, b, mu, h] + xleft[:-1] + xls + xr + xzs, [sub_row])
+        #: the contacts' normal velocities at the sub-node before its impact, after the released contacts' shares
+        self.release = ca.Function("c_release", [qk, qs, b, h] + xleft + xz1,
+                                   [self.release_row(qk, qs, b, h, mul, rll, rel, zm)])
+        if self.friction:
+            #: ... and the slip velocities there (against which a released contact's share sticks or slides)
+            self.left_slip = ca.Function("c_left_slip", [qk, qs, b, h] + xleft + xz1,
+                                         [self.left_velocity(qk, qs, b, h, mul, rll, rel, zm)])
         if s:
             #: the stage rows of both parts of a step (stage_rows) and the constraints at their stages
             lz = sym("lamz", 2 * self.ms)
@@ -128,8 +139,7 @@ class ContactMechanics:
         if self.friction:
             #: the slip velocities the friction opposes, [node part; sub-node part] (see slip)
             arrive = sym("arrive", c)
-            self.slip_row = ca.Function("c_slip", [qk, qs, qk1, b, h, arrive, rel, mu, rho] + xz1,
-                                        [self.slip(qk, qs, qk1, b, h, arrive, rel, mu, frs, zm)])
+            self.slip_row = ca.Function("c_slip", [qk, qs, qk1, b, h, arrive], [self.slip(qk, qs, qk1, b, h, arrive)])
             if d == 2:
                 # the isotropic cone's rows for the certificate: μ_f² − |ρ|² ≥ 0 per slot, and sliding's
                 # ρ + μ_f s/|s| = 0 per component (friction_rows)
@@ -137,9 +147,8 @@ class ContactMechanics:
                 muf2 = np.concatenate([self.mu_f, self.mu_f])
                 self.cone_row = ca.Function("c_cone", [rho], [ca.DM(muf2 ** 2) - ca.transpose(ca.sum1(R2 * R2))])
                 one = ca.DM.ones(2 * c)
-                self.slide_row = ca.Function("c_slide", [qk, qs, qk1, b, h, arrive, rel, mu, rho] + xz1, [self.friction_rows(
-                    self.slip(qk, qs, qk1, b, h, arrive, rel, mu, frs, zm), rho, 0 * one, one, 0 * one,
-                    ca.DM.zeros(2 * c * d), 1.0)])
+                self.slide_row = ca.Function("c_slide", [qk, qs, qk1, b, h, arrive, rho], [self.friction_rows(
+                    self.slip(qk, qs, qk1, b, h, arrive), rho, 0 * one, one, 0 * one, ca.DM.zeros(2 * c * d), 1.0)])
         # Newton's law on the normal velocity at the sub-node, weighted by W = φ(q_{k+1})/δ: the law
         # holds unless the contact is closed again at the next node, where the body is caught (the
         # accumulation point of Zeno bouncing, where no step-resolved flight is left, or a body at
@@ -150,9 +159,9 @@ class ContactMechanics:
         # separately (ContactNLP.residual).
         ell = sym("delta", c)
         self.impact_law, self.law_slack = self._law_functions(
-            "", [qk, qs, qk1, b, mu], [h, ell, rel] + xr + xzs, mu * r * phi(qk1) / ell)
+            "", [qk, qs, qk1, b, mu], [h, ell] + xleft + xzs, mu * r * phi(qk1) / ell)
         # the unweighted law and the next node's gaps, for the residual of real (not caught) impacts
-        self.law_check = ca.Function("c_law_check", [qk, qs, qk1, b, mu, h, rel] + xr + xzs, [mu * r, phi(qk1)])
+        self.law_check = ca.Function("c_law_check", [qk, qs, qk1, b, mu, h] + xleft + xzs, [mu * r, phi(qk1)])
         self.pair = ca.Function("c_pair", [qk, nu], [ca.vertcat(phi(qk), nu)])
         self.gap_row = ca.Function("c_gap", [qk], [phi(qk)])
         w = sym("w")
@@ -225,17 +234,14 @@ class ContactMechanics:
 
 
     # ------------------------------------------------------------------ the rows, built once
-    def slip(self, qk, qs, qn, b, h, arrive, rel=None, mu=None, rho_s=None, zm=None):
+    def slip(self, qk, qs, qn, b, h, arrive):
         """The slip velocities per contact that the step's friction opposes (maximal dissipation: the friction
         force opposes its slip, or the slip vanishes): for the node's force, the first part of the step,
         ``D(q̄₁)(q̃_k − q_k)/(αh)``; for the sub-node's impulse of a contact held through the step, the whole
         step around it, ``[D(q̄₁)(q̃_k − q_k) + D(q̄₂)(q_{k+1} − q̃_k)]/h`` (sticking on both holds the contact point
         still through the step); for a contact that arrives at the sub-node (``arrive`` 1: an impact), the part
         after it, ``D(q̄₂)(q_{k+1} − q̃_k)/((1 − α)h)``, the slip after the impact, which Coulomb's law at an impact
-        opposes (the contact point moved freely before it); for a contact released at the impact (``rel`` 1: its
-        impulse is a share of the first part's force, :meth:`release_row`), the contact point's velocity at the end of
-        the first part after the shares (with the impulses ``mu`` and the sub-node ratios ``rho_s``, whose tangential
-        share then sticks or slides like the normal one holds).  ``q̄₁, q̄₂`` are the parts' midpoints: the contact
+        opposes (the contact point moved freely before it).  ``q̄₁, q̄₂`` are the parts' midpoints: the contact
         point's displacement over a part is then its midpoint rule, exact to O(h³), where ``D`` at the part's start
         left an O(h²) drift that the tangential impulses fought with O(1) of the wrong share (a pivot's sub-node
         slot slid ten steps before the cone was reached, and the motion converged at first order)."""
@@ -244,13 +250,6 @@ class ContactMechanics:
         second = ca.mtimes(self._D(0.5 * (qs + qn)), qn - qs)
         arr = self._per_component(arrive)
         sub = arr * second / ((1 - a) * h) + (1 - arr) * (first + second) / h
-        if rel is not None:
-            # a contact released at the impact: its share sticks or slides against the contact point's velocity at
-            # the end of the first part, after the shares (RATTLE's projection, release_row)
-            rr = self._per_component(rel)
-            pm = self._D2(qk, self._z if zm is None else zm, qs, a * h) + self._shares(qs, mu, rel, rho_s)
-            vrel = ca.mtimes(self._D(qs), _tangent_velocity(self.system.mass_matrix(qs), self._C(qs), pm))
-            sub = sub * (1 - rr) + vrel * rr
         return ca.vertcat(first / (a * h), sub)
 
     def _per_component(self, v):
@@ -269,48 +268,55 @@ class ContactMechanics:
             row = row + ca.mtimes(self._D(qk).T, rho * self._per_component(nu))
         return row - ca.mtimes(self._C(qk).T, lam)
 
-    def sub_row(self, qk, qs, qn, b, mu, lams, h, rho=None, zm=None, zp=None, rel=None):
+    def sub_row(self, qk, qs, qn, b, mu, lams, h, rho=None, zm=None, zp=None, mul=None, rl=None, rel=None):
         """The momentum balance at the sub-node ``q̃_k`` between ``q_k`` and ``q_{k+1}``, with the impulses
         ``μ``: ``(p̃⁻ − p̃⁺ + ∇φ(q̃)ᵀμ)/h − ∇c(q̃)ᵀλ̃``; and Newton's law residual ``r`` there (see
         :func:`_sub_node_kinematics`; ``zm``, ``zp`` the stages of the parts either side).  Returns
         ``(row, r)``.
 
-        ``rel`` (1 per contact that releases at this sub-node's impact): that contact's impulse is the share of
-        its force at the end of the first part (:meth:`release_row`), with its own friction ratio; the impact's law
-        then acts on the momentum after the shares, ``p̃⁻ + S``
-        (:meth:`_shares`), so ``r = ∇φ Π (p̃⁺ + e (p̃⁻ + S))``."""
+        ``mul`` (with its friction ratios ``rl``): the impulses that close the first part, ``S⁻ = ∇φᵀμ⁻ + Dᵀ(ρ⁻μ⁻)``
+        (:meth:`_left`), beside ``μ`` that opens the second: a released contact's share (:meth:`release_row`), an
+        arrival's impulse by Stronge's law where its contact stays closed after.  The momentum before the impact is
+        then ``p̃⁻`` with the released contacts' shares (``rel``), and Newton's law reads
+        ``r = ∇φ Π (p̃⁺ + e (p̃⁻ + S⁻_rel))``."""
         a = 0.5 + b
         pm, pp, r = self._kinematics(qk, qs, qn, a * h, (1 - a) * h, self._z if zm is None else zm,
                                      self._z if zp is None else zp)
         row = pm - pp + ca.mtimes(self._J(qs).T, mu)
         if rho is not None:   # friction: the tangential impulse ρ μ
             row = row + ca.mtimes(self._D(qs).T, rho * self._per_component(mu))
-        if rel is not None:
-            S = self._shares(qs, mu, rel, rho)
-            r = r + self.e * ca.mtimes(self._J(qs), _tangent_velocity(self.system.mass_matrix(qs), self._C(qs), S))
+        if mul is not None:
+            row = row + self._left(qs, mul, rl)
+            if rel is not None:
+                S = self._left(qs, rel * mul, rl)
+                r = r + self.e * ca.mtimes(self._J(qs), _tangent_velocity(self.system.mass_matrix(qs), self._C(qs), S))
         return row / h - ca.mtimes(self._C(qs).T, lams), r
 
-    def _shares(self, qs, mu, rel, rho_s=None):
-        """``S = Σ_released (∇φ_jᵀ + ρ_j D_jᵀ) μ_j`` at the sub-node: the released contacts' shares (``ρ`` their
-        sub-node ratios)."""
-        sh = rel * mu
-        S = ca.mtimes(self._J(qs).T, sh)
-        if rho_s is not None:
-            S = S + ca.mtimes(self._D(qs).T, rho_s * self._per_component(sh))
+    def _left(self, qs, mul, rl=None):
+        """``S⁻ = ∇φ(q̃)ᵀμ⁻ + D(q̃)ᵀ(ρ⁻μ⁻)``: the impulses that close a step's first part."""
+        S = ca.mtimes(self._J(qs).T, mul)
+        if rl is not None:
+            S = S + ca.mtimes(self._D(qs).T, rl * self._per_component(mul))
         return S
 
-    def release_row(self, qk, qs, b, mu, h, rel, rho_s=None, zm=None):
-        """The normal velocities at the sub-node ``q̃`` before its impact, ``∇φ(q̃) Π (p̃⁻ + S)``, ``S`` the shares
-        of the contacts that release there (:meth:`_shares`): zero for each of them.  A contact held through the
-        first part of the step and released at an impact has its force over that part at both ends, the node
-        force ``ν`` at ``q_k`` and this share at ``q̃`` (RATTLE's projection of the velocity onto the constraint):
-        without the share the part's whole force sat at ``q_k``, the momentum before the impact kept an ``O(h)``
-        normal velocity at the held contact, and the impact's law took it -- the rimless wheel's touchdown lost
-        energy at first order."""
-        a = 0.5 + b
-        pm = self._D2(qk, self._z if zm is None else zm, qs, a * h)
-        S = self._shares(qs, mu, rel, rho_s)
-        return ca.mtimes(self._J(qs), _tangent_velocity(self.system.mass_matrix(qs), self._C(qs), pm + S))
+    def _before(self, qk, qs, b, h, mul, rl=None, rel=None, zm=None):
+        """The velocity at the sub-node before its impact, ``Π(q̃)(p̃⁻ + S⁻_rel)`` (the released contacts' shares)."""
+        pm = self._D2(qk, self._z if zm is None else zm, qs, (0.5 + b) * h) + self._left(qs, rel * mul, rl)
+        return _tangent_velocity(self.system.mass_matrix(qs), self._C(qs), pm)
+
+    def release_row(self, qk, qs, b, h, mul, rl=None, rel=None, zm=None):
+        """The normal velocities at the sub-node ``q̃`` before its impact, ``∇φ(q̃) Π (p̃⁻ + S⁻)``: zero for a contact
+        that releases there.  A contact held through the first part of the step and released at an impact has its
+        force over that part at both of the part's ends, the node force ``ν`` at ``q_k`` and a share ``μ⁻`` at
+        ``q̃`` (RATTLE's projection of the velocity onto the constraint): without the share the part's whole force
+        sat at ``q_k``, the momentum before the impact kept an ``O(h)`` normal velocity at the held contact, and
+        the impact's law took it -- the rimless wheel's touchdown lost energy at first order."""
+        return ca.mtimes(self._J(qs), self._before(qk, qs, b, h, mul, rl, rel, zm))
+
+    def left_velocity(self, qk, qs, b, h, mul, rl=None, rel=None, zm=None):
+        """The slip velocities at the sub-node before its impact, ``D(q̃) Π (p̃⁻ + S⁻)``: a released contact's share
+        sticks (zero) or slides against it, as its contact did through the first part."""
+        return ca.mtimes(self._D(qs), self._before(qk, qs, b, h, mul, rl, rel, zm))
 
     def node_law(self, p_in, qk, qs, b, h, zm=None):
         """Newton's law at the node ``q_k`` itself: ``∇φ(q_k) Π(q_k) (p_k⁺ + e p_in)`` with ``p_k⁺ =
@@ -327,7 +333,7 @@ class ContactMechanics:
             n, c, m = self.n, self.c, self.m
             sizes = [("qs", n), ("q", n), ("beta", 1), ("nu", c), ("mu", c), ("lam", m), ("lam_sub", m),
                      ("fratio", 2 * c * self.fd if self.friction else 0), ("zs", 2 * self.s),
-                     ("lam_stage", 2 * self.ms)]
+                     ("lam_stage", 2 * self.ms), ("mul", c), ("fleft", c * self.fd if self.friction else 0)]
             out, o = {}, 0
             for name, size in sizes:
                 out[name] = slice(o, o + size)
@@ -354,8 +360,10 @@ class ContactMechanics:
         ``μ = 0``), ``law`` (Newton's law ``r = 0`` replaces ``μ = 0``) and ``node`` (an impact at the node
         ``q_k`` itself, Newton's law there, :meth:`node_law`, replaces ``ν = 0``); ``fixed`` with ``mufix``
         (``μ = mufix`` replaces ``μ = 0``: an impulse decided outside the step, the sequential law's cascade)
-        and ``nfixed`` (``ν = mufix`` replaces ``ν = 0``: the same at the node); ``release`` (a contact held until
-        an impact's sub-node and open after it: its share, :meth:`release_row`, replaces ``μ = 0``).  The rows are the node
+        and ``nfixed`` (``ν = mufix`` replaces ``ν = 0``: the same at the node); for the first part's closing
+        impulses ``μ⁻``, ``release`` (a contact held until an impact's sub-node and open after it: its share,
+        :meth:`release_row`, replaces ``μ⁻ = 0``) and ``leftfix`` with ``mufixl`` (``μ⁻ = mufixl``: an arrival's
+        impulse by Stronge's law, its contact closed after).  The rows are the node
         and sub-node rows of the transcription (:meth:`node_row`, :meth:`sub_row`), so a point solved step by step satisfies the whole
         program's rows (``docs/derivations.md``, "Contact trajectories", "The march").
         """
@@ -373,16 +381,19 @@ class ContactMechanics:
         snu, smu, vref, bfix = sym("snu"), sym("smu"), sym("vref"), sym("bfix")
         t, held, closed, law = sym("t", c), sym("held", c), sym("closed", c), sym("law", c)
         node, fixed, mufix, nfixed = sym("node", c), sym("fixed", c), sym("mufix", c), sym("nfixed", c)
-        release = sym("release", c)
-        sub_row, r = self.sub_row(qk, qs, qn, b, mu, lams, h, rho_s, zm, zp, release)
+        release, leftfix, mufixl = sym("release", c), sym("leftfix", c), sym("mufixl", c)
+        mul = x[L["mul"]]
+        rl = x[L["fleft"]] if self.friction else None
+        sub_row, r = self.sub_row(qk, qs, qn, b, mu, lams, h, rho_s, zm, zp, mul, rl, release)
         free = 1 - held - node - nfixed
-        other = 1 - closed - law - fixed - release
+        other = 1 - closed - law - fixed
         R = ca.vertcat(self.node_row(p, qk, qs, b, nu, lam, h, rho_n, zm), sub_row,
                        (1 - ca.sum1(t)) * (b - bfix) + ca.dot(t, phi(qs)) / ell,
                        held * phi(qs) / ell + node * self.node_law(p, qk, qs, b, h, zm) / vref
                        + nfixed * (nu - mufix) / snu + free * nu / snu,
-                       closed * phi(qn) / ell + law * r / vref + fixed * (mu - mufix) / smu + other * mu / smu
-                       + release * self.release_row(qk, qs, b, mu, h, release, rho_s, zm) / vref,
+                       closed * phi(qn) / ell + law * r / vref + fixed * (mu - mufix) / smu + other * mu / smu,
+                       release * self.release_row(qk, qs, b, h, mul, rl, release, zm) / vref + leftfix * (mul - mufixl) / smu
+                       + (1 - release - leftfix) * mul / smu,
                        con(qs), con(qn))
         if self.s:
             R = ca.vertcat(R, self.stage_rows(qk, qs, qn, b, h, zm, zp, x[L["lam_stage"]]))
@@ -397,20 +408,24 @@ class ContactMechanics:
             # against the slip's direction on the circular cone; see friction_rows)
             stick, sgn, fix, rfix = sym("stick", 2 * c), sym("sgn", 2 * c), sym("fix", 2 * c), sym("rfix", 2 * cd)
             arrive = sym("arrive", c)
-            R = ca.vertcat(R, self.friction_rows(self.slip(qk, qs, qn, b, h, arrive, release, mu, rho_s, zm), rho, stick,
-                                                 sgn, fix, rfix, vref))
-            extra = [stick, sgn, fix, rfix, arrive]
+            R = ca.vertcat(R, self.friction_rows(self.slip(qk, qs, qn, b, h, arrive), rho, stick, sgn, fix, rfix, vref))
+            # the first part's closing impulses μ⁻: a released contact's share sticks or slides as its node slot did
+            # through that part, against the slip velocity before the impact; a law's (leftfix) ratio is fixed (rfixl)
+            rfixl = sym("rfixl", cd)
+            R = ca.vertcat(R, self.friction_rows(self.left_velocity(qk, qs, b, h, mul, rl, release, zm), rl, stick[:c] * release,
+                                                 sgn[:c] * release, leftfix, rfixl, vref, self.mu_f))
+            extra = [stick, sgn, fix, rfix, arrive, rfixl]
         self.march_step = ca.Function("march_step", [x, qk, p, h, ell, snu, smu, vref, bfix, t, held, closed, law, node,
-                                                      fixed, mufix, nfixed, release] + extra,
+                                                      fixed, mufix, nfixed, release, leftfix, mufixl] + extra,
                                       [R, ca.jacobian(R, x)])
 
-    def friction_rows(self, slip, rho, stick, sgn, fix, rfix, vref):
+    def friction_rows(self, slip, rho, stick, sgn, fix, rfix, vref, muf=None):
         """The friction's rows of a step, per slot (contact and part; masks per slot, values per component):
         sticking, the slip vanishes; sliding, the ratio opposes the slip at the cone's edge -- in the plane
         ``ρ = −sgn μ_f`` (sgn the slip's sign), on a tangent plane ``ρ + μ_f s/|s| = 0`` (sgn then the mask of
         sliding); ``fix``, ``ρ = rfix``; otherwise no friction force, ``ρ = 0``."""
         d = self.fd
-        muf = np.concatenate([self.mu_f, self.mu_f])
+        muf = np.concatenate([self.mu_f, self.mu_f]) if muf is None else np.asarray(muf, float)
         if d == 1:
             slide = sgn * sgn
             return stick * slip / vref + slide * (rho + sgn * ca.DM(muf)) + fix * (rho - rfix) \

@@ -151,6 +151,12 @@ class ContactTranscription:
         if cm.friction:
             muf2 = np.repeat(np.concatenate([cm.mu_f, cm.mu_f]), cm.fd)
             nlp.variable("fratio", L * 2 * c * cm.fd, lb=np.tile(-muf2, L), ub=np.tile(muf2, L))
+        # each sub-node's impulses that close its first part, and their ratios: 0 (fixed) but in the march's branch,
+        # where a contact released at its step's impact takes its share there and a plastic arrival with friction
+        # Stronge's impulse (ContactMechanics.sub_row, ContactNLP.solve_modes)
+        nlp.variable("mul", L * c, lb=0.0, ub=0.0)
+        if cm.friction:
+            nlp.variable("fleft", L * c * cm.fd, lb=0.0, ub=0.0)
         # multipliers of the holonomic constraints at the nodes 0..L-1 and the sub-nodes (none without)
         m = cm.m
         if m:
@@ -179,6 +185,14 @@ class ContactTranscription:
         LAM = (lambda i: [X(nlp.index("lam").reshape(L, m)[i])]) if m else (lambda i: [])  # noqa: E731
         LAMS = (lambda i: [X(nlp.index("lam_sub").reshape(L, m)[i])]) if m else (lambda i: [])  # noqa: E731
         RHO = (lambda i: [X(nlp.index("fratio").reshape(L, 2 * c * cm.fd)[i])]) if cm.friction else (lambda i: [])  # noqa: E731
+        # the first part's closing impulses μ⁻ of every sub-node, and their ratios (0 outside the march's branch)
+        MUL = nlp.index("mul").reshape(L, c)
+        FL = nlp.index("fleft").reshape(L, c * cm.fd) if cm.friction else None
+        LEFT = (lambda i: [X(MUL[i]), X(FL[i])]) if cm.friction else (lambda i: [X(MUL[i])])  # noqa: E731
+        # which contacts release at their step's impact (the march's modes, ContactNLP.solve_modes; 0 elsewhere): their
+        # μ⁻ are shares of their force before it, which the momentum before the impact carries
+        nlp.parameter("release", L * c, value=0.0)
+        REL = P(nlp.parameter_index("release").reshape(L, c))
         # the stages of a step's first part (ZM) and second part (ZP), none for a two-point scheme
         ZI = nlp.index("zs").reshape(L, 2 * s) if s else None
         ZM = (lambda i: [X(ZI[i, :s])]) if s else (lambda i: [])  # noqa: E731
@@ -193,14 +207,15 @@ class ContactTranscription:
             i = np.arange(1, L)
             nlp.equal_elements("node", cm.node, [X(S[i - 1]), X(B[i - 1]), X(Q[i]), X(S[i]), X(B[i]),
                                                  X(NU[i]), Hc[i - 1], Hc[i]] + LAM(i) + RHO(i) + ZP(i - 1) + ZM(i))
-        # the contacts released at an impact's sub-node (the march's modes, ContactNLP.solve_modes; 0 elsewhere): their
-        # sub-node impulse is their share of the first part's force, whose row is "release" (ContactMechanics.release_row)
-        nlp.parameter("release", L * c, value=0.0)
-        REL = P(nlp.parameter_index("release").reshape(L, c))
-        nlp.equal_elements("sub", cm.sub, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), Hc, REL] + LAMS(k) + RHO(k)
-                           + ZM(k) + ZP(k))
-        nlp.inequality_elements("release", cm.release, [X(Q[k]), X(S[k]), X(B[k]), X(MU[k]), Hc, REL] + RHO(k) + ZM(k),
+        nlp.equal_elements("sub", cm.sub, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), Hc] + LEFT(k) + LAMS(k)
+                           + RHO(k) + ZM(k) + ZP(k))
+        # the normal (and slip) velocities before each sub-node's impact, after its first part's closing impulses:
+        # zero for a contact released there (its share; the bounds are the march's modes, ContactNLP.solve_modes)
+        nlp.inequality_elements("release", cm.release, [X(Q[k]), X(S[k]), X(B[k]), Hc] + LEFT(k) + [REL] + ZM(k),
                                 lb=-np.inf, ub=np.inf)
+        if cm.friction:
+            nlp.inequality_elements("left_slip", cm.left_slip, [X(Q[k]), X(S[k]), X(B[k]), Hc] + LEFT(k) + [REL] + ZM(k),
+                                    lb=-np.inf, ub=np.inf)
         if s:
             LAMZ = [X(nlp.index("lam_stage").reshape(L, 2 * cm.ms))] if m else []
             nlp.equal_elements("stage", cm.stage, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), Hc] + ZM(k) + ZP(k) + LAMZ)
@@ -211,14 +226,12 @@ class ContactTranscription:
             # (which contacts arrive at their sub-node: their slip is the one after it, ContactMechanics.slip)
             nlp.parameter("arrive", L * c, value=0.0)
             AR = P(nlp.parameter_index("arrive").reshape(L, c))
-            nlp.inequality_elements("slip", cm.slip_row, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), Hc, AR, REL, X(MU[k])]
-                                    + RHO(k) + ZM(k),
+            nlp.inequality_elements("slip", cm.slip_row, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), Hc, AR],
                                     lb=-np.inf, ub=np.inf)
             if cm.fd == 2:
                 # the tangent plane's circular cone, and sliding against the slip (bounds by the modes)
                 nlp.inequality_elements("cone", cm.cone_row, RHO(k), lb=-np.inf, ub=np.inf)
-                nlp.inequality_elements("slide", cm.slide_row, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), Hc, AR, REL,
-                                                                 X(MU[k])] + RHO(k) + ZM(k),
+                nlp.inequality_elements("slide", cm.slide_row, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), Hc, AR] + RHO(k),
                                         lb=-np.inf, ub=np.inf)
         if m:
             nlp.equal_elements("node_constraint", cm.constraint_row, [X(Q[1:])])
@@ -227,8 +240,8 @@ class ContactTranscription:
         nlp.inequality_elements("sub_gap", cm.gap_row, [X(S)], lb=0.0)
         LL = P(nlp.parameter_index("law_length").reshape(L, c))
         nlp.equal_elements("impact_law", cm.law_slack,
-                           [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), X(SP[k]), X(SM[k]), Hc, LL, REL]
-                           + RHO(k) + ZM(k) + ZP(k) + [np.array([self.scales_law])])
+                           [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), X(SP[k]), X(SM[k]), Hc, LL]
+                           + LEFT(k) + [REL] + ZM(k) + ZP(k) + [np.array([self.scales_law])])
         # exact (l1) penalties: complementarity products and the impact-law slacks
         nlp.minimize_elements("node_penalty", cm.product_penalty, [X(Q[k]), X(NU[k]), rho, ell * pref / Hc])
         nlp.minimize_elements("sub_penalty", cm.product_penalty, [X(S[k]), X(MU[k]), rho, np.array([ell * pref])])
@@ -308,11 +321,12 @@ class ContactTranscription:
         return raw, leaves
 
     def _law_extras(self, values):
-        """The law's inputs after ``h`` (and ``δ``): the released contacts and the friction ratios (columns)."""
+        """The law's inputs after ``h`` (and ``δ``): the first parts' closing impulses and their ratios (columns)."""
         cm, L = self.cm, self.L
-        rel = np.asarray(self.nlp.parameter_value("release"), float).reshape(L, cm.c).T
-        rho = [np.asarray(values["fratio"], float).reshape(L, -1).T] if cm.friction else []
-        return [rel] + rho
+        left = [np.asarray(values["mul"], float).reshape(L, cm.c).T]
+        if cm.friction:
+            left.append(np.asarray(values["fleft"], float).reshape(L, -1).T)
+        return left + [np.asarray(self.nlp.parameter_value("release"), float).reshape(L, cm.c).T]
 
     def _stages(self, values):
         """``([Z⁻], [Z⁺])`` per step, ``(L, s)`` each (both empty for a two-point scheme)."""

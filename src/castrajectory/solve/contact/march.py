@@ -34,6 +34,7 @@ import numpy as np
 
 from ...discretise.contact.elements import ContactMechanics
 from ...discretise.contact.transcription import TOUCH_TOL
+from . import step as _modes
 from .step import FIX, FREE, STICK, C, H, I, O, _march_step, _Step
 
 #: Steps that keep their modes (open or held) marched in one call (step.CHUNK_NEWTON Newton steps
@@ -139,7 +140,7 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
             qn = out["q"]
             p = np.asarray(cm.p_node_minus(out["qs"], out["beta"], qn, hk,
                                            *cm.stage_parts(out["zs"])[1])).reshape(-1)
-            held_prev = np.array([m in (H, C) for m in modes])
+            held_prev = np.array([m in (H, C, _modes.K) for m in modes])
             q, g_q = qn, gn
         k += 1
     out = {key: np.asarray(val) for key, val in rows.items()}
@@ -149,7 +150,7 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
     if not cm.m:
         del out["lam"], out["lam_sub"]
     if not cm.friction:
-        del out["fratio"], out["fmodes"]
+        del out["fratio"], out["fmodes"], out["fleft"]
     if not cm.s:
         del out["zs"]
     if not (cm.s and cm.m):
@@ -158,7 +159,7 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
 
 
 #: The per-step values of the march by the transcription's names (``q`` is the step's end node) ...
-_VALUES = ("q", "qs", "beta", "nu", "mu", "lam", "lam_sub", "fratio", "zs", "lam_stage")
+_VALUES = ("q", "qs", "beta", "nu", "mu", "lam", "lam_sub", "fratio", "zs", "lam_stage", "mul", "fleft")
 #: ... and the march's own records.
 _ROWS = _VALUES + ("bounced", "steps", "base", "modes", "fmodes")
 

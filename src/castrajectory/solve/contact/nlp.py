@@ -54,20 +54,23 @@ class ContactNLP(ContactTranscription):
         multipliers."""
         c, L = self.cm.c, self.L
         modes = np.asarray(point["modes"]).reshape(L, c)
-        timed = np.isin(modes, ("I", "C", "T"))
+        timed = np.isin(modes, ("I", "C", "T", "K"))
         # the first timed contact of a step fixes its sub-node (simultaneous ones share it)
         first = timed & (np.cumsum(timed, axis=1) == 1)
         held = np.isin(modes, ("H", "R"))
-        closes = np.isin(modes, ("H", "C"))
+        closes = np.isin(modes, ("H", "C", "K"))
         law = (modes == "I") & np.asarray(point["bounced"], bool).reshape(L, c)
         node = np.isin(modes, ("N", "P")).reshape(-1)
         fixed = np.isin(modes, ("F", "T")).reshape(-1)
-        # a contact released at its step's impact (R with an impact at the sub-node) takes its share of the first
-        # part's force there: its impulse free, its release row zero, its law waived (it leaves, and is no impact)
-        release = (modes == "R") & np.any(np.isin(modes, ("I", "C", "T", "F")), axis=1, keepdims=True)
+        # the first part's closing impulses μ⁻: a contact released at its step's impact (R with an impact at the
+        # sub-node) takes its share of the first part's force there (free, its release row zero); a plastic arrival
+        # with friction (K) Stronge's impulse, fixed at the march's (ContactMechanics.sub_row)
+        release = (modes == "R") & np.any(np.isin(modes, ("I", "C", "T", "F", "K")), axis=1, keepdims=True)
+        leftfix = modes == "K"
         self.release = release.astype(float)
         self.nlp.set_parameter("release", self.release.reshape(-1))
-        self.law_exempt = np.isin(modes, ("F", "T", "P")) | release
+        self.law_exempt = np.isin(modes, ("F", "T", "P"))
+        mul_march = np.asarray(point["mul"], float).reshape(-1)
         mu_march = np.asarray(point["mu"], float).reshape(-1)
         nu_march = np.asarray(point["nu"], float).reshape(-1)
         zero = np.zeros(L * c)
@@ -81,8 +84,9 @@ class ContactNLP(ContactTranscription):
             "nu": (np.where(node, nu_march, 0.0), np.where(held.reshape(-1), np.inf, np.where(node, nu_march, 0.0))),
             # the sequential law's impulses (modes F and T) are the march's cascade
             "mu": (np.where(fixed, mu_march, 0.0),
-                   np.where((np.isin(modes, ("H", "I", "C")) | release).reshape(-1), np.inf,
-                            np.where(fixed, mu_march, 0.0))),
+                   np.where(np.isin(modes, ("H", "I", "C", "K")).reshape(-1), np.inf, np.where(fixed, mu_march, 0.0))),
+            "mul": (np.where(leftfix.reshape(-1), mul_march, 0.0),
+                    np.where(release.reshape(-1), np.inf, np.where(leftfix.reshape(-1), mul_march, 0.0))),
             "release": (np.where(release.reshape(-1), 0.0, -np.inf), np.where(release.reshape(-1), 0.0, np.inf)),
             "s_plus": (zero, zero), "s_minus": (zero, zero),
             "node_gap": (zero, np.where(closes.reshape(-1), 0.0, np.inf)),
@@ -104,9 +108,24 @@ class ContactNLP(ContactTranscription):
             shi = np.select([fmd == "S", fmd == "D"], [0.0, 0.0], np.inf)
             bounds["fratio"] = (rlo.reshape(-1), rhi.reshape(-1))
             # the contacts that arrive at their sub-node (an impact, caught or fixed by a law): slip after it
-            self.arrive = np.isin(modes, ("I", "C", "T", "F")).astype(float)
+            self.arrive = np.isin(modes, ("I", "C", "T", "F", "K")).astype(float)
             self.nlp.set_parameter("arrive", self.arrive.reshape(-1))
             bounds["slip"] = (slo.reshape(-1), shi.reshape(-1))
+            # a released contact's share: its ratio and the slip before the impact as its node slot's mode (stick, or
+            # slide with the node's ratio); a K arrival's ratio Stronge's (the march's)
+            fn = np.repeat(fm[:, :c, None], d, axis=2)
+            rel_d = np.repeat(release[..., None], d, axis=2)
+            fl_march = np.asarray(point["fleft"], float).reshape(L, c, d)
+            kd = np.repeat(leftfix[..., None], d, axis=2)
+            flo = np.where(kd, fl_march, np.where(rel_d, np.select([fn == "S", fn == "U", fn == "D", fn == "L"],
+                                                                   [-mud[:, :c], -mud[:, :c], mud[:, :c], fl_march],
+                                                                   0.0), 0.0))
+            fhi = np.where(kd, fl_march, np.where(rel_d, np.select([fn == "S", fn == "U", fn == "D", fn == "L"],
+                                                                   [mud[:, :c], -mud[:, :c], mud[:, :c], fl_march],
+                                                                   0.0), 0.0))
+            bounds["fleft"] = (flo.reshape(-1), fhi.reshape(-1))
+            bounds["left_slip"] = (np.where(rel_d & np.isin(fn, ("S", "U")), 0.0, -np.inf).reshape(-1),
+                                   np.where(rel_d & np.isin(fn, ("S", "D")), 0.0, np.inf).reshape(-1))
             if d == 2:
                 # the circular cone: |ρ| ≤ μ_f sticking or sliding; sliding, ρ|s| + μ_f s = 0
                 on = np.isin(fm, ("S", "L"))

@@ -189,19 +189,30 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     RS = RS[..., 0] if fd == 1 else RS
     # a contact that arrives from flight (open at the step's node) and is open at one of the two nodes after its
     # impulse (beyond a resting body's hop, a h²/8): the impulse sent it off
-    # (a contact released at its step's impact takes a share of its force there, not an impact: the momentum
-    # before the impact carries the shares, and their impulses are not impacts)
+    # (the first part's closing impulses μ⁻: a contact released at its step's impact takes its share of its force
+    # there, which the momentum before the impact carries and which is no impact; a plastic arrival with friction
+    # takes Stronge's impulse there, its impact, the contact closed after it by the second part's μ)
     REL = getattr(tn, "release", np.zeros((tn.L, c)))[:N] > 0
-    for k in np.flatnonzero(np.any(MU > tol, axis=1)):
+    MUL = res.values["mul"][:N * c].reshape(N, c)
+    FL = res.values["fleft"][:N * c * fd].reshape(N, c, fd) if cm.friction else np.zeros((N, c, fd))
+    FL = FL[..., 0] if fd == 1 else FL
+    for k in np.flatnonzero(np.any((MU > tol) | (MUL > tol), axis=1)):
         pm = np.asarray(cm.p_minus(q[k], S[k], B[k], H[k], *[z[k] for z in ZM])).reshape(-1)
         pl = np.asarray(cm.p_plus(S[k], q[k + 1], B[k], H[k], *[z[k] for z in ZP])).reshape(-1)
-        if np.any(REL[k]):
-            sh = np.where(REL[k], MU[k], 0.0)
+        sh = np.where(REL[k], MUL[k], 0.0)
+        if np.any(sh):
             pm = pm + np.asarray(sysm.gap(S[k])[1]).T @ sh
             if cm.friction:
-                pm = pm + np.asarray(sysm.tangent(S[k])).T @ (RS[k, c:].reshape(-1) * np.repeat(sh, cm.fd))
-        impacts += _impacts_at(cm, k, float(t_sub[k]), S[k], pm, pl, np.where(REL[k], 0.0, MU[k]), tol, H[k], at_node=False,
-                               ratios=RS[k, c:], leaves=(np.max(gap[k + 1:k + 3], axis=0) > tn.open_gap)
+                pm = pm + np.asarray(sysm.tangent(S[k])).T @ (FL[k].reshape(-1) * np.repeat(sh, fd))
+        imp_k = np.where(REL[k], 0.0, MU[k] + MUL[k])
+        ratio_k = RS[k, c:]
+        if cm.friction and np.any(MUL[k] > 0):
+            # (a K arrival's impulse: Stronge's μ⁻ with its ratio, and the held share after it with its own)
+            w = np.where(REL[k], 0.0, MUL[k])
+            tang = RS[k, c:].reshape(c, -1) * MU[k][:, None] + FL[k].reshape(c, -1) * w[:, None]
+            ratio_k = (tang / np.where(imp_k > 0, imp_k, 1.0)[:, None]).reshape(RS[k, c:].shape)
+        impacts += _impacts_at(cm, k, float(t_sub[k]), S[k], pm, pl, imp_k, tol, H[k], at_node=False,
+                               ratios=ratio_k, leaves=(np.max(gap[k + 1:k + 3], axis=0) > tn.open_gap)
                                & (gap[k] > TOUCH_TOL * tn.scales_ell))
     for k in np.flatnonzero(np.any(force[1:N] > tol, axis=1)) + 1:
         at = _impacts_at(cm, k, float(t[k]), q[k], pp[k] - 2 * half[k], pp[k], force[k], tol, H[k], at_node=True,
@@ -234,13 +245,16 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
         fimp = RF[:N + 1, 0] * nu_full[:N + 1, :, None] + (1.0 - alpha_full[:N + 1, None, None]) * RF[:N + 1, 1] \
             * mu_full[:N + 1, :, None]
         fimp[1:] += alpha_full[:N, None, None] * RF[:N, 1] * mu_full[:N, :, None]
+        # (the first parts' closing impulses μ⁻ with their ratios: the node before takes them, as the part they close)
+        MULf = res.values["mul"][:N * c].reshape(N, c)
+        FLf = res.values["fleft"][:N * c * fdim].reshape(N, c, fdim)
+        fimp[:N] += (1.0 - alpha_full[:N, None, None]) * FLf * MULf[:, :, None]
+        fimp[1:N + 1] += alpha_full[:N, None, None] * FLf * MULf[:, :, None]
         fimp = fimp[..., 0] if fdim == 1 else fimp
         fd = cm.fd
         fratio = res.values["fratio"][:N * 2 * c * fd].reshape(N, 2, c, fd).transpose(0, 2, 1, 3)
         arrive = getattr(tn, "arrive", np.zeros((tn.L, c)))[:N]
-        slip = np.asarray(cm.slip_row.map(N)(q[:-1].T, S.T, q[1:].T, B, hv, arrive.T, REL.T.astype(float), MU.T,
-                                             res.values["fratio"][:N * 2 * c * fd].reshape(N, -1).T,
-                                             *[z.T for z in ZM])).reshape(2 * c * fd, N).T
+        slip = np.asarray(cm.slip_row.map(N)(q[:-1].T, S.T, q[1:].T, B, hv, arrive.T)).reshape(2 * c * fd, N).T
         slip = slip.reshape(N, 2, c, fd).transpose(0, 2, 1, 3)
         if fd == 1:       # planar: (N, contacts, 2) for [node force, sub-node impulse]
             fratio, slip = fratio[..., 0], slip[..., 0]

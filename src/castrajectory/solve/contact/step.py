@@ -24,6 +24,9 @@ MODE_ROUNDS = 12
 SIMULTANEOUS_GAP = 1e-9
 
 O, H, R, I, C, N, F, T, P = "O", "H", "R", "I", "C", "N", "F", "T", "P"
+#: a plastic arrival with friction caught at its sub-node (closed after it) whose impulse is Stronge's, fixed as the
+#: first part's closing impulse μ⁻ (its normal and its ratio; the second part's μ holds the contact closed after)
+K = "K"
 #: friction modes of a contact in a step: no friction force, sticking, sliding with a positive slip
 #: velocity (ρ = −μ_f), sliding with a negative one (ρ = μ_f)
 FREE, STICK, UP, DOWN = "-", "S", "U", "D"
@@ -77,24 +80,24 @@ class _Step:
             zero = ca.DM.zeros(c)
             st, sg = ca.MX.sym("stick", 2 * c), ca.MX.sym("sgn", 2 * c)
             fin = [st, sg] if self.nf else []
-            fz = [st, sg, ca.DM.zeros(2 * c), ca.DM.zeros(2 * c * cm.fd), zero] if self.nf else []
+            fz = [st, sg, ca.DM.zeros(2 * c), ca.DM.zeros(2 * c * cm.fd), zero, ca.DM.zeros(c * cm.fd)] if self.nf else []
             xs = ca.MX.sym("x0", cm.nx)
             v = ca.solve(cm.system.mass_matrix(qs), ps)
             qm_, qn_ = qs + 0.5 * hs * v, qs + hs * v
             # the flight's guess of the positions (and stages), the previous step's forces, ratios, multipliers
             x = ca.vertcat(qm_, qn_, ca.DM.zeros(1), xs[2 * n + 1:2 * n + 1 + 2 * c + 2 * m + self.nf],
-                           _stage_line(cm, qs, qm_, qn_), xs[cm.layout["lam_stage"]])
+                           _stage_line(cm, qs, qm_, qn_), xs[cm.layout["lam_stage"]],
+                           ca.DM.zeros(cm.layout["mul"].stop - cm.layout["mul"].start + self.nf // 2))
             for _ in range(CHUNK_NEWTON):
-                r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero, zero, zero, zero, zero, zero, *fz)
+                r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero, zero, zero, zero, zero, zero, zero, zero,
+                               *fz)
                 x = x - ca.solve(J, r)
             # the size of one more Newton step: the rows' residual in units of the unknowns
-            r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero, zero, zero, zero, zero, zero, *fz)
+            r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero, zero, zero, zero, zero, zero, zero, zero, *fz)
             res = ca.mmax(ca.fabs(ca.solve(J, r)))
             qn, qt = x[n:2 * n], x[:n]
             zp = [x[cm.layout["zs"]][cm.s:]] if cm.s else []
-            zm = [x[cm.layout["zs"]][:cm.s]] if cm.s else []
-            slip = cm.slip_row(qs, qt, qn, 0.0, hs, zero, zero, zero, x[cm.layout["fratio"]], *zm) if self.nf \
-                else ca.DM.zeros(1)
+            slip = cm.slip_row(qs, qt, qn, 0.0, hs, zero) if self.nf else ca.DM.zeros(1)
             one = ca.Function("chunk_step", [qs, ps, xs, hs, hm] + sc + fin,
                               [qn, cm.p_node_minus(qt, 0.0, qn, hs, *zp), x, cm.gap_row(qt), cm.gap_row(qn), res, slip])
             self._chunks[K] = one.mapaccum("chunk_steps", K, [0, 1, 2], [0, 1, 2])
@@ -133,9 +136,9 @@ class _Step:
         t, held, closed, law, node, fixed, nfixed = (np.zeros(c) for _ in range(7))
         for j, m in enumerate(modes):
             nfixed[j] = m == P
-            t[j] = m in (I, C, T)
+            t[j] = m in (I, C, T, K)
             held[j] = m in (H, R)
-            closed[j] = m in (H, C)
+            closed[j] = m in (H, C, K)
             law[j] = m == I
             node[j] = m == N
             fixed[j] = m in (F, T)
@@ -143,27 +146,30 @@ class _Step:
         timing = np.where(t > 0)[0]
         if timing.size > 1:
             t[timing[1:]] = 0.0
-        return t, held, closed, law, node, fixed, nfixed, releases(modes)
+        return t, held, closed, law, node, fixed, nfixed, releases(modes), np.array([float(m == K) for m in modes])
 
-    def solve(self, x, q, p, h, modes, bfix=None, mufix=None, fmodes=None, rfix=None):
+    def solve(self, x, q, p, h, modes, bfix=None, mufix=None, fmodes=None, rfix=None, mufixl=None, rfixl=None):
         """Newton on the step's rows in the given modes (with ``bfix``: the sub-node's ``β`` fixed
         there instead of timed by a contact; ``mufix``: the impulses of the contacts in modes F and T;
-        ``rfix``: the friction ratios of the slots in friction mode FIX); ``(x, ok)``."""
+        ``rfix``: the friction ratios of the slots in friction mode FIX; ``mufixl``, ``rfixl``: the first part's
+        closing impulses and ratios of the contacts in mode K); ``(x, ok)``."""
         n, c = self.n, self.c
         self.snu, self.smu = self.pref / h, self.pref
-        t, held, closed, law, node, fixed, nfixed, release = self.masks(modes)
+        t, held, closed, law, node, fixed, nfixed, release, leftfix = self.masks(modes)
         if bfix is not None:
             t = np.zeros(c)
             x = x.copy()
             x[2 * n] = bfix
         args = (q, p, h, self.ell, self.snu, self.smu, self.vref, 0.0 if bfix is None else bfix,
-                t, held, closed, law, node, fixed, np.zeros(c) if mufix is None else mufix, nfixed, release)
+                t, held, closed, law, node, fixed, np.zeros(c) if mufix is None else mufix, nfixed, release, leftfix,
+                np.zeros(c) if mufixl is None else mufixl)
         if self.nf:
             fm = fmodes or [FREE] * (2 * c)
             args = args + (np.array([f == STICK for f in fm], float),
                            np.array([1.0 if f in (UP, SLIDE) else -1.0 if f == DOWN else 0.0 for f in fm]),
                            np.array([f == FIX for f in fm], float), np.zeros(2 * c * self.fd) if rfix is None else rfix,
-                           np.array([m in (I, C, T, F) for m in modes], float))
+                           np.array([m in (I, C, T, F, K) for m in modes], float),
+                           np.zeros(c * self.fd) if rfixl is None else rfixl)
         small = 0
         for _ in range(NEWTON_ITER):
             r, Jr = self.fn(x, *args)
@@ -202,7 +208,7 @@ def releases(modes) -> np.ndarray:
     """Per contact, 1 where it is held until an impact's sub-node and released there (mode R in a step with an
     impact at its sub-node: I, C, T or F): its sub-node impulse is then its share of the first part's force
     (:meth:`ContactMechanics.release_row`)."""
-    impact = any(m in (I, C, T, F) for m in modes)
+    impact = any(m in (I, C, T, F, K) for m in modes)
     return np.array([float(impact and m == R) for m in modes])
 
 
@@ -341,6 +347,7 @@ def _try(step: _Step, q, p, h, modes, x0, x, frac):
         if law is not None:
             xn, used = law
     o = 2 * n + 1
+    step.last_mul = xn[step.cm.layout["mul"]] * releases(used)
     return (xn, np.asarray(gapf(xn[:n])[0]).reshape(-1), np.asarray(gapf(xn[n:2 * n])[0]).reshape(-1),
             xn[o:o + c], xn[o + c:o + 2 * c], float(xn[2 * n]), used)
 
@@ -349,7 +356,7 @@ def _try(step: _Step, q, p, h, modes, x0, x, frac):
 FRICTION_ROUNDS = 8
 
 
-def _friction(step: _Step, q, p, h, modes, x, mufix=None, rfix=None):
+def _friction(step: _Step, q, p, h, modes, x, mufix=None, rfix=None, mufixl=None, rfixl=None):
     """The step's friction modes (Coulomb, maximal dissipation) for its normal modes, by the same greedy
     search: a contact held on the surface (H or R) with a positive coefficient starts as it ended the
     previous step (sticking if it was free); sticking fails where the ratio |ρ| exceeds μ_f (it then slides
@@ -369,12 +376,11 @@ def _friction(step: _Step, q, p, h, modes, x, mufix=None, rfix=None):
     # against the slip after the sub-node)
     # (an arrival too slow to be an impact, I below IMPACT_SPEED_STEPS |a_n| h, is the discrete form of persistent
     # contact: its impulse has a held one's friction too, and no impact law, _impact_law)
-    # (a contact released at the step's impact: its share of the first part's force has friction too, against the
-    # contact point's velocity at the sub-node, ContactMechanics.slip)
+    # (a contact released at the step's impact: its share of the first part's force slides or sticks as its node slot,
+    # ContactMechanics.left_velocity; a K arrival's friction after its sub-node is a held one's, like C's)
     slow = _slow_arrivals(step, q, p, h) if any(mj == I for mj in modes) else np.zeros(c, bool)
-    rel = releases(modes)
     active = [mj in (H, R) and cm.mu_f[j] > 0 for j, mj in enumerate(modes)] + \
-        [(mj in (H, C) or (mj == I and slow[j]) or rel[j]) and cm.mu_f[j] > 0 for j, mj in enumerate(modes)]
+        [(mj in (H, C, K) or (mj == I and slow[j])) and cm.mu_f[j] > 0 for j, mj in enumerate(modes)]
     muf = np.concatenate([cm.mu_f, cm.mu_f])
     d = step.fd
     # (a slot starts as it ended the previous step; free, or fixed there by an impact's law, it starts sticking)
@@ -384,18 +390,17 @@ def _friction(step: _Step, q, p, h, modes, x, mufix=None, rfix=None):
         fm = [FIX if fixed[i] else f for i, f in enumerate(fm)]
         rfix = np.where(np.isfinite(rfix), rfix, 0.0)
     tol = 1e-12 * step.vref
-    slips = np.array([m in (I, C, T, F) for m in modes], float)
+    slips = np.array([m in (I, C, T, F, K) for m in modes], float)
     choices = (STICK, UP, DOWN) if d == 1 else (STICK, SLIDE)
 
     def judge(fm, x0):
         """Solve in the friction modes ``fm``: ``(x, the most violated slot and its new mode)``; ``None`` if
         Newton fails; the pick is None where every slot holds."""
-        xf, ok = step.solve(x0, q, p, h, modes, mufix=mufix, fmodes=fm, rfix=rfix)
+        xf, ok = step.solve(x0, q, p, h, modes, mufix=mufix, fmodes=fm, rfix=rfix, mufixl=mufixl, rfixl=rfixl)
         if not ok:
             return None
         rho = xf[cm.layout["fratio"]]
-        slip = np.asarray(cm.slip_row(q, xf[:n], xf[n:2 * n], xf[2 * n], h, slips, rel, xf[cm.layout["mu"]], rho,
-                                      *cm.stage_parts(xf[cm.layout["zs"]])[0])).reshape(-1)
+        slip = np.asarray(cm.slip_row(q, xf[:n], xf[n:2 * n], xf[2 * n], h, slips)).reshape(-1)
         worst, pick = 0.0, None
         if d == 2:
             # the circular cone: sticking fails outside it (it then slides), sliding where the slip has vanished
@@ -582,24 +587,26 @@ def _impact_law(step: _Step, q, p, h, x, modes, cascade: bool):
         involved = [j for j, m in enumerate(modes) if (m == N or m in (H, R)) and nu[j] > 0.0]
         qs, pm = q, p
     else:
-        # (a contact released at the impact takes its share of the first part's force, not a part of the impact:
-        # the momentum before the impact is p̃⁻ with those shares, ContactMechanics.release_row)
-        rel = releases(modes)
-        involved = [j for j, m in enumerate(modes) if m in (I, C, H, R) and mu[j] > 0.0 and not rel[j]]
+        involved = [j for j, m in enumerate(modes) if m in (I, C, H, R) and mu[j] > 0.0]
         if not any(modes[j] in (I, C) for j in involved):
             return None                  # no impact
         qs, b = x[:n], float(x[2 * n])
+        # the momentum before the impact: p̃⁻ and the released contacts' shares (ContactMechanics.release_row)
         pm = np.asarray(cm.p_minus(q, qs, b, h, *cm.stage_parts(x[cm.layout["zs"]])[0])).reshape(-1)
-        if np.any(rel):
-            sh = rel * mu
+        sh = x[cm.layout["mul"]] * releases(modes)
+        if np.any(sh):
             pm = pm + np.asarray(cm.system.gap(qs)[1]).T @ sh
             if step.nf:
-                D = np.asarray(cm.system.tangent(qs))
-                pm = pm + D.T @ (x[cm.layout["fratio"]][c * step.fd:] * np.repeat(sh, step.fd))
-    # (a caught arrival waives the law: no frictional impact there; nor at a slow arrival, persistent contact)
+                pm = pm + np.asarray(cm.system.tangent(qs)).T @ (x[cm.layout["fleft"]] * np.repeat(sh, step.fd))
+    # (an arrival too slow to be an impact is persistent contact: no law; a caught one with friction and e = 0 takes
+    # Stronge's law as the first part's closing impulse, mode K, and stays closed after it; with e > 0 a caught
+    # arrival is the end of an accumulation, whose law is waived)
+    slow = _slow_arrivals(step, q, p, h) if not at_node else np.zeros(c, bool)
+    caught = (not cascade and not at_node and step.nf and cm.e == 0.0 and len(involved) == 1
+              and modes[involved[0]] == C and cm.mu_f[involved[0]] > 0 and not slow[involved[0]])
     fric = step.nf and any(cm.mu_f[j] > 0 for j in involved) and \
-        (at_node or any(modes[j] == I for j in involved)) and \
-        not (not cascade and not at_node and np.all(_slow_arrivals(step, q, p, h)[[j for j in involved if modes[j] == I]]))
+        (at_node or any(modes[j] == I for j in involved) or caught) and \
+        not (not cascade and not at_node and not caught and np.all(slow[[j for j in involved if modes[j] == I]]))
     if not involved or (len(involved) >= 2) != cascade or (cascade and not seq) or (not cascade and not fric):
         return None
     # the law in the contacts' velocities: Π = M⁻¹ on the constraints' tangent space (velocities)
@@ -623,6 +630,14 @@ def _impact_law(step: _Step, q, p, h, x, modes, cascade: bool):
         PiJt = cm.dm.velocities(np.repeat(qs[None, :], len(involved), axis=0), Jx)
         Pn, _ = sequential_impact(Jx @ PiJt.T, Jx @ v, cm.e)
         Pt = np.zeros((Pn.size, d))
+    if caught:
+        j = involved[0]
+        mufixl, rfixl = np.zeros(c), np.zeros((c, d))
+        mufixl[j] = Pn[0]
+        rfixl[j] = Pt[0] / Pn[0] if Pn[0] > 0 else 0.0
+        new = [K if i == j else m for i, m in enumerate(modes)]
+        xs = _friction(step, q, p, h, new, x, mufixl=mufixl, rfixl=rfixl.reshape(-1))
+        return "failed" if xs is None else (xs, new)
     mufix, rfix = np.zeros(c), np.full((2 * c, d), np.nan)
     slot = 0 if at_node else c
     for j, pn, pt in zip(involved, Pn, Pt):
@@ -658,11 +673,15 @@ def _next_modes(modes, touch, g0, gs, gn, nu, mu, b, pen, tol, step, finest):
             viol = -nu[j] / step.snu
             if viol > worst:
                 worst, pick = viol, (j, O)
-        if m in (H, I, C, R) and mu[j] < 0.0:
-            # (a released contact's share that pulls: it leaves at the step's node instead)
+        if m in (H, I, C) and mu[j] < 0.0:
             viol = -mu[j] / step.smu
             if viol > worst:
-                worst, pick = viol, (j, {H: R, I: O, C: I, R: O}[m])
+                worst, pick = viol, (j, {H: R, I: O, C: I}[m])
+        if m == R and step.last_mul[j] < 0.0:
+            # (a released contact's share that pulls at the impact: it leaves at the step's node instead)
+            viol = -step.last_mul[j] / step.smu
+            if viol > worst:
+                worst, pick = viol, (j, O)
     if worst > 1e-12:
         j, m = pick
         out = list(modes)
