@@ -129,7 +129,7 @@ FIELDS = ["id", "family", "N", "e", "status", "solved", "checks", "iterations", 
 FRICTION_FIELDS = ["id", "family", "N", "T", "e", "mu", "body", "centred", "status", "solved", "failed", "iterations",
                    "time_s", "impacts", "caught", "oracle_impacts", "first_arrival", "min_gap", "complementarity", "cone",
                    "dissipation", "stick", "impact_energy", "impact_cone", "impact_time_error", "stop_time_error",
-                   "oracle_error", "twin_of", "twin_ok", "command"]
+                   "oracle_error", "reference_error", "reference_reason", "twin_of", "twin_ok", "command"]
 
 SCHEME_FIELDS = ["id", "family", "scheme", "order", "N", "T", "e", "limit", "wall", "q0", "v0", "status", "solved",
                  "failed", "iterations", "time_s", "impacts", "oracle_impacts", "caught", "impact_time_error", "time_tol",
@@ -182,18 +182,22 @@ def summarise_friction(rows, seconds):
     and the closed form); the failures with their parameters; the refinement pairs."""
     lines = _head("# Contact battery: friction", rows, seconds) + [
         "| family | scenes | solved | median s | worst s | worst gap | worst compl. | worst cone | worst ρ·s | "
-        "worst stick slip | worst bounce dK/K | worst impulse cone | worst t-error | worst oracle error |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+        "worst stick slip | worst bounce dK/K | worst impulse cone | worst t-error | worst oracle error | "
+        "median ref. error | worst ref. error |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     lines += _family_rows(rows, FRICTION_FAMILIES, (
         ("min_gap", min), ("complementarity", max), ("cone", max), ("dissipation", max), ("stick", max),
-        ("impact_energy", max), ("impact_cone", max), ("impact_time_error", max), ("oracle_error", max)))
+        ("impact_energy", max), ("impact_cone", max), ("impact_time_error", max), ("oracle_error", max),
+        ("reference_error", np.median), ("reference_error", max)))
     lines += ["", "Columns: the worst over each family's successful solves (a check that does not apply is -); cone "
               "|ρ| − μ; ρ·s and the stick slip off the impacts' own slots; a bounce's kinetic energy change over its "
               "kinetic energy (not caught); an impulse's (|P_t| − μ P_n)/P_n; the impact times (s) against the closed "
               "form (spin-drop, centred corner) or the event-driven reference's first impact (rectangle, bowl), and "
               "the stop or rolling start read from the impulses (incline, rolling; ContactTrajectory.slip_stops); the "
               "closed form's error (incline: path, m; rolling: speed, m/s; spin-drop and centred corner: velocities "
-              "after the bounces over the scene's speed)."]
+              "after the bounces over the scene's speed); the bouncing families' whole motion against the event-driven "
+              "reference (Stronge's law at the impacts, persistent contact with Coulomb friction between them), "
+              "max |q − q_ref|/ℓ up to where the reference holds and before its events crowd within a few steps."]
     arrivals = [r.get("first_arrival") for r in rows if r.get("first_arrival")]
     if arrivals:
         lines += ["", "First arrivals of the rectangle and bowl scenes: " + ", ".join(
@@ -211,7 +215,8 @@ def summarise_friction(rows, seconds):
 
         def errs(r):
             return ", ".join(f"{name} {_fmt(v) if isinstance(v, float) and not math.isnan(v) else '-'}" for name, v in (
-                ("t", r.get("impact_time_error", math.nan)), ("closed form", r.get("oracle_error", math.nan))))
+                ("t", r.get("impact_time_error", math.nan)), ("closed form", r.get("oracle_error", math.nan)),
+                ("reference", r.get("reference_error", math.nan))))
         for coarse, fine in pairs:
             verdict = "ok" if fine.get("twin_ok") else "WORSE" if coarse.get("solved") and fine.get("failed", "").startswith(
                 "twin worse") else "a run not solved"

@@ -208,7 +208,7 @@ IMPACT_TIME_TOL, BOUNCE_TOL, IMPACT_ENERGY_TOL, IMPACT_CONE_TOL = 1e-10, 1e-9, 1
 #: a friction twin at 2N is worse when an oracle error exceeds its N run's by more than TWIN_SLACK of it and
 #: exceeds the floor, a tenth of the tolerance (the bounces' errors are at rounding: up to 2e-12 s and 2e-12
 #: measured; the incline's path error can be the same at N and 2N to 8 digits)
-TWIN_FLOOR = {"impact_time_error": 1e-11, "oracle_error": 1e-10}
+TWIN_FLOOR = {"impact_time_error": 1e-11, "oracle_error": 1e-10, "reference_error": 1e-9}
 TWIN_SLACK = 1e-6
 #: a bounce is compared with the closed form when it arrives at least this many steps before T, and its
 #: rebound only when the flight after it lasts at least REBOUND_STEPS steps (a shorter one may be caught:
@@ -330,9 +330,11 @@ def run_impact_friction_scene(sc) -> dict:
             if va is not None:
                 verr = max(verr, math.inf if imp.caught else float(np.max(np.abs(imp.v_after - va))) / vscale)
         out["oracle_impacts"] = len(oracle)
-    # the first impact against the event-driven reference (frictionless; the same up to the first impact)
+    # the event-driven reference (impacts by Stronge's law, persistent contact with Coulomb friction): the whole
+    # motion up to where it holds (reference_error), and the first impact's time and contact
+    ref = event_driven(system, q0, v0, T)
+    out.update(reference_error=reference_error(tr, ref, T, h, ell), reference_reason=ref.reason)
     if fam != "spin-drop":
-        ref = event_driven(system, q0, v0, T)
         ev = ref.events[0] if ref.events else None
         out.setdefault("oracle_impacts", int(ev is not None))
         t_ref = math.nan
@@ -360,9 +362,35 @@ def run_impact_friction_scene(sc) -> dict:
         ("cone", cone > FRICTION_CONE * sc["mu"]), ("dissipation", work > FRICTION_TOL * vref),
         ("stick", stick > FRICTION_TOL * vref + STICK_ROUNDING * ell / h), ("impact energy", gain > IMPACT_ENERGY_TOL),
         ("impact cone", icone > IMPACT_CONE_TOL), ("impact time", terr > IMPACT_TIME_TOL),
-        ("bounce velocities", verr > BOUNCE_TOL)) if bad]
+        ("bounce velocities", verr > BOUNCE_TOL), ("reference", out["reference_error"] > REFERENCE_TOL)) if bad]
     out.update(checks=not failed, solved=not failed, failed=", ".join(failed))
     return out
+
+
+#: the motion against the event-driven reference, relative to the length scale: persistent contact and its
+#: hand-overs are second order (measured worst ... at N = 200; see reference_error)
+REFERENCE_TOL = 1e-3
+#: the comparison ends REFERENCE_MARGIN_STEPS steps before the reference's horizon, and before an accumulation of
+#: its events (two within REFERENCE_CLUSTER_STEPS steps: bounces or switches the grid does not resolve)
+REFERENCE_MARGIN_STEPS, REFERENCE_CLUSTER_STEPS = 2, 4
+
+
+def reference_error(tr, ref, T: float, h: float, ell: float) -> float:
+    """The largest ``|q − q_ref| / ℓ`` at up to 21 of the answer's nodes, against the event-driven reference, up to
+    where it holds: its horizon, or the start of a run of events closer than REFERENCE_CLUSTER_STEPS steps (the
+    end of a Zeno accumulation, a stick-slip chatter: the answer's grid does not resolve them, and the reference
+    stops in them), less REFERENCE_MARGIN_STEPS steps.  0 where nothing is left to compare."""
+    times = sorted([ev.t for ev in ref.events] + [w.t for w in ref.switches])
+    end = min(T, ref.horizon)
+    for a, b in zip(times, times[1:]):
+        if b - a < REFERENCE_CLUSTER_STEPS * h:
+            end = min(end, a)
+            break
+    end -= REFERENCE_MARGIN_STEPS * h
+    t = np.asarray(tr.t)
+    ks = np.unique(np.linspace(0, int(np.searchsorted(t, end, side="right")) - 1, 21).astype(int))
+    ks = ks[(ks >= 0) & (t[ks] <= end)] if end > 0 else []
+    return max((float(np.max(np.abs(np.asarray(tr.q)[k] - ref.state(t[k])[0]))) / ell for k in ks), default=0.0)
 
 
 def check_friction_twins(rows) -> None:
