@@ -363,7 +363,9 @@ class ContactMechanics:
         and ``nfixed`` (``ν = mufix`` replaces ``ν = 0``: the same at the node); for the first part's closing
         impulses ``μ⁻``, ``release`` (a contact held until an impact's sub-node and open after it: its share,
         :meth:`release_row`, replaces ``μ⁻ = 0``) and ``leftfix`` with ``mufixl`` (``μ⁻ = mufixl``: an arrival's
-        impulse by Stronge's law, its contact closed after).  The rows are the node
+        impulse by Stronge's law, its contact closed after); ``tslip`` (a held contact whose slip stops or turns at the
+        sub-node: its slip velocity there after its share, :meth:`left_velocity`, vanishes, replacing ``β = β_fix``;
+        it is then also a ``release`` for its share, and its slip after the sub-node is the second part's).  The rows are the node
         and sub-node rows of the transcription (:meth:`node_row`, :meth:`sub_row`), so a point solved step by step satisfies the whole
         program's rows (``docs/derivations.md``, "Contact trajectories", "The march").
         """
@@ -382,13 +384,18 @@ class ContactMechanics:
         t, held, closed, law = sym("t", c), sym("held", c), sym("closed", c), sym("law", c)
         node, fixed, mufix, nfixed = sym("node", c), sym("fixed", c), sym("mufix", c), sym("nfixed", c)
         release, leftfix, mufixl = sym("release", c), sym("leftfix", c), sym("mufixl", c)
+        # (tslip: a held contact whose slip stops or turns at the sub-node, which it times: its slip velocity there,
+        # after its share of the first part's force, vanishes -- planar friction)
+        tslip = sym("tslip", c)
         mul = x[L["mul"]]
         rl = x[L["fleft"]] if self.friction else None
         sub_row, r = self.sub_row(qk, qs, qn, b, mu, lams, h, rho_s, zm, zp, mul, rl, release)
         free = 1 - held - node - nfixed
         other = 1 - closed - law - fixed
         R = ca.vertcat(self.node_row(p, qk, qs, b, nu, lam, h, rho_n, zm), sub_row,
-                       (1 - ca.sum1(t)) * (b - bfix) + ca.dot(t, phi(qs)) / ell,
+                       (1 - ca.sum1(t) - ca.sum1(tslip)) * (b - bfix) + ca.dot(t, phi(qs)) / ell
+                       + (ca.dot(tslip, self.left_velocity(qk, qs, b, h, mul, rl, release, zm)) / vref
+                          if self.friction and self.fd == 1 else 0),
                        held * phi(qs) / ell + node * self.node_law(p, qk, qs, b, h, zm) / vref
                        + nfixed * (nu - mufix) / snu + free * nu / snu,
                        closed * phi(qn) / ell + law * r / vref + fixed * (mu - mufix) / smu + other * mu / smu,
@@ -416,7 +423,7 @@ class ContactMechanics:
                                                  sgn[:c] * release, leftfix, rfixl, vref, self.mu_f))
             extra = [stick, sgn, fix, rfix, arrive, rfixl]
         self.march_step = ca.Function("march_step", [x, qk, p, h, ell, snu, smu, vref, bfix, t, held, closed, law, node,
-                                                      fixed, mufix, nfixed, release, leftfix, mufixl] + extra,
+                                                      fixed, mufix, nfixed, release, leftfix, mufixl, tslip] + extra,
                                       [R, ca.jacobian(R, x)])
 
     def friction_rows(self, slip, rho, stick, sgn, fix, rfix, vref, muf=None):

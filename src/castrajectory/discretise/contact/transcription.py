@@ -134,6 +134,8 @@ class ContactTranscription:
         self.arrive = np.zeros((L, cm.c))
         #: the contacts released at their step's impact, per step (their sub-node impulse is a share, no impact)
         self.release = np.zeros((L, cm.c))
+        #: the held contacts whose slip stops or turns at their step's sub-node (step, contact, "stop" or "turn")
+        self.turns = []
         # weight length of the law where the guess has no bounce: W = φ(q_{k+1})/δ with δ = ℓ
         # (law_lengths sets a shorter δ at the guess's bounces)
         self.delta = ell

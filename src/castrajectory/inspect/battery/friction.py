@@ -140,8 +140,9 @@ def impact_residuals(system, tr, mu_f: float):
     return float(gain), float(cone)
 
 
-#: the friction family's tolerances: the cone and the work to rounding; a stop or a turn inside a step is
-#: first order, so the path's error against the closed form is held to FRICTION_PATH_STEPS steps' worth
+#: the friction family's tolerances: the cone and the work to rounding; a stop or a turn inside a step is timed
+#: by its sub-node (exact for the block), but one within ALPHA_MIN of a node stays lumped at it, so the path's
+#: error against the closed form is held to FRICTION_PATH_STEPS steps' worth
 FRICTION_TOL, FRICTION_PATH_STEPS = 1e-12, 4.0
 #: the cone, relative to μ: the march accepts a sticking ratio up to μ (1 + 1e-10) (a held corner's ratio
 #: 1.03e-12 over μ = 0.311 at rounding was refused by an absolute 1e-12)

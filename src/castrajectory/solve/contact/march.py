@@ -109,6 +109,9 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
             ok &= np.all((NU >= 0.0) & (MU >= 0.0) | ~held[:, None], axis=0)
             if cm.friction:
                 ok &= step.friction_holds(fm, X[lay["fratio"]], SL)
+                # a sliding contact whose slip turns inside a step (planar): that step is marched alone, where its
+                # sub-node times the turn (mode W, step._slip_turn)
+                ok &= ~_turns(cm, fm, held, np.column_stack([q, Qn]), np.column_stack([p, Pn]))
             i = int(np.argmin(ok)) if not np.all(ok) else K
             span = min(2 * span, CHUNK_STEPS) if i == K else 8
             if i:
@@ -140,7 +143,7 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
             qn = out["q"]
             p = np.asarray(cm.p_node_minus(out["qs"], out["beta"], qn, hk,
                                            *cm.stage_parts(out["zs"])[1])).reshape(-1)
-            held_prev = np.array([m in (H, C, _modes.K) for m in modes])
+            held_prev = np.array([m in (H, C, _modes.K, _modes.W) for m in modes])
             q, g_q = qn, gn
         k += 1
     out = {key: np.asarray(val) for key, val in rows.items()}
@@ -155,6 +158,24 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
         del out["zs"]
     if not (cm.s and cm.m):
         del out["lam_stage"]
+    return out
+
+
+def _turns(cm, fm, held, Q, Pm) -> np.ndarray:
+    """Per chunk step (columns of its nodes ``Q`` and momenta ``p⁻`` there, the step's start first): a held contact
+    sliding through the step (its node slot UP or DOWN, planar friction) has its slip turn or stop inside it
+    (:func:`.step.turn_fraction`)."""
+    K = Q.shape[1] - 1
+    out = np.zeros(K, bool)
+    if cm.fd != 1:
+        return out
+    sl = [(j, 1.0 if fm[j] == "U" else -1.0) for j in range(cm.c) if held[j] and fm[j] in ("U", "D")]
+    if not sl:
+        return out
+    V = cm.dm.velocities(Q.T, Pm.T)
+    S = np.array([np.asarray(cm.system.tangent(Q[:, k])) @ V[k] for k in range(K + 1)])
+    for k in range(K):
+        out[k] = any(_modes.turn_fraction(sg * S[k, j], sg * S[k + 1, j]) is not None for j, sg in sl)
     return out
 
 

@@ -55,17 +55,22 @@ class ContactNLP(ContactTranscription):
         c, L = self.cm.c, self.L
         modes = np.asarray(point["modes"]).reshape(L, c)
         timed = np.isin(modes, ("I", "C", "T", "K"))
-        # the first timed contact of a step fixes its sub-node (simultaneous ones share it)
+        # the first timed contact of a step fixes its sub-node (simultaneous ones share it); a held contact whose slip
+        # stops or turns there (W) times it by its slip (left_slip, below)
         first = timed & (np.cumsum(timed, axis=1) == 1)
-        held = np.isin(modes, ("H", "R"))
-        closes = np.isin(modes, ("H", "C", "K"))
+        turns = modes == "W"
+        # (which slips stop or turn at a sub-node, for the answer: stop where the second part sticks)
+        fm_all = np.asarray(point.get("fmodes", np.full((L, 2 * c), "-")), dtype=object).reshape(L, 2 * c)
+        self.turns = [(int(k), int(j), "stop" if fm_all[k, c + j] == "S" else "turn") for k, j in zip(*np.where(turns))]
+        held = np.isin(modes, ("H", "R", "W"))
+        closes = np.isin(modes, ("H", "C", "K", "W"))
         law = (modes == "I") & np.asarray(point["bounced"], bool).reshape(L, c)
         node = np.isin(modes, ("N", "P")).reshape(-1)
         fixed = np.isin(modes, ("F", "T")).reshape(-1)
         # the first part's closing impulses μ⁻: a contact released at its step's impact (R with an impact at the
         # sub-node) takes its share of the first part's force there (free, its release row zero); a plastic arrival
         # with friction (K) Stronge's impulse, fixed at the march's (ContactMechanics.sub_row)
-        release = (modes == "R") & np.any(np.isin(modes, ("I", "C", "T", "F", "K")), axis=1, keepdims=True)
+        release = (modes == "R") & np.any(np.isin(modes, ("I", "C", "T", "F", "K")), axis=1, keepdims=True) | turns
         leftfix = modes == "K"
         self.release = release.astype(float)
         self.nlp.set_parameter("release", self.release.reshape(-1))
@@ -74,7 +79,7 @@ class ContactNLP(ContactTranscription):
         mu_march = np.asarray(point["mu"], float).reshape(-1)
         nu_march = np.asarray(point["nu"], float).reshape(-1)
         zero = np.zeros(L * c)
-        untimed = ~np.any(timed, axis=1)
+        untimed = ~np.any(timed | turns, axis=1)
         blo = np.where(untimed, 0.0, ALPHA_MIN - 0.5)
         bhi = np.where(untimed, 0.0, 0.5 - ALPHA_MIN)
         bounds = {
@@ -84,7 +89,7 @@ class ContactNLP(ContactTranscription):
             "nu": (np.where(node, nu_march, 0.0), np.where(held.reshape(-1), np.inf, np.where(node, nu_march, 0.0))),
             # the sequential law's impulses (modes F and T) are the march's cascade
             "mu": (np.where(fixed, mu_march, 0.0),
-                   np.where(np.isin(modes, ("H", "I", "C", "K")).reshape(-1), np.inf, np.where(fixed, mu_march, 0.0))),
+                   np.where(np.isin(modes, ("H", "I", "C", "K", "W")).reshape(-1), np.inf, np.where(fixed, mu_march, 0.0))),
             "mul": (np.where(leftfix.reshape(-1), mul_march, 0.0),
                     np.where(release.reshape(-1), np.inf, np.where(leftfix.reshape(-1), mul_march, 0.0))),
             "release": (np.where(release.reshape(-1), 0.0, -np.inf), np.where(release.reshape(-1), 0.0, np.inf)),
@@ -108,7 +113,7 @@ class ContactNLP(ContactTranscription):
             shi = np.select([fmd == "S", fmd == "D"], [0.0, 0.0], np.inf)
             bounds["fratio"] = (rlo.reshape(-1), rhi.reshape(-1))
             # the contacts that arrive at their sub-node (an impact, caught or fixed by a law): slip after it
-            self.arrive = np.isin(modes, ("I", "C", "T", "F", "K")).astype(float)
+            self.arrive = np.isin(modes, ("I", "C", "T", "F", "K", "W")).astype(float)
             self.nlp.set_parameter("arrive", self.arrive.reshape(-1))
             bounds["slip"] = (slo.reshape(-1), shi.reshape(-1))
             # a released contact's share: its ratio and the slip before the impact as its node slot's mode (stick, or
@@ -124,8 +129,9 @@ class ContactNLP(ContactTranscription):
                                                                    [mud[:, :c], -mud[:, :c], mud[:, :c], fl_march],
                                                                    0.0), 0.0))
             bounds["fleft"] = (flo.reshape(-1), fhi.reshape(-1))
-            bounds["left_slip"] = (np.where(rel_d & np.isin(fn, ("S", "U")), 0.0, -np.inf).reshape(-1),
-                                   np.where(rel_d & np.isin(fn, ("S", "D")), 0.0, np.inf).reshape(-1))
+            turn_d = np.repeat(turns[..., None], d, axis=2)
+            bounds["left_slip"] = (np.where(turn_d | rel_d & np.isin(fn, ("S", "U")), 0.0, -np.inf).reshape(-1),
+                                   np.where(turn_d | rel_d & np.isin(fn, ("S", "D")), 0.0, np.inf).reshape(-1))
             if d == 2:
                 # the circular cone: |ρ| ≤ μ_f sticking or sliding; sliding, ρ|s| + μ_f s = 0
                 on = np.isin(fm, ("S", "L"))

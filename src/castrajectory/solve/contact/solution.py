@@ -81,6 +81,9 @@ class ContactTrajectory(Result):
     friction_impulse: Optional[np.ndarray] = None
     #: the friction coefficients per contact (None without friction)
     friction_coefficients: Optional[np.ndarray] = None
+    #: the slips that stop (``"stop"``: the contact then sticks) or turn (``"turn"``: it slides back) at a sub-node,
+    #: which their step timed: ``(t, contact, kind)``
+    slip_turns: Optional[list] = None
 
     def slip_stops(self, contact: int = 0) -> List[float]:
         """The times at which contact ``contact`` stops sliding (and sticks or rolls), read from the discrete
@@ -93,6 +96,9 @@ class ContactTrajectory(Result):
         (the slip's balance), so the time is too; the nodes themselves resolve the stop to a step only."""
         if self.friction_impulse is None:
             return []
+        # a stop that its step's sub-node timed (mode W) is that sub-node's time; the impulses read the others
+        timed = [t for t, j, kind in (self.slip_turns or []) if j == contact and kind == "stop"]
+        near = [t for t, j, kind in (self.slip_turns or []) if j == contact]
         mu = float(self.friction_coefficients[contact])
         Lam = np.asarray(self.node_impulse, float)[:, contact]
         Phi = np.asarray(self.friction_impulse, float)[:, contact]
@@ -121,8 +127,10 @@ class ContactTrajectory(Result):
                 a = mu * d - r_s
                 f = float(np.dot(mean - r_s, a) / max(np.dot(a, a), 1e-300))
                 f = min(max(f, 0.0), 1.0)
-                out.append(float(edges[k] + f * (edges[K + 1] - edges[k])))
-        return out
+                t_stop = float(edges[k] + f * (edges[K + 1] - edges[k]))
+                if not any(edges[max(k - 2, 0)] <= tt <= edges[min(K + 2, edges.size - 1)] for tt in near):
+                    out.append(t_stop)
+        return sorted(out + timed)
 
     def as_dict(self) -> dict:
         return {**super().as_dict(), "solver_status": self.solver_status,
@@ -270,6 +278,7 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
         scheme=cm.dm.scheme.name, homotopy=list(res.homotopy), attempts=attempts, n=int(round(float(t[-1]) / h)),
         friction_ratio=fratio, slip=slip, friction_impulse=fimp,
         friction_coefficients=cm.mu_f.copy() if cm.friction else None,
+        slip_turns=[(float(t_sub[k]), j, kind) for k, j, kind in getattr(tn, "turns", []) if k < N] if cm.friction else None,
         program={"terms": sysm.terms(), "steps": int(tn.L), **tn.nlp.anatomy()})
 
 

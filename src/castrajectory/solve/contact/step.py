@@ -27,6 +27,10 @@ O, H, R, I, C, N, F, T, P = "O", "H", "R", "I", "C", "N", "F", "T", "P"
 #: a plastic arrival with friction caught at its sub-node (closed after it) whose impulse is Stronge's, fixed as the
 #: first part's closing impulse μ⁻ (its normal and its ratio; the second part's μ holds the contact closed after)
 K = "K"
+#: a held contact with planar friction whose slip stops or turns at the sub-node, which it times (its slip velocity
+#: there vanishes after its share of the first part's force; it slides through the first part, and sticks or
+#: slides the other way through the second)
+W = "W"
 #: friction modes of a contact in a step: no friction force, sticking, sliding with a positive slip
 #: velocity (ρ = −μ_f), sliding with a negative one (ρ = μ_f)
 FREE, STICK, UP, DOWN = "-", "S", "U", "D"
@@ -90,10 +94,11 @@ class _Step:
                            ca.DM.zeros(cm.layout["mul"].stop - cm.layout["mul"].start + self.nf // 2))
             for _ in range(CHUNK_NEWTON):
                 r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero, zero, zero, zero, zero, zero, zero, zero,
-                               *fz)
+                               zero, *fz)
                 x = x - ca.solve(J, r)
             # the size of one more Newton step: the rows' residual in units of the unknowns
-            r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero, zero, zero, zero, zero, zero, zero, zero, *fz)
+            r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero, zero, zero, zero, zero, zero, zero, zero, zero,
+                           *fz)
             res = ca.mmax(ca.fabs(ca.solve(J, r)))
             qn, qt = x[n:2 * n], x[:n]
             zp = [x[cm.layout["zs"]][cm.s:]] if cm.s else []
@@ -137,8 +142,8 @@ class _Step:
         for j, m in enumerate(modes):
             nfixed[j] = m == P
             t[j] = m in (I, C, T, K)
-            held[j] = m in (H, R)
-            closed[j] = m in (H, C, K)
+            held[j] = m in (H, R, W)
+            closed[j] = m in (H, C, K, W)
             law[j] = m == I
             node[j] = m == N
             fixed[j] = m in (F, T)
@@ -146,7 +151,8 @@ class _Step:
         timing = np.where(t > 0)[0]
         if timing.size > 1:
             t[timing[1:]] = 0.0
-        return t, held, closed, law, node, fixed, nfixed, releases(modes), np.array([float(m == K) for m in modes])
+        return (t, held, closed, law, node, fixed, nfixed, releases(modes), np.array([float(m == K) for m in modes]),
+                np.array([float(m == W) for m in modes]))
 
     def solve(self, x, q, p, h, modes, bfix=None, mufix=None, fmodes=None, rfix=None, mufixl=None, rfixl=None):
         """Newton on the step's rows in the given modes (with ``bfix``: the sub-node's ``β`` fixed
@@ -155,20 +161,20 @@ class _Step:
         closing impulses and ratios of the contacts in mode K); ``(x, ok)``."""
         n, c = self.n, self.c
         self.snu, self.smu = self.pref / h, self.pref
-        t, held, closed, law, node, fixed, nfixed, release, leftfix = self.masks(modes)
+        t, held, closed, law, node, fixed, nfixed, release, leftfix, tslip = self.masks(modes)
         if bfix is not None:
             t = np.zeros(c)
             x = x.copy()
             x[2 * n] = bfix
         args = (q, p, h, self.ell, self.snu, self.smu, self.vref, 0.0 if bfix is None else bfix,
                 t, held, closed, law, node, fixed, np.zeros(c) if mufix is None else mufix, nfixed, release, leftfix,
-                np.zeros(c) if mufixl is None else mufixl)
+                np.zeros(c) if mufixl is None else mufixl, tslip)
         if self.nf:
             fm = fmodes or [FREE] * (2 * c)
             args = args + (np.array([f == STICK for f in fm], float),
                            np.array([1.0 if f in (UP, SLIDE) else -1.0 if f == DOWN else 0.0 for f in fm]),
                            np.array([f == FIX for f in fm], float), np.zeros(2 * c * self.fd) if rfix is None else rfix,
-                           np.array([m in (I, C, T, F, K) for m in modes], float),
+                           np.array([m in (I, C, T, F, K, W) for m in modes], float),
                            np.zeros(c * self.fd) if rfixl is None else rfixl)
         small = 0
         for _ in range(NEWTON_ITER):
@@ -205,11 +211,11 @@ class _Step:
         return x, bool(np.max(np.abs(r)) <= STEP_TOL * (1.0 + float(np.max(np.abs(x)))))
 
 def releases(modes) -> np.ndarray:
-    """Per contact, 1 where it is held until an impact's sub-node and released there (mode R in a step with an
-    impact at its sub-node: I, C, T or F): its sub-node impulse is then its share of the first part's force
-    (:meth:`ContactMechanics.release_row`)."""
+    """Per contact, 1 where its sub-node impulse μ⁻ is its share of the first part's force
+    (:meth:`ContactMechanics.release_row`): held until an impact's sub-node and released there (mode R in a step
+    with an impact at its sub-node: I, C, T, F or K), or held with its slip stopping or turning there (W)."""
     impact = any(m in (I, C, T, F, K) for m in modes)
-    return np.array([float(impact and m == R) for m in modes])
+    return np.array([float(impact and m == R or m == W) for m in modes])
 
 
 def _timed_by_bracket(step: _Step, x, q, p, h, modes, j: int):
@@ -301,6 +307,10 @@ def _march_step(step: _Step, q, p, h, g_q, held_prev, tol, finest: bool):
         if change is None:
             law = _cascade(step, q, p, h, x, used, tol)
             if law != "rejected":
+                if not law:
+                    turned = _slip_turn(step, q, p, h, used, x, step.last_fmodes)
+                    if turned is not None:
+                        return _result(step, *turned)
                 return law or _result(step, x, used, gn, step.last_fmodes)
             why = "the sequential law"
             break
@@ -379,8 +389,8 @@ def _friction(step: _Step, q, p, h, modes, x, mufix=None, rfix=None, mufixl=None
     # (a contact released at the step's impact: its share of the first part's force slides or sticks as its node slot,
     # ContactMechanics.left_velocity; a K arrival's friction after its sub-node is a held one's, like C's)
     slow = _slow_arrivals(step, q, p, h) if any(mj == I for mj in modes) else np.zeros(c, bool)
-    active = [mj in (H, R) and cm.mu_f[j] > 0 for j, mj in enumerate(modes)] + \
-        [(mj in (H, C, K) or (mj == I and slow[j])) and cm.mu_f[j] > 0 for j, mj in enumerate(modes)]
+    active = [mj in (H, R, W) and cm.mu_f[j] > 0 for j, mj in enumerate(modes)] + \
+        [(mj in (H, C, K, W) or (mj == I and slow[j])) and cm.mu_f[j] > 0 for j, mj in enumerate(modes)]
     muf = np.concatenate([cm.mu_f, cm.mu_f])
     d = step.fd
     # (a slot starts as it ended the previous step; free, or fixed there by an impact's law, it starts sticking)
@@ -390,7 +400,7 @@ def _friction(step: _Step, q, p, h, modes, x, mufix=None, rfix=None, mufixl=None
         fm = [FIX if fixed[i] else f for i, f in enumerate(fm)]
         rfix = np.where(np.isfinite(rfix), rfix, 0.0)
     tol = 1e-12 * step.vref
-    slips = np.array([m in (I, C, T, F, K) for m in modes], float)
+    slips = np.array([m in (I, C, T, F, K, W) for m in modes], float)
     choices = (STICK, UP, DOWN) if d == 1 else (STICK, SLIDE)
 
     def judge(fm, x0):
@@ -463,6 +473,65 @@ def _friction(step: _Step, q, p, h, modes, x, mufix=None, rfix=None, mufixl=None
             step.last_fmodes = trial
             return got[0]
     return None
+
+
+def _slip_turn(step: _Step, q, p, h, modes, x, fmodes):
+    """A held contact whose slip stops or turns inside the step (planar friction, no impact in the step): the step
+    again with its sub-node timed there (mode W: the slip velocity at the sub-node, after the contact's share of
+    the first part's force, vanishes), the first part sliding as its node slot did and the second sticking or
+    sliding the other way.  ``(x, modes, gaps at q_{k+1}, friction modes)``, or None where no slip turns, or the
+    timed step does not solve with valid modes (the step as it was then stands: the turn inside it, first order)."""
+    cm, n, c = step.cm, step.n, step.c
+    if not step.nf or step.fd != 1 or any(m not in (O, H) for m in modes):
+        return None
+    fm = list(fmodes)
+    qn = x[n:2 * n]
+    pn = np.asarray(cm.p_node_minus(x[:n], float(x[2 * n]), qn, h, *cm.stage_parts(x[cm.layout["zs"]])[1])).reshape(-1)
+    v0 = cm.dm.velocities(q[None, :], p[None, :])[0]
+    v1 = cm.dm.velocities(qn[None, :], pn[None, :])[0]
+    s0 = np.asarray(cm.system.tangent(q)).reshape(-1, n) @ v0
+    s1 = np.asarray(cm.system.tangent(qn)).reshape(-1, n) @ v1
+    for j in range(c):
+        if modes[j] != H or cm.mu_f[j] <= 0 or fm[j] not in (UP, DOWN):
+            continue
+        sg = 1.0 if fm[j] == UP else -1.0
+        frac = turn_fraction(sg * s0[j], sg * s1[j])
+        if frac is None:
+            continue
+        frac = min(max(frac, ALPHA_MIN), 1.0 - ALPHA_MIN)
+        new = list(modes)
+        new[j] = W
+        start = restage(cm, np.concatenate([q + frac * (qn - q), x[n:2 * n], [frac - 0.5], x[2 * n + 1:]]), q)
+        for after in (STICK, DOWN if sg > 0 else UP):
+            trial = list(fm)
+            trial[c + j] = after
+            xw, ok = step.solve(start, q, p, h, new, fmodes=trial)
+            if not ok or not (ALPHA_MIN - 0.5 <= xw[2 * n] <= 0.5 - ALPHA_MIN):
+                continue
+            o = 2 * n + 1
+            nu, mu, mul = xw[o:o + c], xw[o + c:o + 2 * c], xw[cm.layout["mul"]]
+            rho = xw[cm.layout["fratio"]]
+            slip = np.asarray(cm.slip_row(q, xw[:n], xw[n:2 * n], xw[2 * n], h,
+                                          np.array([float(m == W) for m in new]))).reshape(-1)
+            held = [i for i, m in enumerate(new) if m in (H, W)]
+            valid = all(nu[i] >= 0.0 and mu[i] >= 0.0 for i in held) and mul[j] >= 0.0 and sg * slip[j] >= 0.0
+            valid &= abs(rho[c + j]) <= cm.mu_f[j] * (1 + 1e-10) if after == STICK else -sg * slip[c + j] >= 0.0
+            gn = np.asarray(cm.system.gap(xw[n:2 * n])[0]).reshape(-1)
+            if valid:
+                return xw, new, gn, trial
+    return None
+
+
+def turn_fraction(s0: float, s1: float):
+    """Where in a step a slip turns, from the slip velocities (signed along the sliding direction) of the momenta
+    ``p_k⁻`` and ``p_{k+1}⁻`` at its ends, or None where it does not turn in it.  Those momenta miss half of their
+    node's friction impulse, so each is half a step's change ahead of the slip at its node: the slip's values
+    at the nodes are ``s − Δ/2`` (``Δ = s0 − s1``)."""
+    d = s0 - s1
+    a, b = s0 - 0.5 * d, s1 - 0.5 * d
+    if not (a > 0.0 and b <= 0.0):
+        return None
+    return a / (a - b)
 
 
 def _slow_arrivals(step: _Step, q, p, h):
