@@ -8,13 +8,17 @@ area multiplier the pressure at the table); ``--pendant`` hangs it under a
 ceiling: beyond the fold of the pendant family there is no stable drop, and the
 run says so and exits 1.  ``--axisymmetric`` makes it a drop of revolution
 (3-D; ``--area`` is then its volume): a spherical cap without gravity, the
-Young–Laplace profile with it.
+Young–Laplace profile with it.  ``--pattern W GAMMA_SL_OUT`` puts the drop on a
+patterned table: γ_sl on a strip of width W under the drop (a disc of diameter W
+for a drop of revolution), GAMMA_SL_OUT outside it; the drop sits inside the
+pattern, pinned at its edge (Gibbs' criterion) or spread beyond it.
 
     python problems/droplet.py                       # default scene, summary table
     python problems/droplet.py --json                # one JSON object on stdout
     python problems/droplet.py --formulation graph --n 2000 --plot drop.png
     python problems/droplet.py --gravity 1 --gamma-sl 1 --area 2 --pendant
     python problems/droplet.py --axisymmetric --gravity 1 --gamma-sl 1 --area 10
+    python problems/droplet.py --pattern 1 1.5 --area 0.5 --json
 """
 import math
 import sys
@@ -41,17 +45,23 @@ def parser():
                    help="reverse gravity: the drop hangs under a ceiling (needs --gravity > 0)")
     p.add_argument("--axisymmetric", action="store_true",
                    help="a drop of revolution (3-D): --area is then its volume; curve formulation only")
+    p.add_argument("--pattern", type=float, nargs=2, default=None, metavar=("W", "GAMMA_SL_OUT"),
+                   help="a patterned table: γ_sl on a strip of width W (> 0) under the drop, GAMMA_SL_OUT "
+                        "(> γ_sl: less wettable) outside it; weightless drops")
     cli.add_plot(p)
     return p
 
 
 def run(args):
     # describe
+    width, gamma_out = args.pattern if args.pattern is not None else (None, None)
     drop = droplet.Droplet(args.gamma_gl, args.gamma_sl, args.gamma_sg, args.area, args.span, args.gravity,
-                           args.pendant, args.axisymmetric)
+                           args.pendant, args.axisymmetric, width, gamma_out)
     # discretise + solve
     sol = droplet.solve(drop, args.n, args.formulation, options=cli.ipopt_options(args), verbose=args.verbose)
     # inspect
+    if drop.patterned:
+        return _pattern_outcome(sol)
     if drop.axisymmetric:
         return _revolution_outcome(sol)
     if drop.rho_g > 0.0:
@@ -161,6 +171,41 @@ def _revolution_outcome(sol):
                      f" (smallest eigenvalue {hess['min_eigenvalue']:.3e}, dimension {hess['dimension']})")
     lines.append(cli.status_line(sol.status, sol))
     return cli.Outcome.of(sol, summary=lines, writers=plot)
+
+
+def _pattern_outcome(sol):
+    """The summary of a drop on a patterned table: its regime, apparent angle and pinning multiplier against
+    Gibbs' criterion (the cap inside, pinned at the step, or spread)."""
+    drop, cap, e, pat = sol.drop, sol.analytic, sol.errors, sol.pattern
+    deg = math.degrees
+    th_in, th_out = pat["young_angles"]
+    what = "volume" if drop.axisymmetric else "area"
+    head = [f"droplet on a patterned table{' (of revolution)' if drop.axisymmetric else ''}: {sol.formulation} "
+            f"formulation, N = {sol.n}, {what} {drop.area:g}, pattern width {drop.pattern_width:g}, "
+            f"γ_sl = {drop.gamma_sl:g} inside, {drop.gamma_sl_out:g} outside",
+            f"Young angles {deg(th_in):.6g}° inside, {deg(th_out):.6g}° outside; the edge pins for {what}s "
+            f"{cap.areas[0]:.6g} to {cap.areas[1]:.6g}"]
+
+    def row(name, mine, ref, key, scale=lambda v: v, rel=" rel"):
+        err = e.get(key)
+        return [name, cli.fmt(scale(mine)), cli.fmt(scale(ref)), "" if err is None else cli.fmt(scale(err), ".3e") + rel]
+
+    rows = [["quantity", "discrete", "analytic", "error"],
+            ["regime", pat["regime"], cap.regime, ""],
+            row("apparent angle (deg)", sol.contact_angle, cap.contact_angle, "contact_angle", deg, ""),
+            row("contact radius r_c" if drop.axisymmetric else "span a",
+                sol.contact_radius if drop.axisymmetric else sol.span,
+                cap.contact_radius if drop.axisymmetric else cap.span,
+                "contact_radius" if drop.axisymmetric else "span"),
+            row(f"pressure ({what} multiplier)", sol.pressure, cap.pressure, "pressure"),
+            row("energy", sol.energy, cap.energy, "energy"),
+            ["pinning multiplier γ(cos θ_in − cos θ)", cli.fmt(pat["pinning_multiplier"]),
+             cli.fmt(cap.pinning_multiplier), cli.fmt(e.get("pinning_multiplier"), ".3e") + " of Δγ_sl"]]
+    lines = head + cli.table(rows)
+    lines.append(f"the pinning multiplier lies in [0, γ_sl_out − γ_sl] = [0, {pat['pinning_bounds'][1]:.6g}]; "
+                 f"the outside's bound carries the rest, {pat['outside_multiplier']:.6g}")
+    lines.append(cli.status_line(sol.status, sol))
+    return cli.Outcome.of(sol, summary=lines, writers={"plot": lambda path: plotting.droplet_shape(sol, path)})
 
 
 def main(argv=None):

@@ -9,7 +9,8 @@ Each writes its unknowns and rows (surface length, equal chords, the area) into 
 :class:`~castrajectory.discretise.program.Program` in scaled units (``A = 1``,
 ``gamma_gl = 1``) and returns the :class:`Geometry` that reads the vertices back.
 A scene adds the terms it needs on top: :func:`add_gravity` (the weight, over the same pieces
-as the area).  :func:`contact_angle_estimate` reads the contact angle off the vertices to second order.
+as the area), :func:`add_pattern` (the wetting energy of a patterned table, split at its step).
+:func:`contact_angle_estimate` reads the contact angle off the vertices to second order.
 """
 from __future__ import annotations
 
@@ -317,6 +318,28 @@ def add_gravity(nlp: Program, geo: Geometry, weight: float) -> None:
     """
     nlp.parameter("gravity", 1, weight)
     nlp.minimize_elements("gravity", _element(geo.moment), [*geo.pieces, P(nlp.parameter_index("gravity"))])
+
+
+def add_pattern(nlp: Program, geo: Geometry, wetting_in: float, wetting_out: float, step: float):
+    """The wetting energy of a patterned table, whose kink at the step is held exactly without a kink.
+
+    The wetted measure ``m`` (the span, or the disc ``pi r_c²`` of a drop of revolution: :attr:`Geometry.wetted`)
+    is split into an inside part ``m_in`` in ``[0, step]`` and an outside part ``m_out >= 0``, ``m_in + m_out = m``
+    (the row ``wetted_split``), and the wetting energy is linear in the parts, ``wetting_in m_in + wetting_out
+    m_out``.  With ``wetting_out > wetting_in`` (the pattern the more wettable part) its least value over the
+    splits of ``m`` is the kinked ``wetting_in min(m, step) + wetting_out max(m − step, 0)``, and every KKT point
+    has ``m_out (step − m_in) = 0``: the complementarity of the split holds without being imposed (Droplet §11).
+    The pinning bound ``m_in <= step`` is a bound of the unknown ``wetted_inside``; its multiplier is the
+    pinning force.  Returns the wetting energy (an expression for the objective)."""
+    wet = geo.span if geo.wetted is None else geo.wetted
+    # start from the split of the guess's wetted measure (the kinked energy's own split)
+    x0 = np.concatenate([b.init for b in nlp._vars])
+    p0 = np.concatenate([b.init for b in nlp._params]) if nlp._params else np.zeros(0)
+    m0 = float(nlp.evaluator(wet)(x0, p0))
+    inside = nlp.variable("wetted_inside", 1, lb=0.0, ub=step, init=min(m0, step))
+    outside = nlp.variable("wetted_outside", 1, lb=0.0, init=max(m0 - step, 0.0))
+    nlp.equal("wetted_split", inside + outside - wet)
+    return wetting_in * inside + wetting_out * outside
 
 
 # ---------------------------------------------------------------------------- inspect helpers

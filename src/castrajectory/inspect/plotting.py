@@ -68,13 +68,20 @@ def droplet_figure(sol) -> Figure:
     pad = 0.08 * (hi - lo)
     ax.axhline(0.0, color="k", lw=1)
     ax.fill_between([lo - pad, hi + pad], [0, 0], [-0.04 * (hi - lo)] * 2, color="0.85")
+    if sol.drop.patterned:  # the pattern, centred under the drop
+        mid, half = (sol.contact_radius if revolution else 0.5 * sol.span), 0.5 * sol.drop.pattern_width
+        ax.fill_between([mid - half, mid + half], [0, 0], [-0.04 * (hi - lo)] * 2, color="C2", alpha=0.5,
+                        label=f"pattern (γ_sl = {sol.drop.gamma_sl:g}; outside {sol.drop.gamma_sl_out:g})")
     _mark_contact_angle(ax, (sx[0], sy[0]), sol.contact_angle, 0.15 * (hi - lo))
     ax.set_aspect("equal")
     ax.set_xlabel("x (a section through the axis)" if revolution else "x")
     ax.set_ylabel("y (down from the ceiling)" if sol.drop.pendant else "y")
     if sol.drop.pendant:
         ax.invert_yaxis()
-    if revolution:
+    if sol.drop.patterned:
+        mode = (f"{'of revolution ' if revolution else ''}on a patterned table, width {sol.drop.pattern_width:g}, "
+                f"{sol.pattern['regime'] if sol.pattern else ''}")
+    elif revolution:
         mode = (f"of revolution, volume {sol.drop.area:g}, "
                 + (f"{'pendant' if sol.drop.pendant else 'sessile'}, Bond number {sol.drop.bond_number:.4g}"
                    if heavy else "weightless"))

@@ -55,6 +55,10 @@ class Droplet:
     pendant: bool = False
     #: a drop of revolution about the vertical axis: ``area`` is then its volume, ``span`` its contact radius
     axisymmetric: bool = False
+    #: a patterned table: ``gamma_sl`` holds on the pattern, a strip ``|x| < pattern_width / 2`` centred under
+    #: the drop (a disc of diameter ``pattern_width`` for a drop of revolution), ``gamma_sl_out`` outside it
+    pattern_width: Optional[float] = None
+    gamma_sl_out: Optional[float] = None
 
     def __post_init__(self):
         self.validate()
@@ -102,6 +106,16 @@ class Droplet:
         """+1 for a sessile drop (gravity towards the wall), -1 for a pendant one (away from it)."""
         return -1 if self.pendant else 1
 
+    @property
+    def patterned(self) -> bool:
+        """A table whose ``gamma_sl`` steps at the pattern's edge (:class:`PatternedCap`)."""
+        return self.pattern_width is not None
+
+    @property
+    def wetting_out(self) -> float:
+        """Coefficient of the wetted measure outside the pattern: ``gamma_sl_out - gamma_sg``."""
+        return self.gamma_sl_out - self.gamma_sg
+
     def validate(self) -> None:
         positive("gamma_gl", self.gamma_gl)
         finite("gamma_sl", self.gamma_sl)
@@ -112,6 +126,10 @@ class Droplet:
         if self.pendant and self.rho_g == 0.0:
             raise InputError("a pendant drop needs gravity (rho_g > 0): without it a drop under a ceiling is "
                              "the weightless drop")
+        if (self.pattern_width is None) != (self.gamma_sl_out is None):
+            raise InputError("a pattern needs both its width and the outside's gamma_sl (--pattern W GAMMA_SL_OUT)")
+        if self.patterned:
+            self._validate_pattern()
         if self.axisymmetric and self.span is not None:
             raise InputError("a pinned contact radius of a drop of revolution has no oracle yet; leave the span free")
         if self.rho_g > 0.0 and self.span is not None:
@@ -127,6 +145,22 @@ class Droplet:
             raise InputError(
                 f"complete non-wetting: gamma_sl - gamma_sg = {self.wetting:g} >= gamma_gl = {self.gamma_gl:g} "
                 "gives Young's angle pi, where the drop touches the table at a single point")
+
+    def _validate_pattern(self) -> None:
+        positive("pattern width", self.pattern_width)
+        finite("gamma_sl_out (the pattern's outside)", self.gamma_sl_out)
+        if self.span is not None:
+            raise InputError("a pattern and a pinned span exclude each other: the pattern decides where the edge "
+                             "pins; leave the span free")
+        if self.rho_g > 0.0:
+            raise InputError("a patterned table under gravity has no oracle yet; use a weightless drop (--gravity 0)")
+        if self.gamma_sl_out == self.gamma_sl:
+            raise InputError(f"the pattern's gamma_sl_out = {self.gamma_sl_out:g} equals gamma_sl: both Young angles "
+                             "are equal and the table has no pattern")
+        if self.gamma_sl_out < self.gamma_sl:
+            raise InputError(f"the pattern must be the more wettable part: gamma_sl_out = {self.gamma_sl_out:g} must "
+                             f"exceed gamma_sl = {self.gamma_sl:g} (a more wettable outside does not pin the edge: "
+                             "the step is then an energy maximum for it)")
 
 
 def young_angle(gamma_gl: float, gamma_sl: float, gamma_sg: float) -> float:
@@ -214,7 +248,10 @@ def arc_points(theta: float, radius: float, n: int) -> np.ndarray:
 def analytic(drop: Droplet) -> Union[CircularCap, "HeavyDrop"]:
     """The exact minimiser: Young's angle for a free span, the arc through (0,0),(a,0) for a fixed one;
     under gravity the heavy drop (:func:`heavy_drop`); a drop of revolution: the spherical cap
-    (:class:`SphericalCap`), or under gravity the Young–Laplace profile (:func:`axisymmetric_drop`)."""
+    (:class:`SphericalCap`), or under gravity the Young–Laplace profile (:func:`axisymmetric_drop`); on a
+    patterned table the cap of Gibbs' criterion (:func:`patterned_cap`)."""
+    if drop.patterned:
+        return patterned_cap(drop)
     if drop.axisymmetric:
         return axisymmetric_drop(drop) if drop.rho_g > 0.0 else spherical_cap(drop)
     if drop.rho_g > 0.0:
@@ -1030,3 +1067,117 @@ def revolution_fold(drop: Droplet) -> AxisymmetricDrop:
     fold = _revolution_fold(theta)
     (prof, _), b = _pendant_member(theta, fold.u, fold.b_t)
     return _revolution(drop, prof, b)
+
+
+# ---------------------------------------------------------------------------- a patterned table (Gibbs' criterion)
+#: The regimes of a drop on a patterned table, by growing area: its edge inside the pattern at the inner Young
+#: angle, pinned at the step at an apparent angle between the two Young angles, spread beyond it at the outer one.
+REGIMES = ("inside", "pinned", "spread")
+
+
+def outer_young_angle(drop: Droplet) -> float:
+    """Young's angle outside the pattern; ``pi`` when the outside does not wet at all
+    (``gamma_sl_out - gamma_sg >= gamma_gl``: the edge then never depins)."""
+    return math.acos(max(-1.0, -drop.wetting_out / drop.gamma_gl))
+
+
+def step_measure(drop: Droplet) -> float:
+    """The wetted measure at which the edge reaches the step: the pattern's width (2-D) or its disc's area."""
+    return math.pi * (0.5 * drop.pattern_width) ** 2 if drop.axisymmetric else drop.pattern_width
+
+
+def pinned_area(theta: float, width: float, axisymmetric: bool = False) -> float:
+    """The area of the weightless cap of contact angle ``theta`` whose edges sit at ``±width/2``:
+    ``(w/2)² (θ − sin θ cos θ) / sin² θ``; for a drop of revolution its volume, ``π (w/2)³ (2 − 3 cos θ + cos³ θ) /
+    (3 sin³ θ)``.  Increasing in ``theta`` (``docs/derivations.md``, Droplet §5), infinite at ``pi``."""
+    s = math.sin(theta)
+    if theta >= math.pi:
+        return math.inf
+    if axisymmetric:
+        return cap_volume_factor(theta) * (0.5 * width / s) ** 3
+    return segment_area_factor(theta) * (0.5 * width / s) ** 2
+
+
+@dataclass(frozen=True)
+class PatternedCap:
+    """The weightless drop on a patterned table: a cap (:class:`CircularCap`, or :class:`SphericalCap` for a
+    drop of revolution) in one of three regimes (:data:`REGIMES`), ``docs/derivations.md``, Droplet §11.
+
+    ``angles`` are the inner and outer Young angles, ``areas`` the areas (volumes) where the regimes change:
+    the edge reaches the step at the inner angle, and depins at the outer one (:func:`pinned_area`).  The
+    energy counts the wetted measure at ``gamma_sl - gamma_sg`` inside the pattern and ``gamma_sl_out - gamma_sg``
+    outside.  :attr:`pinning_multiplier` is the multiplier of the pinning bound (the inside's wetted measure
+    at most the step's): ``gamma (cos θ_in − cos θ)``, in ``[0, gamma_sl_out − gamma_sl]``."""
+
+    regime: str
+    cap: Union[CircularCap, "SphericalCap"]
+    width: float
+    gamma_gl: float
+    wetting: float
+    wetting_out: float
+    angles: tuple
+    areas: tuple
+
+    @property
+    def axisymmetric(self) -> bool:
+        return isinstance(self.cap, SphericalCap)
+
+    def __getattr__(self, name):  # the cap's own readings: span, radius, pressure, points, distance, ...
+        if name.startswith("__"):
+            raise AttributeError(name)
+        return getattr(self.cap, name)
+
+    @property
+    def contact_angle(self) -> float:
+        """The apparent contact angle."""
+        return self.cap.contact_angle
+
+    @property
+    def wetted(self) -> float:
+        """The wetted measure: the span (2-D) or the disc ``pi r_c²``."""
+        return math.pi * self.cap.contact_radius ** 2 if self.axisymmetric else self.cap.span
+
+    @property
+    def step(self) -> float:
+        return math.pi * (0.5 * self.width) ** 2 if self.axisymmetric else self.width
+
+    @property
+    def energy(self) -> float:
+        """``gamma S + (gamma_sl − gamma_sg) min(m, m_step) + (gamma_sl_out − gamma_sg) max(m − m_step, 0)``, ``m``
+        the wetted measure."""
+        surface = self.cap.surface_area if self.axisymmetric else self.cap.length
+        m, step = self.wetted, self.step
+        return self.gamma_gl * surface + self.wetting * min(m, step) + self.wetting_out * max(m - step, 0.0)
+
+    @property
+    def pinning_multiplier(self) -> float:
+        """``gamma (cos θ_in − cos θ)``: 0 inside the pattern, the jump ``gamma_sl_out − gamma_sl`` when spread."""
+        return self.gamma_gl * (math.cos(self.angles[0]) - math.cos(self.contact_angle))
+
+    def as_dict(self) -> Dict[str, float]:
+        return {**self.cap.as_dict(), "energy": self.energy, "regime": self.regime,
+                "apparent_angle": self.contact_angle, "pinning_multiplier": self.pinning_multiplier,
+                "young_angles": list(self.angles), "regime_areas": list(self.areas)}
+
+
+def patterned_cap(drop: Droplet) -> PatternedCap:
+    """The exact minimiser on a patterned table (weightless; 2-D or of revolution).  By growing area: the Young
+    cap at the inner angle while its edge lies inside the pattern; the cap pinned at the step, its angle solved
+    from the area (bisection, to rounding), while that angle lies between the two Young angles; the Young cap
+    at the outer angle beyond."""
+    th_in, th_out = young_angle(drop.gamma_gl, drop.gamma_sl, drop.gamma_sg), outer_young_angle(drop)
+    w, axi = drop.pattern_width, drop.axisymmetric
+    a_in, a_out = float(pinned_area(th_in, w, axi)), float(pinned_area(th_out, w, axi))
+    if drop.area <= a_in:
+        regime, theta = "inside", th_in
+    elif drop.area >= a_out:
+        regime, theta = "spread", th_out
+    else:
+        regime = "pinned"
+        theta = _bisect(lambda t: pinned_area(t, w, axi) - drop.area, th_in, th_out)
+    if axi:
+        cap = SphericalCap(theta, (drop.area / cap_volume_factor(theta)) ** (1.0 / 3.0), drop.gamma_gl, drop.wetting)
+    else:
+        cap = CircularCap(theta, math.sqrt(drop.area / segment_area_factor(theta)), drop.gamma_gl, drop.wetting)
+    return PatternedCap(regime, cap, w, drop.gamma_gl, drop.wetting, drop.wetting_out, (th_in, th_out),
+                        (a_in, a_out))

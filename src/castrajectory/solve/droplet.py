@@ -25,11 +25,12 @@ import casadi as ca
 import numpy as np
 
 from ..discretise.droplet import (  # noqa: F401  (the discretisations, re-exported with the model)
-    DISCRETISATIONS, FORMULATIONS, MIN_N, Curve, Geometry, Graph, Revolution, add_gravity, contact_angle_at_rim,
-    contact_angle_estimate, resample_polyline)
+    DISCRETISATIONS, FORMULATIONS, MIN_N, Curve, Geometry, Graph, Revolution, add_gravity, add_pattern,
+    contact_angle_at_rim, contact_angle_estimate, resample_polyline)
 from ..models.droplet import (  # noqa: F401
-    AxisymmetricDrop, BeyondFold, CircularCap, Droplet, HeavyDrop, SphericalCap, analytic, arc_points,
-    pendant_fold, puddle_height, reduced_energy, revolution_fold, segment_area_factor, young_angle)
+    AxisymmetricDrop, BeyondFold, CircularCap, Droplet, HeavyDrop, PatternedCap, SphericalCap, analytic, arc_points,
+    outer_young_angle, pendant_fold, puddle_height, reduced_energy, revolution_fold, segment_area_factor,
+    step_measure, young_angle)
 from ..result import NLPResult, Result
 from ..validation import InputError, integer_at_least, one_of
 from .nlp import NLP
@@ -85,6 +86,8 @@ class DropletSolution(Result):
     #: a drop of revolution: its volume (the polyline of revolution's, exactly) and contact radius
     volume: float = math.nan
     contact_radius: float = math.nan
+    #: a patterned table: the regime, the apparent angle, the pinning multiplier and the split (:func:`_pattern_readings`)
+    pattern: Optional[dict] = None
 
     @property
     def pressure_at_table(self) -> float:
@@ -119,6 +122,9 @@ class DropletSolution(Result):
                        capillary_length=self.drop.capillary_length)
         if self.stability is not None:
             out["stability"] = self.stability
+        if self.pattern is not None:
+            out.update(regime=self.pattern["regime"], apparent_angle=self.pattern["apparent_angle"],
+                       pinning_multiplier=self.pattern["pinning_multiplier"], pattern=self.pattern)
         return out
 
 
@@ -164,12 +170,20 @@ def make_nlp(drop: Droplet, n: int, formulation: str = "curve", guess: Optional[
     # of revolution, whose surface tension is its frustums' area).
     geo = disc.build(nlp, None if drop.span is None else drop.span / L)
     w = drop.wetting / drop.gamma_gl
-    if drop.span is None and w != 0.0:
+    if drop.patterned:  # the wetting energy split at the pattern's step (its kink held by a bound)
+        nlp.minimize(add_pattern(nlp, geo, w, drop.wetting_out / drop.gamma_gl, _scaled_step(drop)))
+    elif drop.span is None and w != 0.0:
         nlp.minimize(w * (geo.span if geo.wetted is None else geo.wetted))
     # gravity only for a heavy drop (a weightless drop builds exactly the program it had before)
     if drop.rho_g > 0.0:
         add_gravity(nlp, geo, drop.gravity_sign * drop.bond_number)
     return nlp, geo, nlp.constraint("area")
+
+
+def _scaled_step(drop: Droplet, area: Optional[float] = None) -> float:
+    """The pattern's step measure (width, or disc area) in the scaled units of a drop of ``area``."""
+    L = drop.length_scale if area is None else replace(drop, area=area).length_scale
+    return step_measure(drop) / L ** (2 if drop.axisymmetric else 1)
 
 
 def solve(drop: Droplet, n: int = 400, formulation: str = "curve", *, options: Optional[dict] = None,
@@ -193,6 +207,8 @@ def solve(drop: Droplet, n: int = 400, formulation: str = "curve", *, options: O
     opts = {**SOLVER_OPTIONS, **(options or {})}
     if drop.pendant:
         return _solve_pendant(drop, n, formulation, opts, verbose)
+    if drop.patterned:
+        opts = {**opts, **PATTERN_OPTIONS, **(options or {})}
     res, nlp, geo = _solve_scaled(drop, n, formulation, opts, verbose)
     cap, note = _oracle(drop)
     sol = _solution(drop, n, formulation, opts, verbose, res, nlp, geo, cap)
@@ -212,6 +228,13 @@ def _oracle(drop: Droplet):
 
 def _terms(drop: Droplet) -> list:
     """The scene's terms, as the NLP carries them."""
+    if drop.patterned:
+        measure = "π r_c²" if drop.axisymmetric else "span"
+        return ["surface tension γ_gl × " + ("area of revolution (Σ π(r_i + r_i+1) l_i)" if drop.axisymmetric
+                                              else "length"),
+                f"wetting split at the pattern's step: {measure} = inside + outside, (γ_sl − γ_sg) × inside + "
+                "(γ_sl_out − γ_sg) × outside, inside ≤ step (pinning bound)",
+                "volume constraint" if drop.axisymmetric else "area constraint"]
     if drop.axisymmetric:
         terms = ["surface tension γ_gl × area of revolution (Σ π(r_i + r_i+1) l_i)", "volume constraint"]
         if drop.wetting != 0.0:
@@ -233,6 +256,12 @@ def _terms(drop: Droplet) -> list:
 
 def _errors(r: dict, cap) -> Dict[str, float]:
     """The readings' errors against the oracle (relative, but the contact angle's, in radians)."""
+    if isinstance(cap, PatternedCap):  # the cap's errors; the energy with the split wetting; the pinning force
+        errors = _errors(r, cap.cap)
+        errors["energy"] = abs(r["energy"] - cap.energy) / abs(cap.energy)
+        errors["pinning_multiplier"] = abs(r["pattern"]["pinning_multiplier"] - cap.pinning_multiplier) / (
+            cap.wetting_out - cap.wetting)
+        return errors
     if isinstance(cap, (SphericalCap, AxisymmetricDrop)):
         curv = cap.apex_curvature + 1.0 / cap.capillary_length  # (1/l_c = 0 without gravity)
         return {"shape": float(np.max(np.abs(cap.distance(r["x"], r["y"])))) / cap.height,
@@ -270,11 +299,15 @@ def _solution(drop: Droplet, n: int, formulation: str, opts: dict, verbose: bool
     r = _readings(drop, res, geo)
     errors = {} if cap is None else _errors(r, cap)
     young = None if drop.span is not None else drop.gamma_gl * math.cos(r["contact_angle"]) + drop.wetting
+    if drop.patterned:  # Young's law holds at the regime's angle; a pinned edge obeys Gibbs' criterion instead
+        regime = r["pattern"]["regime"]
+        young = None if regime == "pinned" else drop.gamma_gl * math.cos(r["contact_angle"]) + (
+            drop.wetting if regime == "inside" else drop.wetting_out)
     sol = DropletSolution(drop, formulation, n, res, r["x"], r["y"], r["contact_angle"], r["span"], r["pressure"],
                           r["energy"], young, cap, errors, {"terms": _terms(drop), "steps": int(n), **nlp.anatomy()},
                           height=r["height"], apex_curvature=r["apex_curvature"], stability=stability,
                           volume=r.get("volume", math.nan), contact_radius=r.get("contact_radius", math.nan),
-                          **res.contract())
+                          pattern=r.get("pattern"), **res.contract())
     if sol.success and estimate:
         sol.error_estimate = _estimate(drop, n, formulation, opts, verbose, r, sol)
         sol.warnings += sol.error_estimate.warnings()
@@ -438,6 +471,8 @@ ESTIMATED = ("contact_angle", "span", "pressure", "energy")
 
 def _readings(drop: Droplet, res: NLPResult, geo) -> dict:
     """The physical readings of a solve, in the drop's units."""
+    if drop.patterned:
+        return _pattern_readings(drop, res, geo)
     if drop.axisymmetric:
         return _revolution_readings(drop, res, geo)
     L, g = drop.length_scale, drop.gamma_gl
@@ -474,6 +509,41 @@ def _revolution_readings(drop: Droplet, res: NLPResult, geo) -> dict:
             "contact_radius": L * rc, "volume": 2.0 * math.pi / 3.0 * float(np.sum(tri * (r[:-1] + r[1:]))),
             "pressure": pressure, "energy": energy, "height": float(y[0]),
             "apex_curvature": (pressure - drop.gravity_sign * drop.rho_g * float(y[0])) / (2.0 * g)}
+
+
+#: A part of the wetted measure within this fraction of the step from its bound counts as at the bound (the
+#: regime's reading; Ipopt ends within about 1e-10 of an active bound).
+REGIME_RTOL = 1e-6
+#: Ipopt options of a patterned table on top of SOLVER_OPTIONS: the pinning bound is active in two regimes of
+#: three, so the barrier starts at Ipopt's default (``mu_init = 1e-9`` of the smooth drop, with no active
+#: inequality, ...) and the bounds are not relaxed (the split stays exact; contact code does the same).
+PATTERN_OPTIONS = {"mu_init": 0.1, "bound_relax_factor": 0.0}
+
+
+def _pattern_readings(drop: Droplet, res: NLPResult, geo) -> dict:
+    """The readings of a drop on a patterned table: the plain drop's (the wetting energy replaced by the split
+    one), and ``pattern``: the regime read off the split (the inside part below its bound: ``inside``; the
+    outside part above zero: ``spread``; both at their bounds: ``pinned``), the apparent angle, the parts of the
+    wetted measure and the multipliers of their bounds, ``pinning_multiplier = −dE*/d(step)`` (per unit length
+    of contact line; Droplet §11) and ``outside_multiplier`` (their sum is ``gamma_sl_out − gamma_sl``)."""
+    plain = replace(drop, pattern_width=None, gamma_sl_out=None)
+    r = _revolution_readings(plain, res, geo) if drop.axisymmetric else _readings(plain, res, geo)
+    L, g = drop.length_scale, drop.gamma_gl
+    unit = L ** 2 if drop.axisymmetric else L
+    inside, outside = float(res["wetted_inside"][0]) * unit, float(res["wetted_outside"][0]) * unit
+    step = step_measure(drop)
+    measure = math.pi * r["contact_radius"] ** 2 if drop.axisymmetric else r["span"]
+    r["energy"] += drop.wetting * (min(measure, step) - measure) + drop.wetting_out * max(measure - step, 0.0)
+    regime = "inside" if step - inside > REGIME_RTOL * step else (
+        "spread" if outside > REGIME_RTOL * step else "pinned")
+    pin = -g * float(res.bound_multipliers["wetted_inside"][0])
+    out = g * float(res.bound_multipliers["wetted_outside"][0])
+    r["pattern"] = {"regime": regime, "apparent_angle": r["contact_angle"], "pinning_multiplier": pin,
+                    "outside_multiplier": out, "pinning_bounds": [0.0, drop.gamma_sl_out - drop.gamma_sl],
+                    "wetted_inside": inside, "wetted_outside": outside, "step": step, "width": drop.pattern_width,
+                    "gamma_sl_out": drop.gamma_sl_out,
+                    "young_angles": [young_angle(g, drop.gamma_sl, drop.gamma_sg), outer_young_angle(drop)]}
+    return r
 
 
 def apex_curvature(x, y) -> float:
@@ -555,6 +625,93 @@ def _coarse_to_fine(drop: Droplet, n: int, opts: dict, verbose: bool, failed: NL
         guess = resample_polyline(xs, ys, m)
     res.build_time_s, res.solve_time_s, res.iterations = build, solve_t, iters
     return res, nlp, geo
+
+
+# ---------------------------------------------------------------------------- a sweep of the area on a pattern
+#: Options of a warm-started step of a sweep: the last drop is near the next, so the barrier starts small.
+WARM_OPTIONS = {"mu_init": 1e-9}
+
+
+def _pattern_step(nlp, drop: Droplet, last: Optional[NLPResult], opts: dict, verbose: bool) -> NLPResult:
+    """One solve of a pattern's program at ``drop``'s area (only the pinning bound changes), started from ``last``
+    (a warm step that fails is solved once more from the default guess)."""
+    bounds = {"wetted_inside": (0.0, _scaled_step(drop))}
+    res = nlp.solve(warm=last, options={**opts, **WARM_OPTIONS} if last else opts, verbose=verbose, bounds=bounds)
+    if not res.success and last is not None:
+        res = _add_costs(nlp.solve(options=opts, verbose=verbose, bounds=bounds), [res])
+    return res
+
+
+def solve_pattern_sweep(drop: Droplet, areas, n: int = 100, formulation: str = "curve", *,
+                        options: Optional[dict] = None, verbose: bool = False, warm: bool = True) -> list:
+    """The drop on its patterned table at each area (volume) of ``areas``, in order: one program (the scaled
+    drop has area 1 whatever its area; only the pinning bound, the step in units of the drop's size, changes),
+    each solve started from the last drop and its multipliers (``warm``), or from the default guess.  Returns a
+    :class:`DropletSolution` per area (errors against :func:`~castrajectory.models.droplet.patterned_cap`; no
+    error estimate); a failed solve is returned as such and the next starts afresh."""
+    if not drop.patterned:
+        raise InputError("a pattern sweep needs a patterned table (pattern_width and gamma_sl_out)")
+    n = integer_at_least("n", n, MIN_N)
+    _check_formulation(drop, formulation)
+    opts = {**SOLVER_OPTIONS, **PATTERN_OPTIONS, **(options or {})}
+    nlp, geo, _ = make_nlp(drop, n, formulation)
+    out, last = [], None
+    for area in areas:
+        last = last if warm else None
+        here = replace(drop, area=float(area))
+        _check_formulation(here, formulation)
+        res = _pattern_step(nlp, here, last, opts, verbose)
+        if out:
+            res.build_time_s = 0.0  # one program, built once
+        cap, _ = _oracle(here)
+        out.append(_solution(here, n, formulation, opts, verbose, res, nlp, geo, cap, estimate=False))
+        last = res if res.success else None
+    return out
+
+
+def pattern_transitions(drop: Droplet, n: int = 100, formulation: str = "curve", *, options: Optional[dict] = None,
+                        verbose: bool = False, rtol: float = 1e-10) -> dict:
+    """The areas (volumes) where the discrete drop's edge reaches the step and where it depins, to ``rtol``.
+
+    Each is the root of a signed reading that is continuous through the transition: at the pinning area
+    ``λ_in / Δγ − (step − m_in) / step`` (the pinning multiplier on the pinned side, the gap to the step inside),
+    at the depinning area ``λ_out / Δγ − m_out / step`` (``Δγ = gamma_sl_out − gamma_sl``), found by the Illinois
+    regula falsi from brackets around the oracle's areas; one program, each solve warm-started from the last.
+    Returns ``{"pinning": A_pin, "depinning": A_depin}`` (``None`` where the edge never depins, a
+    non-wetting outside) and ``{"solves": k, "iterations": i}``.  A study helper, not a scene's solve: a drop
+    that does not converge raises ``RuntimeError``."""
+    from ..models.droplet import _illinois, patterned_cap
+    opts = {**SOLVER_OPTIONS, **PATTERN_OPTIONS, **(options or {})}
+    nlp, geo, _ = make_nlp(drop, n, formulation)
+    jump = drop.gamma_sl_out - drop.gamma_sl
+    state = {"last": None, "solves": 0, "iterations": 0}
+
+    def reading(area: float, key: str) -> float:
+        here = replace(drop, area=area)
+        res = _pattern_step(nlp, here, state["last"], opts, verbose)
+        state["solves"] += 1
+        state["iterations"] += res.iterations
+        if not res.success:
+            raise RuntimeError(f"the drop of {drop.measure} {area:g} did not converge ({res.solver_status})")
+        state["last"] = res
+        p = _pattern_readings(here, res, geo)["pattern"]
+        if key == "pinning":
+            return p["pinning_multiplier"] / jump - (p["step"] - p["wetted_inside"]) / p["step"]
+        return p["outside_multiplier"] / jump - p["wetted_outside"] / p["step"]
+
+    out = {}
+    for key, exact in zip(("pinning", "depinning"), patterned_cap(drop).areas):
+        if not math.isfinite(exact):
+            out[key] = None
+            continue
+        lo, hi = 0.8 * exact, 1.25 * exact
+        f = lambda a: reading(a, key)  # noqa: E731
+        flo, fhi = f(lo), f(hi)
+        while (flo > 0.0) == (fhi > 0.0):  # widen the bracket (the discrete transition moves by O(N^-2))
+            lo, hi = 0.8 * lo, 1.25 * hi
+            flo, fhi = f(lo), f(hi)
+        out[key] = _illinois(f, lo, hi, flo, fhi, rtol)
+    return {**out, "solves": state["solves"], "iterations": state["iterations"]}
 
 
 # ---------------------------------------------------------------------------- reduced problem in theta
