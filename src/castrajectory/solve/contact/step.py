@@ -514,8 +514,17 @@ def _slip_turn(step: _Step, q, p, h, modes, x, fmodes):
             slip = np.asarray(cm.slip_row(q, xw[:n], xw[n:2 * n], xw[2 * n], h,
                                           np.array([float(m == W) for m in new]))).reshape(-1)
             held = [i for i, m in enumerate(new) if m in (H, W)]
-            valid = all(nu[i] >= 0.0 and mu[i] >= 0.0 for i in held) and mul[j] >= 0.0 and sg * slip[j] >= 0.0
-            valid &= abs(rho[c + j]) <= cm.mu_f[j] * (1 + 1e-10) if after == STICK else -sg * slip[c + j] >= 0.0
+            valid = all(nu[i] >= 0.0 and mu[i] >= 0.0 for i in held) and mul[j] >= 0.0
+            # every slot's friction mode holds (sticking inside the cone, sliding with its slip's sign)
+            muf = np.concatenate([cm.mu_f, cm.mu_f])
+            tol = 1e-12 * step.vref
+            for i, f in enumerate(trial):
+                if f == STICK:
+                    valid &= abs(rho[i]) <= muf[i] * (1 + 1e-10)
+                elif f == UP:
+                    valid &= slip[i] >= -tol
+                elif f == DOWN:
+                    valid &= slip[i] <= tol
             gn = np.asarray(cm.system.gap(xw[n:2 * n])[0]).reshape(-1)
             if valid:
                 return xw, new, gn, trial
