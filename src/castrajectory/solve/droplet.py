@@ -204,6 +204,7 @@ def solve(drop: Droplet, n: int = 400, formulation: str = "curve", *, options: O
     """
     n = integer_at_least("n", n, MIN_N)
     _check_formulation(drop, formulation)
+    _check_bracketable(drop)
     opts = {**SOLVER_OPTIONS, **(options or {})}
     if drop.pendant:
         return _solve_pendant(drop, n, formulation, opts, verbose)
@@ -337,6 +338,20 @@ CONTINUATION_MAX_ITER = 20
 CONTINUATION_MAX_STEPS = 200
 #: The status of a pendant drop asked for beyond the fold of its family.
 NO_STABLE_DROP = "No_Stable_Drop"
+#: The largest Bond number of a pendant drop whose fold the continuation can bracket: from its first step
+#: (a quarter of the target) it halves until a drop is found, about log2(Bo / Bo*) refused steps, then
+#: bisects the fold to FOLD_RTOL (about 24 more; measured 23.5-25 steps beyond log2(Bo / Bo*) at N = 40,
+#: 2-D and 3-D, Bo up to 1e30).  2^152 (5.7e45) leaves CONTINUATION_MAX_STEPS room for folds down to
+#: Bo* = 2^-24; above it the continuation would stall, so the drop is refused before any solve.
+MAX_PENDANT_BOND = 2.0 ** (CONTINUATION_MAX_STEPS - 2 * math.ceil(math.log2(1.0 / FOLD_RTOL)))
+
+
+def _check_bracketable(drop: Droplet) -> None:
+    """Refuse a pendant drop too large for the continuation to bracket its family's fold (see MAX_PENDANT_BOND)."""
+    if drop.pendant and drop.bond_number > MAX_PENDANT_BOND:
+        raise InputError(f"a pendant drop of {drop.measure} {drop.area:g} (Bond number {drop.bond_number:.3g}) is "
+                         f"beyond what the continuation can bracket (Bond number <= {MAX_PENDANT_BOND:.3g}); "
+                         "every pendant family folds at a Bond number of order one, so no stable drop exists there")
 
 
 @dataclass
