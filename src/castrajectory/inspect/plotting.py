@@ -169,6 +169,40 @@ def droplet_convergence(rows: List[dict], path: str) -> None:
     fig.savefig(path, dpi=120)
 
 
+def bond_study(rows: List[dict], theta_deg: float = 90.0, peak: Optional[dict] = None) -> Figure:
+    """The shape-against-Bond study (:mod:`castrajectory.inspect.bond`): height and contact radius (2-D: half
+    span) against Bo, the oracle as lines and the NLP as markers, the puddle limit and the 3-D peak."""
+    limit = 2.0 * math.sin(0.5 * math.radians(theta_deg))
+    fig = Figure(figsize=(11.0, 4.2), layout="constrained")
+    ax_h, ax_r = fig.subplots(1, 2)
+    for dim, color in (("2-D", "C0"), ("3-D", "C3")):
+        sel = sorted((r for r in rows if r["dim"] == dim), key=lambda r: r["bond"])
+        if not sel:
+            continue
+        bo = np.array([r["bond"] for r in sel])
+        ax_h.semilogx(bo, [r["height_ref"] for r in sel], "-", color=color, lw=1.2, label=f"{dim}, oracle")
+        ax_r.loglog(bo, [r["radius_ref"] for r in sel], "-", color=color, lw=1.2, label=f"{dim}, oracle")
+        ok = [r for r in sel if r["status"] == "ok"]
+        ax_h.semilogx([r["bond"] for r in ok], [r["height"] for r in ok], "o", color=color, mfc="none", ms=6,
+                      label=f"{dim}, NLP")
+        ax_r.loglog([r["bond"] for r in ok], [r["radius"] for r in ok], "o", color=color, mfc="none", ms=6,
+                    label=f"{dim}, NLP")
+    ax_h.axhline(limit, color="k", ls="--", lw=0.8, label="puddle limit 2 l_c sin(θ/2)")
+    if peak is not None:
+        ax_h.plot([peak["bond"]], [peak["height"]], "k*", ms=9,
+                  label=f"3-D peak: V = {peak['volume']:.3g} l_c³, h = {peak['height']:.4f}")
+    ax_h.set_xlabel("Bond number (2-D A/l_c², 3-D V^(2/3)/l_c²)")
+    ax_h.set_ylabel("height h / l_c")
+    ax_h.set_title(f"height against Bo (θ = {theta_deg:g}°)")
+    ax_r.set_xlabel("Bond number")
+    ax_r.set_ylabel("2-D half span X, 3-D contact radius r_c (/ l_c)")
+    ax_r.set_title("contact radius against Bo")
+    for ax in (ax_h, ax_r):
+        ax.grid(True, which="major", alpha=0.3)
+        ax.legend(fontsize=7)
+    return fig
+
+
 # ----------------------------------------------------------------------------- trajectories
 # The functions below return a Figure and leave saving to the caller
 # (``fig.savefig(path)``); nothing global is touched.
