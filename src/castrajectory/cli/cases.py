@@ -24,8 +24,12 @@ class Case:
     argv: Tuple[str, ...]
     check: Optional[Check]
     #: "solve", or "unresolved": a grid too coarse for the motion, whose run must stop unconverged and
-    #: say which N resolves it (failure reported as failure is the behaviour checked)
+    #: say which N resolves it (failure reported as failure is the behaviour checked), or "no_stable_drop":
+    #: a pendant drop beyond its family's fold, whose run must end with that verdict (status No_Stable_Drop)
+    #: and whose check judges the fold it found
     expect: str = "solve"
+    #: over a few seconds: tests/test_stability.py marks it slow (the report runs it regardless)
+    slow: bool = False
 
     @property
     def command(self) -> str:
@@ -37,6 +41,24 @@ class Case:
 def droplet_check(key: str, tol: float, what: str) -> Check:
     def check(d):
         return float(d["errors"][key]), tol, what
+    return check
+
+
+def puddle_check(theta_deg: float, tol: float) -> Check:
+    def check(d):
+        """A 2-D puddle (κ_a below 1e-100 / l_c, beyond the closed form's range): its span against the force
+        balance X = (ρg A/2 + γ sin θ)/P with P = ρg h∞, h∞ = 2 l_c sin(θ/2), and the pressure at the table
+        against ρg h∞ (relative; the worse of the two).  The height itself is not judged: the edge, one l_c
+        wide, lies inside a chord or two (measured at Bo = 1e4, N = 2000: 11 % high)."""
+        rho_g, lc, bo = float(d["gravity"]), float(d["capillary_length"]), float(d["bond_number"])
+        gamma, area = rho_g * lc ** 2, bo * lc ** 2
+        theta = math.radians(theta_deg)
+        p_inf = rho_g * 2.0 * lc * math.sin(0.5 * theta)
+        span = 2.0 * (0.5 * rho_g * area + gamma * math.sin(theta)) / p_inf
+        err = max(abs(float(d["span"]) - span) / span, abs(float(d["pressure"]) - p_inf) / p_inf)
+        return err, tol, (f"span and pressure against the puddle's force balance (relative; height "
+                          f"{float(d['height']) / (2.0 * lc * math.sin(0.5 * theta)) - 1.0:+.2f} off 2 l_c sin(θ/2): "
+                          "the edge is unresolved)")
     return check
 
 

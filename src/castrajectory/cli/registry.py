@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from typing import Dict, List, Tuple
 
 from .cases import (Case, chaotic_reference, contact_check, droplet_check, energy_bounded, flip_interval,
-                        no_flip, rigid_pendulum)
+                        no_flip, puddle_check, rigid_pendulum)
 
 
 @dataclass(frozen=True)
@@ -45,8 +45,9 @@ class Scene:
         return f"castrajectory.problems.{self.name}"
 
 
-#: γ_sl giving Young's angles 2°, 90° and 178° (γ_gl = γ_sg = 1)
-GSL = {2: 1.0 - math.cos(math.radians(2.0)), 90: 1.0, 178: 1.0 - math.cos(math.radians(178.0))}
+#: γ_sl giving Young's angles 2°, 90°, 175° and 178° (γ_gl = γ_sg = 1)
+GSL = {2: 1.0 - math.cos(math.radians(2.0)), 90: 1.0, 175: 1.0 - math.cos(math.radians(175.0)),
+       178: 1.0 - math.cos(math.radians(178.0))}
 _ANGLE = "contact angle against Young's (rad)"
 _SHAPE = "shape: max distance to the analytic circle / R"
 
@@ -64,6 +65,19 @@ SCENES: List[Scene] = [
         Case("droplet", "N = 10⁵, curve", "droplet", ("--n", "100000"), droplet_check("shape", 1e-9, _SHAPE)),
         Case("droplet", "N = 10⁵, graph", "droplet", ("--n", "100000", "--formulation", "graph"),
              droplet_check("shape", 1e-9, _SHAPE)),
+        # drops under gravity (#26; the report's section "drops under gravity"), θ = 90° unless said
+        Case("droplet", "a puddle under gravity, Bo = 10⁴ (l_c = 0.01)", "droplet",
+             ("--gravity", "1e4", "--gamma-sl", "1", "--n", "2000"), puddle_check(90.0, 1e-3), slow=True),  # 1.1e-4
+        Case("droplet", "θ = 175° under gravity (Bo = 1)", "droplet", ("--gravity", "1", "--gamma-sl",
+                                                                     f"{GSL[175]:.12g}", "--n", "400"),
+             droplet_check("height", 1e-4, "height against the closed form (relative)")),          # 7.2e-6
+        Case("droplet", "pendant drop just below its fold (A = 2.7, A* = 2.7151505)", "droplet",
+             ("--gravity", "1", "--gamma-sl", "1", "--pendant", "--area", "2.7", "--n", "50"),
+             droplet_check("height", 1e-2, "height against the closed form (relative; N = 50)")),   # 3.4e-3
+        Case("droplet", "pendant drop just above its fold (A = 2.73): no stable drop", "droplet",
+             ("--gravity", "1", "--gamma-sl", "1", "--pendant", "--area", "2.73", "--n", "50"),
+             droplet_check("fold_area", 3e-3, "the last stable area against the closed form's fold A* "
+                                             "(relative; N = 50, order 2)"), expect="no_stable_drop"),   # 1.2e-3
     )),
     Scene("droplet_angle", "droplet"),
     Scene("double_pendulum", "mechanics", report=(
