@@ -146,34 +146,30 @@ class EventDriven(Result):
         return np.array([s.t for s in self.switches if s.kind == kind and (contact is None or s.contact == contact)])
 
 
-def _constant_acceleration(dyn: ca.Function, q0: np.ndarray, v0: np.ndarray):
-    """A phase's acceleration where it is the same at a few states (a body sliding or rolling on a flat floor
-    under gravity: then its flight is the exact parabola), else ``None``."""
-    a0 = np.asarray(dyn(q0, v0)).reshape(-1)
-    rng = np.random.default_rng(1)
-    for _ in range(3):
-        dq = rng.standard_normal(q0.size) * (1.0 + np.abs(q0))
-        dv = rng.standard_normal(q0.size) * (1.0 + np.abs(v0))
-        a = np.asarray(dyn(q0 + dq, v0 + dv)).reshape(-1)
-        if np.max(np.abs(a - a0)) > 1e-12 * (1.0 + float(np.max(np.abs(a0)))):
-            return None
-    return a0
-
-
-def _constant_dynamics(system: LagrangianSystem, q0: np.ndarray, v0: np.ndarray):
-    """``(M, a)``, checked constant at a few states, or ``None``."""
-    M0 = np.asarray(system.mass_matrix(q0))
-    a0 = np.asarray(system.acceleration(q0, np.zeros_like(q0))).reshape(-1)
+def _constant(fn, q0: np.ndarray, v0: np.ndarray):
+    """``fn(q0, v0)`` where ``fn`` takes the same value at a few other states, else ``None``."""
+    x0 = np.asarray(fn(q0, v0))
     rng = np.random.default_rng(0)
     for _ in range(3):
         dq = rng.standard_normal(q0.size) * (1.0 + np.abs(q0))
         dv = rng.standard_normal(q0.size) * (1.0 + np.abs(v0))
-        M = np.asarray(system.mass_matrix(q0 + dq))
-        a = np.asarray(system.acceleration(q0 + dq, v0 + dv)).reshape(-1)
-        scale = 1.0 + float(np.max(np.abs(a0)))
-        if np.max(np.abs(M - M0)) > 1e-12 * np.max(np.abs(M0)) or np.max(np.abs(a - a0)) > 1e-12 * scale:
+        if np.max(np.abs(np.asarray(fn(q0 + dq, v0 + dv)) - x0)) > 1e-12 * (1.0 + float(np.max(np.abs(x0)))):
             return None
-    return M0, a0
+    return x0
+
+
+def _constant_acceleration(dyn: ca.Function, q0: np.ndarray, v0: np.ndarray):
+    """A phase's acceleration where it is the same at a few states (a body sliding or rolling on a flat floor
+    under gravity: then its flight is the exact parabola), else ``None``."""
+    a = _constant(dyn, q0, v0)
+    return None if a is None else a.reshape(-1)
+
+
+def _constant_dynamics(system: LagrangianSystem, q0: np.ndarray, v0: np.ndarray):
+    """``(M, a)``, checked constant at a few states, or ``None``."""
+    M = _constant(lambda q, v: system.mass_matrix(q), q0, v0)
+    a = _constant(system.acceleration, q0, v0)
+    return None if M is None or a is None else (M, a.reshape(-1))
 
 
 #: The step numbers of the extrapolation's columns (Gragg–Bulirsch–Stoer: order 2 × 8 = 16).
