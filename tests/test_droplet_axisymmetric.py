@@ -190,3 +190,40 @@ def test_script_refuses_bad_axisymmetric_input(args, needle):
     assert p.returncode == 2 and p.stdout == ""
     lines = p.stderr.strip().splitlines()
     assert len(lines) == 1 and needle in lines[0] and "Traceback" not in p.stderr
+
+
+# ----------------------------------------------------------------------------- flat, beading and heavy extremes
+@pytest.mark.parametrize("deg, measured", [(3, 1.2e-4), (10, 1.2e-4), (30, 1.2e-4), (170, 1.6e-4)])
+def test_flat_and_beading_caps_of_revolution(deg, measured):
+    """The weightless drop of revolution from 3° to 170° at N = 100, against the spherical cap (its start is the
+    cap of Young's angle, resampled: the discrete optimum is not, and Ipopt must find it).  From the hemisphere
+    the 30° drop crossed the axis and its energy ran to -87, and the 10° one did not converge."""
+    sol = dl.solve(revolution(deg, 1.0, 0.0), 100)
+    assert sol.success, sol.message
+    assert sol.errors["height"] < 100 * measured
+    assert abs(sol.contact_angle - math.radians(deg)) < 100 * 2.2e-3 * math.radians(deg)  # measured 2.2e-3 at 170°
+    assert np.all(sol.x[1:] > 0.0)  # the profile stays off the axis
+
+
+def test_heavy_drop_of_revolution_at_bond_100_at_second_order():
+    """Bond 100 at 60° (V = 1000 l_c³): the height against the Young–Laplace shooting at N = 100 and 400 at order
+    about 2 (measured 1.23e-4, 7.7e-6: order 2.0).  The family is followed on the coarse polyline, then refined.
+    Before, the apex node sat on the axis below the drop (a chord along the axis has no area and no volume)."""
+    drop = revolution(60, 100.0 ** 1.5, 1.0)
+    errs = []
+    for n in (100, 400):
+        sol = dl.solve(drop, n)
+        assert sol.success, sol.message
+        errs.append(sol.errors["height"])
+    assert errs[-1] < 100 * 7.7e-6 and 1.8 <= observed_order((100, 400), errs) <= 2.2
+
+
+def test_puddle_beyond_the_shooting_is_said():
+    """A puddle so flat that its apex radius overflows (θ = 8.1°, Bo = 1000): the oracle says why it has no answer
+    (it raised an OverflowError before), and the solve reports the drop with that warning and no errors."""
+    drop = revolution(8.1, 1000.0 ** 1.5, 1.0)
+    with pytest.raises(ValueError, match="beyond the shooting"):
+        md.analytic(drop)
+    sol = dl.solve(drop, 100)
+    assert sol.success and sol.errors == {}
+    assert any("beyond the shooting" in w for w in sol.warnings)

@@ -162,7 +162,9 @@ def make_nlp(drop: Droplet, n: int, formulation: str = "curve", guess: Optional[
     L = drop.length_scale
     nlp = NLP()
     if formulation == "curve":
-        disc = Revolution(n, guess) if drop.axisymmetric else Curve(n, guess)
+        # a drop of revolution starts from the cap of its weightless angle (Young's, or Gibbs' on a pattern)
+        disc = Revolution(n, guess, analytic(replace(drop, rho_g=0.0, pendant=False)).contact_angle) \
+            if drop.axisymmetric else Curve(n, guess)
     else:
         disc = DISCRETISATIONS[formulation](n)
     # The scene's terms: surface tension (the length elements, added by the discretisation) always;
@@ -298,6 +300,11 @@ def _solution(drop: Droplet, n: int, formulation: str, opts: dict, verbose: bool
     """The solution of the drop from its final solve: readings, errors against ``cap`` (None: no oracle),
     and on success (and ``estimate``) the error estimate."""
     r = _readings(drop, res, geo)
+    if drop.axisymmetric and res.success and np.any(r["xs"][1:] <= 0.0):
+        # the frustum's area pi (r_i + r_{i+1}) l is the surface only on the axis' own side: a profile that
+        # reaches or crosses the axis is no drop of revolution, whatever Ipopt says
+        res.fail("Profile_Crossed_Axis", f"the profile reached the axis at {int(np.sum(r['xs'][1:] <= 0.0))} "
+                 "node(s) besides the apex: no drop of revolution; supply a better initial guess")
     errors = {} if cap is None else _errors(r, cap)
     young = None if drop.span is not None else drop.gamma_gl * math.cos(r["contact_angle"]) + drop.wetting
     if drop.patterned:  # Young's law holds at the regime's angle; a pinned edge obeys Gibbs' criterion instead
@@ -413,8 +420,8 @@ def _continuation(drop: Droplet, n: int, formulation: str, opts: dict, verbose: 
             spent.append(res)
             bond, res, hess = trial, r, h
             step *= 2.0
-            if refused is not None and bond >= refused:
-                refused = None
+            if refused is not None and (bond >= refused or not stability):
+                refused = None  # without a stability test a refusal marks no fold: only a step too long
             continue
         spent.append(r)
         refused, refused_from = trial, bond
@@ -608,7 +615,9 @@ def _solve_scaled(drop: Droplet, n: int, formulation: str, opts: dict, verbose: 
     if ladder or heavy:  # a good start converges in <= 15 iterations; do not spend a long failing run
         first["max_iter"] = min(int(opts.get("max_iter", 200)), FIRST_ATTEMPT_MAX_ITER)
     guess, spent = None, []
-    if formulation == "curve" and n >= PRESOLVE_MIN_N:
+    # a heavy drop's default guess is the weightless one: far from a heavy drop at any N, and a first attempt
+    # from it at fine N spends its iterations in Ipopt's inertia correction (N = 1000, Bond 100: 37 s)
+    if formulation == "curve" and (n >= PRESOLVE_MIN_N or (heavy and n > PRESOLVE_N)):
         coarse, cnlp, cgeo = _solve_scaled(drop, PRESOLVE_N, "curve", opts, verbose)
         spent.append(coarse)
         if coarse.success:
@@ -617,18 +626,31 @@ def _solve_scaled(drop: Droplet, n: int, formulation: str, opts: dict, verbose: 
     nlp, geo, _ = make_nlp(drop, n, formulation, guess)
     res = nlp.solve(options=first, verbose=verbose)
     if not res.success and heavy:
+        # the family is followed on the coarse polyline (a continuation step from a weightless drop at fine N
+        # drove Ipopt into its inertia correction: 30 s for one refused step at N = 1000), then refined
         spent.append(res)
-        cont = _continuation(drop, n, formulation, opts, verbose, stability=False)
+        m = min(n, COARSE_N) if formulation == "curve" else n
+        cont = _continuation(drop, m, formulation, opts, verbose, stability=False)
         res, nlp, geo = cont.result, cont.nlp, cont.geo
+        if m < n and res.success:
+            res, nlp, geo = _coarse_to_fine(drop, n, opts, verbose, res, start=(m, geo))
     elif not res.success and ladder:
         res, nlp, geo = _coarse_to_fine(drop, n, opts, verbose, res)
     return _add_costs(res, spent), nlp, geo
 
 
-def _coarse_to_fine(drop: Droplet, n: int, opts: dict, verbose: bool, failed: NLPResult):
-    """Fallback ladder COARSE_N, 2 COARSE_N, ..., n; every solve's time and iterations are counted."""
+def _coarse_to_fine(drop: Droplet, n: int, opts: dict, verbose: bool, failed: NLPResult, start=None):
+    """Fallback ladder COARSE_N, 2 COARSE_N, ..., n; every solve's time and iterations are counted.
+
+    ``start = (m, geometry)``: ``failed`` is instead a solved drop on ``m`` segments, and the ladder climbs
+    from it (its costs are counted)."""
     build, solve_t, iters = failed.build_time_s, failed.solve_time_s, failed.iterations
     guess, m = None, COARSE_N
+    if start is not None:
+        m, geo = start
+        xs, ys, _ = geo.vertices(failed)
+        m = min(2 * m, n)
+        guess = resample_polyline(xs, ys, m)
     while True:
         nlp, geo, _ = make_nlp(drop, m, "curve", guess)
         res = nlp.solve(options=opts, verbose=verbose)

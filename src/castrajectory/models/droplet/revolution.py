@@ -324,16 +324,26 @@ def _unit_revolution(theta: float, g: int, b: float, crossing: int = 0):
     return prof, b ** 3 * prof.volume
 
 
+#: The largest ``log b`` the sessile shooting brackets (``b³`` overflows near ``e^236``): a puddle's top flattens
+#: as ``e^(-r_c)`` (θ = 8°, V = 3.2e4 l_c³ needs b ≈ e^268).
+MAX_LOG_APEX_RADIUS = 200.0
+
+
 def _sessile_revolution(theta: float, volume: float) -> tuple:
     """``(profile, b)`` of the sessile drop of unit volume ``volume`` (units of l_c): its volume rises with
     the apex radius ``b``; Illinois regula falsi in ``log b`` from the spherical cap's radius."""
     f = lambda lb: _unit_revolution(theta, 1, math.exp(lb))[1] / volume - 1.0  # noqa: E731
     lo = math.log((volume / cap_volume_factor(theta)) ** (1.0 / 3.0))  # the weightless cap: too small a drop
     flo = f(lo)
-    hi = lo + 1.0
+    hi, stride = lo + 1.0, 1.0
     fhi = f(hi)
     while fhi <= 0.0:
-        lo, flo, hi = hi, fhi, hi + 1.0
+        if hi >= MAX_LOG_APEX_RADIUS:
+            raise ValueError(f"the sessile drop of revolution at {math.degrees(theta):.6g} degrees and volume "
+                             f"{volume:.6g} l_c³ is a puddle whose apex radius exceeds e^{MAX_LOG_APEX_RADIUS:g} l_c "
+                             "(its top flattens exponentially in its radius): beyond the shooting from the apex")
+        stride *= 2.0  # a puddle's volume grows only as (log b)²: widen the bracket geometrically
+        lo, flo, hi = hi, fhi, min(hi + stride, MAX_LOG_APEX_RADIUS)
         fhi = f(hi)
     while flo > 0.0:
         lo -= 1.0
