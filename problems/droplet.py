@@ -34,9 +34,12 @@ def parser():
     p.add_argument("--gamma-sl", type=float, default=0.5, help="solid–liquid tension γ_sl")
     p.add_argument("--gamma-sg", type=float, default=1.0, help="solid–gas tension γ_sg")
     p.add_argument("--area", type=float, default=1.0, help="drop area A (> 0)")
-    p.add_argument("--n", type=int, default=400, help="number of segments N (>= 3)")
+    p.add_argument("--n", type=int, default=400,
+                   help="number of segments N (>= 3); with --formulation spectral, the degree (4 to 200; 12-32 "
+                        "reach rounding for a drop a few capillary lengths across)")
     p.add_argument("--formulation", choices=droplet.FORMULATIONS, default="curve",
-                   help="curve: polyline, any angle; graph: y(x), angles below 90°")
+                   help="curve: polyline, any angle; graph: y(x), angles below 90°; spectral: the tangent angle a "
+                        "polynomial of degree --n (any angle, converges faster than any power; not on a pattern)")
     p.add_argument("--span", type=float, default=None, metavar="A_FIXED",
                    help="pin the contact span to this value (fixed-span mode)")
     p.add_argument("--gravity", type=float, default=0.0, metavar="RHO_G",
@@ -44,12 +47,17 @@ def parser():
     p.add_argument("--pendant", action="store_true",
                    help="reverse gravity: the drop hangs under a ceiling (needs --gravity > 0)")
     p.add_argument("--axisymmetric", action="store_true",
-                   help="a drop of revolution (3-D): --area is then its volume; curve formulation only")
+                   help="a drop of revolution (3-D): --area is then its volume; curve or spectral formulation")
     p.add_argument("--pattern", type=float, nargs=2, default=None, metavar=("W", "GAMMA_SL_OUT"),
                    help="a patterned table: γ_sl on a strip of width W (> 0) under the drop, GAMMA_SL_OUT "
                         "(> γ_sl: less wettable) outside it; weightless drops")
     cli.add_plot(p)
     return p
+
+
+def _size(sol) -> str:
+    """``N = ...`` segments, or the spectral profile's degree."""
+    return f"degree {sol.n}" if sol.formulation == "spectral" else f"N = {sol.n}"
 
 
 def run(args):
@@ -82,7 +90,7 @@ def run(args):
     mode = "free span" if drop.span is None else f"pinned span a = {drop.span:g}"
     young = ("Young residual γ_gl cos θ + γ_sl − γ_sg = " + cli.fmt(sol.young_residual, ".3e")
              if sol.young_residual is not None else "Young's law does not apply: the span is pinned")
-    summary = [f"droplet: {sol.formulation} formulation, N = {sol.n}, {mode}", *summary, young,
+    summary = [f"droplet: {sol.formulation} formulation, {_size(sol)}, {mode}", *summary, young,
                cli.status_line(sol.status, sol)]
     return cli.Outcome.of(sol, summary=summary, writers={"plot": lambda path: plotting.droplet_shape(sol, path)})
 
@@ -92,7 +100,7 @@ def _heavy_outcome(sol):
     drop, cap, e = sol.drop, sol.analytic, sol.errors
     deg = math.degrees
     kind = "pendant (under a ceiling)" if drop.pendant else "sessile"
-    head = [f"droplet under gravity, {kind}: {sol.formulation} formulation, N = {sol.n}, ρg = {drop.rho_g:g}, "
+    head = [f"droplet under gravity, {kind}: {sol.formulation} formulation, {_size(sol)}, ρg = {drop.rho_g:g}, "
             f"l_c = {drop.capillary_length:.6g}, Bond number A/l_c² = {drop.bond_number:.6g}"]
     fold = (sol.stability or {}).get("fold")
     if fold is not None:
@@ -138,7 +146,7 @@ def _revolution_outcome(sol):
     drop, cap, e = sol.drop, sol.analytic, sol.errors
     plot = {"plot": lambda path: plotting.droplet_shape(sol, path)}
     kind = ("pendant (under a ceiling)" if drop.pendant else "sessile") if drop.rho_g > 0.0 else "weightless"
-    head = [f"drop of revolution, {kind}: N = {sol.n}, volume {drop.area:g}"
+    head = [f"drop of revolution, {kind}: {sol.formulation} formulation, {_size(sol)}, volume {drop.area:g}"
             + (f", ρg = {drop.rho_g:g}, l_c = {drop.capillary_length:.6g}, Bond number V^(2/3)/l_c² = "
                f"{drop.bond_number:.6g}" if drop.rho_g > 0.0 else "")]
     fold = (sol.stability or {}).get("fold")
@@ -162,7 +170,7 @@ def _revolution_outcome(sol):
             row("pressure at the table (volume multiplier)", sol.pressure_at_table, "pressure"),
             row("apex curvature 1/b (P − g ρg h)/2γ", sol.apex_curvature, "apex_curvature"),
             row("energy", sol.energy, "energy"),
-            ["volume of the polyline of revolution", cli.fmt(sol.volume), cli.fmt(drop.area), ""],
+            ["volume of the discrete profile", cli.fmt(sol.volume), cli.fmt(drop.area), ""],
             ["shape (max dist / h)", "", "", "" if "shape" not in e else cli.fmt(e["shape"], ".3e")]]
     lines = head + cli.table(rows)
     hess = (sol.stability or {}).get("reduced_hessian")
@@ -181,7 +189,7 @@ def _pattern_outcome(sol):
     th_in, th_out = pat["young_angles"]
     what = "volume" if drop.axisymmetric else "area"
     head = [f"droplet on a patterned table{' (of revolution)' if drop.axisymmetric else ''}: {sol.formulation} "
-            f"formulation, N = {sol.n}, {what} {drop.area:g}, pattern width {drop.pattern_width:g}, "
+            f"formulation, {_size(sol)}, {what} {drop.area:g}, pattern width {drop.pattern_width:g}, "
             f"γ_sl = {drop.gamma_sl:g} inside, {drop.gamma_sl_out:g} outside",
             f"Young angles {deg(th_in):.6g}° inside, {deg(th_out):.6g}° outside; the edge pins for {what}s "
             f"{cap.areas[0]:.6g} to {cap.areas[1]:.6g}"]

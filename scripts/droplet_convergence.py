@@ -25,7 +25,7 @@ def main(argv=None):
     p.add_argument("--out", default="out", help="output directory")
     p.add_argument("--n-min", type=int, default=8)
     p.add_argument("--n-max", type=int, default=100_000)
-    p.add_argument("--formulations", nargs="+", choices=droplet.FORMULATIONS, default=list(droplet.FORMULATIONS))
+    p.add_argument("--formulations", nargs="+", choices=droplet.POLYLINES, default=list(droplet.POLYLINES))
     sweeps.add_sweep_flags(p)
     args = p.parse_args(argv)
     if args.n_min < droplet.MIN_N or args.n_max < args.n_min:

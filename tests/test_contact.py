@@ -812,7 +812,11 @@ PLASTIC_BOXES = [
 ]
 
 
-@pytest.mark.parametrize("size,R,axis,angle,pos,omega,v", PLASTIC_BOXES)
+@pytest.mark.parametrize("size,R,axis,angle,pos,omega,v", [
+    PLASTIC_BOXES[0],
+    # the second box in the slow run (15 s: the default run is near its 10-minute guideline, and the first
+    # box keeps the oracle; session 14 added the spectral drop's tests)
+    pytest.param(*PLASTIC_BOXES[1], marks=pytest.mark.slow)])
 def test_plastic_box_in_a_3d_bowl(size, R, axis, angle, pos, omega, v):
     """e = 0: every arrival is plastic (Newton's law with e = 0, or caught), the body comes to rest
     or slides in the bowl; no penetration, complementarity, impulses in Π ∇φᵀ μ, energy only lost."""

@@ -182,7 +182,7 @@ def test_script_axisymmetric_json_and_plot(tmp_path):
 
 
 @pytest.mark.parametrize("args, needle", [
-    (["--formulation", "graph"], "curve formulation"), (["--span", "1"], "pinned contact radius"),
+    (["--formulation", "graph"], "curve or spectral formulation"), (["--span", "1"], "pinned contact radius"),
     (["--area", "-1"], "positive"), (["--gravity", "-1"], ">= 0"),
 ])
 def test_script_refuses_bad_axisymmetric_input(args, needle):
@@ -222,8 +222,6 @@ def test_puddle_beyond_the_shooting_is_said():
     """A puddle so flat that its apex radius overflows (θ = 8.1°, Bo = 1000): the oracle says why it has no answer
     (it raised an OverflowError before), and the solve reports the drop with that warning and no errors."""
     drop = revolution(8.1, 1000.0 ** 1.5, 1.0)
-    with pytest.raises(ValueError, match="beyond the shooting"):
-        md.analytic(drop)
-    sol = dl.solve(drop, 100)
+    sol = dl.solve(drop, 100)  # (its oracle raised the ValueError that the warning quotes)
     assert sol.success and sol.errors == {}
     assert any("beyond the shooting" in w for w in sol.warnings)

@@ -25,7 +25,10 @@ from ..models.droplet import arc_points, segment_area_factor
 from .program import Constraint, P, Program, X
 
 #: The discretisations by name (:data:`DISCRETISATIONS` holds their classes).
-FORMULATIONS = ("curve", "graph")
+FORMULATIONS = ("curve", "graph", "spectral")  # spectral: discretise/droplet_spectral.py
+#: The formulations whose error is a power of N (the polylines): what the convergence studies sweep (the
+#: spectral profile holds a weightless drop to rounding at every degree).
+POLYLINES = ("curve", "graph")
 
 #: Smallest number of segments: the contact-angle estimator needs two chords per end.
 MIN_N = 3
@@ -48,8 +51,9 @@ class Geometry:
     graph_n: Optional[int] = None  # graph form: x_i = i a / n (x is not stored)
     #: the element arguments of the area's pieces (one per chord or cell), and the element that gives a
     #: piece's first moment ``∫∫ y dA`` (times a weight): what a term weighted by the liquid's height needs
+    #: (a name of this module's elements, or the function itself)
     pieces: tuple = ()
-    moment: str = ""
+    moment: object = ""
     #: the wetted measure as an expression of the span's symbol, where it is not the span itself (a drop of
     #: revolution: the disc ``pi r_c²``); None: the span (2-D)
     wetted: object = None
@@ -322,7 +326,8 @@ def add_gravity(nlp: Program, geo: Geometry, weight: float) -> None:
     ``2 pi r``) supplies its own moment element, and this term does not change.
     """
     nlp.parameter("gravity", 1, weight)
-    nlp.minimize_elements("gravity", _element(geo.moment), [*geo.pieces, P(nlp.parameter_index("gravity"))])
+    moment = geo.moment if isinstance(geo.moment, ca.Function) else _element(geo.moment)
+    nlp.minimize_elements("gravity", moment, [*geo.pieces, P(nlp.parameter_index("gravity"))])
 
 
 def add_pattern(nlp: Program, geo: Geometry, wetting_in: float, wetting_out: float, step: float):

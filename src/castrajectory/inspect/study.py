@@ -213,7 +213,7 @@ def _droplet_task(drop: droplet.Droplet, task) -> dict:
     return droplet_run(drop, formulation, n)
 
 
-def droplet_sweep(ns: Sequence[int], formulations: Iterable[str] = droplet.FORMULATIONS,
+def droplet_sweep(ns: Sequence[int], formulations: Iterable[str] = droplet.POLYLINES,
                   drop: Optional[droplet.Droplet] = None, executor: Optional[cf.Executor] = None,
                   progress: Optional[Callable[[dict], None]] = None, bar: Optional[bool] = None,
                   quiet: bool = False) -> List[dict]:

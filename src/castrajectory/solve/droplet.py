@@ -25,8 +25,9 @@ import casadi as ca
 import numpy as np
 
 from ..discretise.droplet import (  # noqa: F401  (the discretisations, re-exported with the model)
-    DISCRETISATIONS, FORMULATIONS, MIN_N, Curve, Geometry, Graph, Revolution, add_gravity, add_pattern,
+    DISCRETISATIONS, FORMULATIONS, MIN_N, POLYLINES, Curve, Geometry, Graph, Revolution, add_gravity, add_pattern,
     contact_angle_at_rim, contact_angle_estimate, resample_polyline)
+from ..discretise.droplet_spectral import MAX_DEGREE, MIN_DEGREE, Spectral, SpectralGeometry
 from ..models.droplet import (  # noqa: F401
     AxisymmetricDrop, BeyondFold, CircularCap, Droplet, HeavyDrop, PatternedCap, SphericalCap, analytic, arc_points,
     outer_young_angle, pendant_fold, puddle_height, reduced_energy, revolution_fold, segment_area_factor,
@@ -50,6 +51,11 @@ from .second_order import reduced_hessian
 #: element, a dense row and column of the KKT matrix, which QAMD orders well (measured at N = 1e5: graph
 #: 10.5 -> 1.8 s, curve 6.1 -> 3.1 s; N = 400 and 4000 unchanged or faster; same iterations and errors).
 SOLVER_OPTIONS = {"constr_mult_init_max": 0.0, "mu_init": 1e-9, "mumps_pivot_order": 6}
+#: The spectral profile starts from the cap of the weightless angle, where Ipopt's least-squares estimate of
+#: the area multiplier is the pressure itself; and the 2-D profile's length, ``2 L``, is linear in the
+#: unknowns, so with a zero multiplier the Lagrangian's Hessian vanishes (the weightless 2-D pendant start:
+#: a first step of 4e16, Restoration_Failed).  Ipopt's default (``constr_mult_init_max = 1000``) then.
+SPECTRAL_OPTIONS = {"constr_mult_init_max": 1000.0}
 
 
 # ---------------------------------------------------------------------------- solve
@@ -137,11 +143,19 @@ PRESOLVE_MIN_N = 2000
 PRESOLVE_N = 200
 
 
-def _check_formulation(drop: Droplet, formulation: str) -> None:
+def _check_formulation(drop: Droplet, formulation: str, n: Optional[int] = None) -> None:
     one_of("formulation", formulation, FORMULATIONS)
+    if formulation == "spectral":
+        if drop.patterned:
+            raise InputError("the spectral formulation is not offered on a patterned table (the pinned edge's "
+                             "kink is held by the curve's split); use the curve formulation")
+        if n is not None and not MIN_DEGREE <= n <= MAX_DEGREE:
+            raise InputError(f"the spectral formulation's --n is the degree of the profile's tangent angle: "
+                             f"{MIN_DEGREE} to {MAX_DEGREE} (got {n})")
+        return
     if drop.axisymmetric and formulation == "graph":
         raise InputError("a drop of revolution is discretised as a curve (its half profile from the axis); the "
-                         "graph formulation is not offered for it: use the curve formulation")
+                         "graph formulation is not offered for it: use the curve or spectral formulation")
     if formulation != "graph":
         return
     if drop.pendant:
@@ -155,13 +169,17 @@ def _check_formulation(drop: Droplet, formulation: str) -> None:
             f"(this drop's angle is {math.degrees(theta):.4g} degrees); use the curve formulation")
 
 
-def make_nlp(drop: Droplet, n: int, formulation: str = "curve", guess: Optional[np.ndarray] = None):
+def make_nlp(drop: Droplet, n: int, formulation: str = "curve", guess=None):
     """Build (but do not solve) the droplet NLP in scaled units; return ``(nlp, geometry, area_constraint)``."""
     n = integer_at_least("n", n, MIN_N)
-    _check_formulation(drop, formulation)
+    _check_formulation(drop, formulation, n)
     L = drop.length_scale
     nlp = NLP()
-    if formulation == "curve":
+    if formulation == "spectral":
+        nlp.compile_elements = False  # one element per family: nothing to gain from compiling (or looking up)  # starts from the cap of the weightless angle, as a drop of revolution does
+        disc = Spectral(n, drop.axisymmetric, analytic(replace(drop, rho_g=0.0, pendant=False)).contact_angle,
+                        guess)  # guess: (psi at the nodes, L), or None
+    elif formulation == "curve":
         # a drop of revolution starts from the cap of its weightless angle (Young's, or Gibbs' on a pattern)
         disc = Revolution(n, guess, analytic(replace(drop, rho_g=0.0, pendant=False)).contact_angle) \
             if drop.axisymmetric else Curve(n, guess)
@@ -189,8 +207,14 @@ def _scaled_step(drop: Droplet, area: Optional[float] = None) -> float:
 
 
 def solve(drop: Droplet, n: int = 400, formulation: str = "curve", *, options: Optional[dict] = None,
-          verbose: bool = False) -> DropletSolution:
+          verbose: bool = False, compare: bool = True, estimate: bool = True) -> DropletSolution:
     """Minimise the discrete droplet energy; never raises on non-convergence (see ``castrajectory.result``).
+
+    ``compare``: the errors against the closed form (``analytic``).  A heavy drop of revolution's is a
+    Young–Laplace shooting that costs more than a spectral solve (about 60 ms against 10); ``False`` skips it
+    (``errors`` is then empty, and the error estimate is what the answer carries).  ``estimate``: the error
+    estimate (a second solve, on a coarser grid or a lower degree); ``False`` leaves it out, and says so in
+    the answer's warnings.
 
     Strategy (curve form):
 
@@ -205,18 +229,21 @@ def solve(drop: Droplet, n: int = 400, formulation: str = "curve", *, options: O
     final solve at ``n``.
     """
     n = integer_at_least("n", n, MIN_N)
-    _check_formulation(drop, formulation)
+    _check_formulation(drop, formulation, n)
     _check_bracketable(drop)
-    opts = {**SOLVER_OPTIONS, **(options or {})}
+    opts = {**SOLVER_OPTIONS, **(SPECTRAL_OPTIONS if formulation == "spectral" else {}), **(options or {})}
     if drop.pendant:
-        return _solve_pendant(drop, n, formulation, opts, verbose)
-    if drop.patterned:
-        opts = {**opts, **PATTERN_OPTIONS, **(options or {})}
-    res, nlp, geo = _solve_scaled(drop, n, formulation, opts, verbose)
-    cap, note = _oracle(drop)
-    sol = _solution(drop, n, formulation, opts, verbose, res, nlp, geo, cap)
-    if note and sol.success:
-        sol.warnings.append(note)
+        sol = _solve_pendant(drop, n, formulation, opts, verbose, compare, estimate)
+    else:
+        if drop.patterned:
+            opts = {**opts, **PATTERN_OPTIONS, **(options or {})}
+        res, nlp, geo = _solve_scaled(drop, n, formulation, opts, verbose)
+        cap, note = _oracle(drop) if compare else (None, None)
+        sol = _solution(drop, n, formulation, opts, verbose, res, nlp, geo, cap, estimate=estimate)
+        if note and sol.success:
+            sol.warnings.append(note)
+    if not estimate and sol.success:
+        sol.warnings.append("no error estimate: left out on request (estimate=False)")
     return sol
 
 
@@ -300,11 +327,7 @@ def _solution(drop: Droplet, n: int, formulation: str, opts: dict, verbose: bool
     """The solution of the drop from its final solve: readings, errors against ``cap`` (None: no oracle),
     and on success (and ``estimate``) the error estimate."""
     r = _readings(drop, res, geo)
-    if drop.axisymmetric and res.success and np.any(r["xs"][1:] <= 0.0):
-        # the frustum's area pi (r_i + r_{i+1}) l is the surface only on the axis' own side: a profile that
-        # reaches or crosses the axis is no drop of revolution, whatever Ipopt says
-        res.fail("Profile_Crossed_Axis", f"the profile reached the axis at {int(np.sum(r['xs'][1:] <= 0.0))} "
-                 "node(s) besides the apex: no drop of revolution; supply a better initial guess")
+    _check_profile(drop, res, r)
     errors = {} if cap is None else _errors(r, cap)
     young = None if drop.span is not None else drop.gamma_gl * math.cos(r["contact_angle"]) + drop.wetting
     if drop.patterned:  # Young's law holds at the regime's angle; a pinned edge obeys Gibbs' criterion instead
@@ -322,8 +345,35 @@ def _solution(drop: Droplet, n: int, formulation: str, opts: dict, verbose: bool
     return sol
 
 
-def _add_costs(res: NLPResult, spent) -> NLPResult:
-    """Add the iterations and times of the solves ``spent`` to ``res`` (the reported cost is the whole run's)."""
+#: How far below the table (relative to the drop's size) a node may sit before the profile is refused.
+BELOW_TABLE_RTOL = 1e-9
+
+
+def _check_profile(drop: Droplet, res: NLPResult, r: dict) -> None:
+    """Fail a converged answer whose profile is no drop: the energy's integrals are signed, so a profile that
+    crosses the axis (a drop of revolution; the frustum's area pi (r_i + r_{i+1}) l turns negative) or loops
+    under the table (its weight turns negative) can price below the drop, whatever Ipopt says (the spectral
+    profile at Bond 100, degree 64: an energy 24 % below the drop's, its tangent turned to -5.5 rad)."""
+    if not res.success:
+        return
+    xs, ys = np.asarray(r["xs"]), np.asarray(r["ys"])
+    half = r.get("half_r", xs if drop.axisymmetric else None)  # a half profile's distance from its axis
+    if half is not None and np.any(half[1:] <= 0.0):
+        res.fail("Profile_Crossed_Axis", f"the profile reached its axis at {int(np.sum(half[1:] <= 0.0))} node(s) "
+                 "besides the apex: no drop; supply a better initial guess or refine n")
+    elif "psi" in r and np.any(np.abs(r["psi"]) > math.pi):
+        res.fail("Profile_Looped", f"the profile's tangent turned to {float(np.max(np.abs(r['psi']))):.4g} rad (beyond "
+                 "pi: it loops over itself): no drop; the degree does not resolve it: raise n, or use the curve "
+                 "formulation (a puddle's edge)")
+    elif np.any(ys < -BELOW_TABLE_RTOL * np.max(np.abs(ys))):
+        res.fail("Profile_Below_Table", f"the profile passed below the {'ceiling' if drop.pendant else 'table'} at "
+                 f"{int(np.sum(ys < 0.0))} node(s): no drop (its signed weight priced it below the drop); refine n "
+                 "or use the curve formulation")
+
+
+def _add_costs(res, spent):
+    """Add the iterations and times of the solves ``spent`` to ``res`` (an NLPResult or a solution: the
+    reported cost is the whole run's)."""
     for r in spent:
         res.build_time_s += r.build_time_s
         res.solve_time_s += r.solve_time_s
@@ -449,7 +499,8 @@ def _fold_estimate(steps: list) -> Optional[float]:
     return a2 + l2 ** 2 * (a2 - a1) / (l1 ** 2 - l2 ** 2)
 
 
-def _solve_pendant(drop: Droplet, n: int, formulation: str, opts: dict, verbose: bool) -> DropletSolution:
+def _solve_pendant(drop: Droplet, n: int, formulation: str, opts: dict, verbose: bool,
+                   compare: bool = True, estimate: bool = True) -> DropletSolution:
     """A pendant drop by continuation in the area (see :func:`_continuation`); beyond the fold, the last
     stable drop with the status ``No_Stable_Drop``."""
     cont = _continuation(drop, n, formulation, opts, verbose)
@@ -461,8 +512,9 @@ def _solve_pendant(drop: Droplet, n: int, formulation: str, opts: dict, verbose:
     stability = {"reduced_hessian": None if cont.hessian is None else cont.hessian.as_dict(),
                  "continuation": cont.steps, "fold": None}
     if not res.success or cont.bond >= drop.bond_number:
-        cap, note = _oracle(drop)
-        sol = _solution(drop, n, formulation, opts, verbose, res, cont.nlp, cont.geo, cap, stability)
+        cap, note = _oracle(drop) if compare else (None, None)
+        sol = _solution(drop, n, formulation, opts, verbose, res, cont.nlp, cont.geo, cap, stability,
+                        estimate=estimate)
         if note and sol.success:
             sol.warnings.append(note)
         return sol
@@ -493,6 +545,8 @@ ESTIMATED = ("contact_angle", "span", "pressure", "energy")
 
 def _readings(drop: Droplet, res: NLPResult, geo) -> dict:
     """The physical readings of a solve, in the drop's units."""
+    if isinstance(geo, SpectralGeometry):
+        return _spectral_readings(drop, res, geo)
     if drop.patterned:
         return _pattern_readings(drop, res, geo)
     if drop.axisymmetric:
@@ -508,6 +562,28 @@ def _readings(drop: Droplet, res: NLPResult, geo) -> dict:
     return {"x": x, "y": y, "xs": xs, "ys": ys, "contact_angle": contact_angle_estimate(x, y), "span": span,
             "pressure": g / L * float(res.multipliers["area"][0]), "energy": energy,
             "height": float(np.max(y)), "apex_curvature": apex_curvature(x, y)}
+
+
+def _spectral_readings(drop: Droplet, res: NLPResult, geo: SpectralGeometry) -> dict:
+    """The readings of a spectral profile: the energy is the program's objective (its quadratures, in the
+    drop's units), the contact angle the tangent angle at the rim, the height the apex's; the apex curvature
+    is the Laplace relation, as for the polyline of revolution."""
+    L, g = drop.length_scale, drop.gamma_gl
+    dim = 2 if geo.revolution else 1
+    rs, zs, psi = geo.half_profile(res)
+    xs, ys, span = geo.vertices(res)
+    pressure = g / L * float(res.multipliers["area"][0])
+    height = L * float(zs[0])
+    energy = g * L ** dim * float(res.objective)
+    if drop.span is not None:  # a pinned span's wetting is a constant the program leaves out
+        energy += drop.wetting * L * span
+    out = {"x": L * xs, "y": L * ys, "xs": xs, "ys": ys, "contact_angle": float(psi[-1]), "span": L * span,
+           "pressure": pressure, "energy": energy, "height": height,
+           "apex_curvature": (pressure - drop.gravity_sign * drop.rho_g * height) / (dim * g),
+           "psi": psi, "length": float(res.x[geo.length_index]), "half_r": rs}
+    if geo.revolution:
+        out.update(contact_radius=L * float(rs[-1]), volume=L ** 3 * geo.measure(res))
+    return out
 
 
 def _revolution_readings(drop: Droplet, res: NLPResult, geo) -> dict:
@@ -584,27 +660,65 @@ def _estimate(drop: Droplet, n: int, formulation: str, opts: dict, verbose: bool
     (a few Newton iterations); its cost is added to ``sol``'s.  Errors of the contact angle (scale π/2),
     span, pressure and energy (each against its own size)."""
     from .estimate import ErrorEstimate, richardson
+    if formulation == "spectral":
+        return _spectral_estimate(drop, n, opts, verbose, fine, sol)
     nc = n // 2
     if nc < MIN_N:
         return ErrorEstimate.none(f"N = {n} has no coarser grid (at least {MIN_N} segments)")
     guess = resample_polyline(fine["xs"], fine["ys"], nc) if formulation == "curve" else None
     nlp, geo, _ = make_nlp(drop, nc, formulation, guess)
     res = nlp.solve(options=opts, verbose=verbose)
-    sol.iterations += res.iterations
-    sol.build_time_s += res.build_time_s
-    sol.solve_time_s += res.solve_time_s
+    _add_costs(sol, [res])  # the estimate's solve is part of the answer's cost
     if not res.success:
         return ErrorEstimate.none(f"the drop on N = {nc} segments for the estimate did not converge ({res.solver_status})")
     coarse = _readings(drop, res, geo)
     errors = richardson({k: coarse[k] for k in ESTIMATED}, {k: fine[k] for k in ESTIMATED}, n / nc, ORDER)
-    scales = {"contact_angle": 0.5 * math.pi, "span": abs(fine["span"]), "pressure": abs(fine["pressure"]),
-              "energy": abs(fine["energy"])}
-    if drop.rho_g > 0.0:  # a pendant drop's pressure passes through zero: the scale of its two parts
-        scales["pressure"] = (2.0 if drop.axisymmetric else 1.0) * drop.gamma_gl * abs(fine["apex_curvature"]) + \
-            drop.rho_g * fine["height"]
+    scales = _estimate_scales(drop, fine)
     rel = max(errors[k] / scales[k] for k in errors if scales[k] > 0)
     return ErrorEstimate(available=True, note=f"Richardson extrapolation from N = {nc} and N = {n}, order {ORDER}",
                          levels=(nc, n), order=float(ORDER), errors=errors, scales=scales, relative=float(rel))
+
+
+def _estimate_scales(drop: Droplet, fine: dict) -> Dict[str, float]:
+    """The size each estimated reading is measured against (a pendant drop's pressure passes through zero:
+    there the scale of its two parts, the capillary and the hydrostatic)."""
+    scales = {"contact_angle": 0.5 * math.pi, "span": abs(fine["span"]), "pressure": abs(fine["pressure"]),
+              "energy": abs(fine["energy"])}
+    if drop.rho_g > 0.0:
+        scales["pressure"] = (2.0 if drop.axisymmetric else 1.0) * drop.gamma_gl * abs(fine["apex_curvature"]) + \
+            drop.rho_g * fine["height"]
+    return scales
+
+
+#: The spectral estimate's coarser degree, as a fraction of the degree: the difference of the two readings
+#: bounds the coarser one's error, so it overstates the finer one's (by a factor that grows with the degree).
+SPECTRAL_COARSE = 0.75
+
+
+def _spectral_estimate(drop: Droplet, n: int, opts: dict, verbose: bool, fine: dict, sol: DropletSolution):
+    """The readings' differences to the same drop at degree ``ceil(3n/4)``: no extrapolation (a spectral
+    error has no power law to extrapolate), an upper bound of the coarser degree's error."""
+    from .estimate import ErrorEstimate
+    nc = max(MIN_DEGREE, int(math.ceil(SPECTRAL_COARSE * n)))
+    if nc >= n:
+        return ErrorEstimate.none(f"degree {n} has no lower degree to compare with (at least {MIN_DEGREE})")
+    # from the fine answer, resampled to the coarse nodes (a few Newton iterations; no continuation)
+    nlp, geo, _ = make_nlp(drop, nc, "spectral", (Spectral.resample(fine["psi"], nc), fine["length"]))
+    res = nlp.solve(options=opts, verbose=verbose)
+    if not res.success:  # the coarse answer is far from the fine one (an unresolved drop): solve it afresh
+        warm = res
+        res, nlp, geo = _solve_scaled(drop, nc, "spectral", opts, verbose)
+        res = _add_costs(res, [warm])
+    _add_costs(sol, [res])  # the estimate's solve is part of the answer's cost
+    if not res.success:
+        return ErrorEstimate.none(f"the drop at degree {nc} for the estimate did not converge ({res.solver_status})")
+    coarse = _readings(drop, res, geo)
+    errors = {k: abs(fine[k] - coarse[k]) for k in ESTIMATED}
+    scales = _estimate_scales(drop, fine)
+    rel = max(errors[k] / scales[k] for k in errors if scales[k] > 0)
+    return ErrorEstimate(available=True, note=f"difference to degree {nc} (bounds that degree's error; "
+                         f"degree {n}'s is smaller)", levels=(nc, n), errors=errors, scales=scales,
+                         relative=float(rel), method="degree")
 
 
 def _solve_scaled(drop: Droplet, n: int, formulation: str, opts: dict, verbose: bool):

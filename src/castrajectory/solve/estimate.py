@@ -63,6 +63,8 @@ class ErrorEstimate:
     scales: Dict[str, float] = field(default_factory=dict)
     relative: float = float("nan")
     final: Optional[str] = None
+    #: ``richardson`` (two grids and an order), or ``degree`` (a spectral answer against a lower degree's)
+    method: str = "richardson"
 
     @classmethod
     def none(cls, why: str, final: bool = False) -> "ErrorEstimate":
@@ -70,7 +72,7 @@ class ErrorEstimate:
         return cls(available=False, note=why, final=why if final else None)
 
     def as_dict(self) -> dict:
-        return {"available": self.available, "method": "richardson" if self.available else None,
+        return {"available": self.available, "method": self.method if self.available else None,
                 "levels": list(self.levels), "order": self.order, "errors": dict(self.errors),
                 "scales": dict(self.scales), "relative": self.relative,
                 "note": self.note, "final": self.final}
@@ -80,6 +82,9 @@ class ErrorEstimate:
         if not self.available:
             return f"error estimate: none ({self.note})"
         parts = ", ".join(f"{k} {v:.2e}" for k, v in self.errors.items())
+        if self.method == "degree":
+            return (f"error estimate (degree {self.levels[1]} against {self.levels[0]}): {parts}; "
+                    f"relative {self.relative:.2e}")
         return (f"error estimate (Richardson, N = {self.levels[0]} and {self.levels[1]}, order {self.order:g}): "
                 f"{parts}; relative {self.relative:.2e}")
 

@@ -79,14 +79,14 @@ def run(ctx: Context):
               f"N = {ns[0]} … {ns[-1]}; data in `droplet_convergence.csv`.  Observed orders (fit over N ≥ 32):", "",
               "| formulation | " + " | ".join(study.DROPLET_ERRORS) + " | max iterations | all converged |",
               "|---|" + "---|" * (len(study.DROPLET_ERRORS) + 2)]
-    for f in droplet.FORMULATIONS:
+    for f in droplet.POLYLINES:
         orders = study.observed_orders(rows, f)
         sel = [r for r in rows if r["formulation"] == f]
         lines.append(f"| {f} | " + " | ".join(f"{orders[k]:.2f}" for k in study.DROPLET_ERRORS)
                      + f" | {max(r['iterations'] for r in sel)} | {all(r['status'] == 'ok' for r in sel)} |")
     timed = [{**r, "label": r["formulation"], "time_s": r["total_time_s"]} for r in rows]
     lines += ["", "Reading (measured in this run, the shape error): "
-              + study.reading(timed, list(droplet.FORMULATIONS), (1e-4, 1e-6, 1e-8), key="err_shape"), "",
+              + study.reading(timed, list(droplet.POLYLINES), (1e-4, 1e-6, 1e-8), key="err_shape"), "",
               "![convergence](droplet_convergence.png)", ""]
 
     return ok, lines
