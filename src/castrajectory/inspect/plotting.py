@@ -62,7 +62,8 @@ def droplet_figure(sol) -> Figure:
         sx = sol.contact_radius + np.concatenate([-sol.x[::-1], sol.x[1:]])
         sy = np.concatenate([sol.y[::-1], sol.y[1:]])
     stride = max(1, len(sx) // 200)
-    ax.plot(sx, sy, "-", color="C0", lw=1.2, label=f"discrete ({sol.formulation}, N = {sol.n})")
+    size = f"degree {sol.n}" if sol.formulation == "spectral" else f"N = {sol.n}"
+    ax.plot(sx, sy, "-", color="C0", lw=1.2, label=f"discrete ({sol.formulation}, {size})")
     ax.plot(sx[::stride], sy[::stride], ".", color="C0", ms=3)
     lo, hi = min(sx.min(), 0.0), max(sx.max(), sol.span if cap is None else cap.span)
     pad = 0.08 * (hi - lo)
@@ -92,7 +93,7 @@ def droplet_figure(sol) -> Figure:
         mode = "free span (Young)" if sol.drop.span is None else f"pinned span a = {sol.drop.span:g}"
     closed = "" if cap is None else f" (analytic {math.degrees(cap.contact_angle):.4f}°)"
     shape = f", shape error {sol.errors['shape']:.1e}" if "shape" in sol.errors else ""
-    ax.set_title(f"Droplet, {mode}, {sol.formulation}, N = {sol.n}\n"
+    ax.set_title(f"Droplet, {mode}, {sol.formulation}, {size}\n"
                  f"θ = {math.degrees(sol.contact_angle):.4f}°{closed}{shape}", fontsize=10)
     ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8)
     return fig
