@@ -128,6 +128,17 @@ def _cumulative_area(nlp: Program, link: str, last: str, args, init_pieces) -> C
     return nlp.equal_elements("area", _element(last), [X(c[n - 1:]), *args(np.array([n - 1])), nn], 1.0)
 
 
+def _chords(nlp: Program, P: np.ndarray, seg0: float, name: str, element: str) -> np.ndarray:
+    """A polyline's surface term ``name`` (one ``element`` per chord) and its equal-chords gauge rows (scaled
+    by the guess's mean chord ``seg0``); returns the chords' indices."""
+    k = np.arange(P.shape[0] - 1)
+    nlp.minimize_elements(name, _element(element), [X(P[k]), X(P[k + 1])])
+    j = np.arange(P.shape[0] - 2)
+    nlp.equal_elements("equal_segments", _element("equal_chords"),
+                       [X(P[j]), X(P[j + 1]), X(P[j + 2]), np.array([1.0 / (2.0 * seg0 ** 2)])])
+    return k
+
+
 def _fixed(values, free):
     """Bounds that fix every entry where ``free`` is False at ``values``."""
     values = np.asarray(values, dtype=float)
@@ -190,11 +201,7 @@ class Curve:
         xs = nlp.variable("x", n + 1, lb=lbx, ub=ubx, init=guess[:, 0])
         nlp.variable("y", n + 1, *_fixed(guess[:, 1], free), init=guess[:, 1])
         P = np.column_stack([nlp.index("x"), nlp.index("y")])  # (n + 1, 2) positions of the vertices
-        k = np.arange(n)
-        nlp.minimize_elements("length", _element("chord"), [X(P[k]), X(P[k + 1])])
-        j = np.arange(n - 1)
-        nlp.equal_elements("equal_segments", _element("equal_chords"),
-                           [X(P[j]), X(P[j + 1]), X(P[j + 2]), np.array([1.0 / (2.0 * seg0 ** 2)])])
+        k = _chords(nlp, P, seg0, "length", "chord")
         gx, gy = guess[:, 0], guess[:, 1]
         _cumulative_area(nlp, "curve_link", "curve_last", lambda r: [X(P[r]), X(P[r + 1])],
                          0.5 * (gx[1:] * gy[:-1] - gx[:-1] * gy[1:]))
@@ -299,11 +306,7 @@ class Revolution:
         rs = nlp.variable("r", n + 1, lb=lbr, ub=ubr, init=guess[:, 0])
         nlp.variable("z", n + 1, *_fixed(guess[:, 1], free_z), init=guess[:, 1])
         P = np.column_stack([nlp.index("r"), nlp.index("z")])
-        k = np.arange(n)
-        nlp.minimize_elements("surface", _element("frustum"), [X(P[k]), X(P[k + 1])])
-        j = np.arange(n - 1)
-        nlp.equal_elements("equal_segments", _element("equal_chords"),
-                           [X(P[j]), X(P[j + 1]), X(P[j + 2]), np.array([1.0 / (2.0 * seg0 ** 2)])])
+        k = _chords(nlp, P, seg0, "surface", "frustum")
         gr, gz = guess[:, 0], guess[:, 1]
         tri = 0.5 * (gr[1:] * gz[:-1] - gr[:-1] * gz[1:])
         _cumulative_area(nlp, "revolution_link", "revolution_last", lambda r: [X(P[r]), X(P[r + 1])],

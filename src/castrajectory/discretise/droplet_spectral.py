@@ -55,7 +55,8 @@ def lobatto(p: int) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
     return 0.5 * (x + 1.0), 0.5 * w, 0.5 * Q
 
 
-_FUNCTIONS: Dict[tuple, ca.Function] = {}
+#: The element functions per (degree, revolution): one object per key, so their derivatives are formed once.
+_FUNCTIONS: Dict[tuple, Dict[str, ca.Function]] = {}
 
 #: The integrands are evaluated at the Lobatto nodes of degree ``OVER_INTEGRATION * p`` (over-integration):
 #: at the degree's own nodes the quadrature sees only the node values, and an unresolved profile wiggled
@@ -64,21 +65,19 @@ _FUNCTIONS: Dict[tuple, ca.Function] = {}
 OVER_INTEGRATION = 2
 
 
+@functools.lru_cache(maxsize=64)
 def _grids(p: int):
     """``(t, tq, w, Q, interp, back)``: the degree's nodes ``t``, the finer nodes ``tq`` with their weights
     and integration matrix, ``interp`` (node values of degree p to the finer nodes) and ``back`` (finer-grid
     polynomials of degree m read at the degree's nodes)."""
-    key = ("grids", p)
-    if key not in _FUNCTIONS:
-        t = lobatto(p)[0]
-        m = OVER_INTEGRATION * p
-        tq, w, Q = lobatto(m)
-        interp = legendre.legvander(2.0 * tq - 1.0, p) @ np.linalg.solve(legendre.legvander(2.0 * t - 1.0, p),
-                                                                           np.eye(p + 1))
-        back = legendre.legvander(2.0 * t - 1.0, m) @ np.linalg.solve(legendre.legvander(2.0 * tq - 1.0, m),
-                                                                       np.eye(m + 1))
-        _FUNCTIONS[key] = (t, tq, w, Q, interp, back)
-    return _FUNCTIONS[key]
+    t = lobatto(p)[0]
+    m = OVER_INTEGRATION * p
+    tq, w, Q = lobatto(m)
+    interp = legendre.legvander(2.0 * tq - 1.0, p) @ np.linalg.solve(legendre.legvander(2.0 * t - 1.0, p),
+                                                                       np.eye(p + 1))
+    back = legendre.legvander(2.0 * t - 1.0, m) @ np.linalg.solve(legendre.legvander(2.0 * tq - 1.0, m),
+                                                                   np.eye(m + 1))
+    return t, tq, w, Q, interp, back
 
 
 def _profile(p: int, revolution: bool) -> Dict[str, ca.Function]:
@@ -156,6 +155,10 @@ class SpectralGeometry(Geometry):
         """As :meth:`Geometry.vertices`: the half profile ``(r, z, r_c)`` of a drop of revolution; the whole
         2-D profile mirrored about its axis, ``(x, y, span)`` with ``x`` from 0 to the span."""
         r, z, _ = self.half_profile(res)
+        return self.outline(r, z)
+
+    def outline(self, r: np.ndarray, z: np.ndarray):
+        """:meth:`vertices` from the half profile's ``(r, z)``."""
         if self.revolution:
             return r, z, float(r[-1])
         x = np.concatenate([r[-1] - r[::-1], r[-1] + r[1:]])
