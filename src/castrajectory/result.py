@@ -45,6 +45,7 @@ Bound multipliers on decision variables follow the same rule
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Dict, List, Optional
 
@@ -189,3 +190,38 @@ class NLPResult(Result):
             return "Ipopt converged to the requested tolerance"
         advice = _ADVICE.get(status, "see Ipopt's documentation of this status")
         return f"Ipopt did not converge ({status}): {advice}"
+
+
+@dataclass(kw_only=True)
+class ControlResult(Result):
+    """The answer of an :class:`OptimalControl`: the result contract, plus ``cost``, ``T``, node times ``t``,
+    configurations ``q`` and velocities ``v`` at the nodes, the controls ``u`` per step (``(N, nu)``; by name
+    in ``controls``), the discrete ``costates`` at the interior nodes, ``(N−1, n)``: ``∂J*/∂p_k``, the change
+    of the optimal cost per unit impulse at node k (the DEL row's multiplier ``∂J*/∂rhs`` times ``−1/h``:
+    an impulse ``ι`` is the right-hand side ``−ι/h`` of the row, a momentum balance per unit time), which
+    converge to the continuous costates of the momenta; the ``certificate``: the largest distance of a
+    step of the controls' march, taken from the optimal nodes, from the next optimal node (relative to the
+    motion's scale), and ``march_distance``: the same for the whole march (see :func:`_certify`); ``grids``:
+    the grids solved (see :meth:`OptimalControl.solve`); ``q_stages``: a higher-order scheme's stage
+    configurations, ``(N, stages, n)``, at the times ``t_k + c_j h`` of its ``stage_times`` c."""
+
+    cost: float
+    T: float
+    t: np.ndarray
+    q: np.ndarray
+    v: np.ndarray
+    u: np.ndarray
+    t_u: Optional[np.ndarray] = None
+    controls: Dict[str, np.ndarray] = field(default_factory=dict)
+    costates: Optional[np.ndarray] = None
+    certificate: float = math.nan
+    march_distance: float = math.nan
+    scheme: str = "midpoint"
+    grids: List[int] = field(default_factory=list)
+    q_stages: Optional[np.ndarray] = None
+
+    def as_dict(self) -> dict:
+        return {**super().as_dict(), "cost": self.cost, "T": self.T, "t": self.t, "q": self.q, "v": self.v,
+                "u": self.u, "t_u": self.t_u, "controls": self.controls, "costates": self.costates, "certificate": self.certificate,
+                "march_distance": self.march_distance, "grids": self.grids,
+                "scheme": self.scheme}

@@ -212,6 +212,11 @@ SCENES: List[Scene] = [
               "cart-pole swing-up, galerkin8, N = 50, against Kelly's J*", True),)),
     Scene("pendulum_swingup", "optimal control", report=(
         Entry("pendulum_swingup", (), "pendulum swing-up, |u| <= 3, midpoint, N = 200", True),)),
+    # contact-implicit optimal control (#27)
+    Scene("block_push", "optimal control", report=(
+        Entry("block_push", (), "block push with friction, slides the whole horizon: the exact discrete optimum"),
+        Entry("block_push_sticks", ("--T", "2", "--n", "80"),
+              "block push, T > τ*: slides τ* = √(6d/(μg)) and sticks, against J* = (4/3)(μmg)²τ*"))),
 ]
 
 #: The stability table's order of families (a family's cases in the order of its scenes)

@@ -28,7 +28,6 @@ from __future__ import annotations
 import copy
 import math
 import time as _time
-from dataclasses import dataclass, field
 from typing import Dict, List, Optional
 
 import casadi as ca
@@ -37,7 +36,7 @@ import numpy as np
 from ..discretise.lagrangians import SCHEMES, discrete_mechanics
 from ..discretise.optimal_control import ControlTranscription, split_controls
 from ..models.mechanics import LagrangianSystem
-from ..result import Result
+from ..result import ControlResult
 from ..validation import InputError, integer_at_least, one_of
 from .nlp import NLP
 
@@ -51,41 +50,6 @@ LADDER_MAX = 64
 
 class _Transcription(ControlTranscription):
     program = NLP
-
-
-@dataclass(kw_only=True)
-class ControlResult(Result):
-    """The answer of an :class:`OptimalControl`: the result contract, plus ``cost``, ``T``, node times ``t``,
-    configurations ``q`` and velocities ``v`` at the nodes, the controls ``u`` per step (``(N, nu)``; by name
-    in ``controls``), the discrete ``costates`` at the interior nodes, ``(N−1, n)``: ``∂J*/∂p_k``, the change
-    of the optimal cost per unit impulse at node k (the DEL row's multiplier ``∂J*/∂rhs`` times ``−1/h``:
-    an impulse ``ι`` is the right-hand side ``−ι/h`` of the row, a momentum balance per unit time), which
-    converge to the continuous costates of the momenta; the ``certificate``: the largest distance of a
-    step of the controls' march, taken from the optimal nodes, from the next optimal node (relative to the
-    motion's scale), and ``march_distance``: the same for the whole march (see :func:`_certify`); ``grids``:
-    the grids solved (see :meth:`OptimalControl.solve`); ``q_stages``: a higher-order scheme's stage
-    configurations, ``(N, stages, n)``, at the times ``t_k + c_j h`` of its ``stage_times`` c."""
-
-    cost: float
-    T: float
-    t: np.ndarray
-    q: np.ndarray
-    v: np.ndarray
-    u: np.ndarray
-    t_u: Optional[np.ndarray] = None
-    controls: Dict[str, np.ndarray] = field(default_factory=dict)
-    costates: Optional[np.ndarray] = None
-    certificate: float = math.nan
-    march_distance: float = math.nan
-    scheme: str = "midpoint"
-    grids: List[int] = field(default_factory=list)
-    q_stages: Optional[np.ndarray] = None
-
-    def as_dict(self) -> dict:
-        return {**super().as_dict(), "cost": self.cost, "T": self.T, "t": self.t, "q": self.q, "v": self.v,
-                "u": self.u, "t_u": self.t_u, "controls": self.controls, "costates": self.costates, "certificate": self.certificate,
-                "march_distance": self.march_distance, "grids": self.grids,
-                "scheme": self.scheme}
 
 
 def _vector(name, value, n, names, allow_none=True):
@@ -137,8 +101,6 @@ class OptimalControl:
     def __init__(self, system: LagrangianSystem, T, N: int, scheme: str = "midpoint", controls: str = "quadrature"):
         if not isinstance(system, LagrangianSystem):
             raise InputError(f"system must be a LagrangianSystem (got {type(system).__name__})")
-        if system.contact is not None:
-            raise InputError("optimal control with contact is not supported yet (contact-implicit planning)")
         if not system.controls:
             raise InputError("the system has no control: put a ct.Control in a ct.Force")
         self.system = system
@@ -267,6 +229,8 @@ class OptimalControl:
         optima at N = 100 and N = 200 without it), and the fine grid needs a few iterations (7-9 instead of
         39-289 on the cart-pole).  A rung that fails is dropped: the grid then starts from the boundary
         conditions.  ``grids`` lists the grids solved."""
+        if self.system.contact is not None:
+            return self._solve_contact(guess, options, verbose)
         rungs: List[int] = []
         if guess is None and self.N > LADDER_MAX:
             coarse = copy.copy(self)
@@ -281,6 +245,37 @@ class OptimalControl:
         if rungs:
             out.solve_time_s += spent
         return out
+
+    def _solve_contact(self, guess, options, verbose) -> "ControlResult":
+        """Contact-implicit optimal control (:mod:`castrajectory.solve.contact.control`): the whole MPCC in one
+        program, its guess the contact march of the controls' guess, its answer certified by the march."""
+        from .contact.control import solve_contact_control
+        s = self.system
+        if self._running is None and self._final is None:
+            raise InputError("no cost: call minimize() first")
+        (q0, v0), (qN, vN) = self._start, self._end
+        if v0 is None or np.any(np.isnan(q0)):
+            raise InputError("optimal control through contact needs the initial state given in full "
+                             "(ocp.initial(q=..., qd=...))")
+        if self._is_free_time():
+            raise InputError("optimal control through contact takes a fixed final time")
+        if self._path:
+            raise InputError("optimal control through contact takes no path constraints yet (bound the controls)")
+        if s.nc:
+            raise InputError("optimal control through contact takes no holonomic constraints yet")
+        if s.contact.friction is not None and np.any(np.asarray(s.contact.friction) > 0) and s.contact.slip_dim != 1:
+            raise InputError("optimal control through contact takes planar friction (one slip direction per contact)")
+        phi0 = np.asarray(s.gap(q0)[0]).reshape(-1)
+        if np.any(phi0 < -1e-9 * max(1.0, float(np.max(np.abs(q0))))):
+            raise InputError(f"the initial configuration penetrates a contact (gap {float(np.min(phi0)):.3g})")
+        q, qd, u = s.q, s.qd, self._u
+        running = ca.Function("l", [q, qd, u], [ca.substitute(self._running, s.t, 0)]) \
+            if self._running is not None else None
+        final = ca.Function("phi", [q, qd, self.T_symbol], [self._final]) if self._final is not None else None
+        lo = np.concatenate([c.lower for c in self._controls])
+        hi = np.concatenate([c.upper for c in self._controls])
+        return solve_contact_control(s, self.T, self.N, self.scheme, (q0, v0), (qN, vN), running, final, (lo, hi),
+                                     self._controls, guess, options, verbose)
 
     def _interpolated(self, prior: "ControlResult") -> Dict[str, np.ndarray]:
         """A coarser answer on this grid: nodes and controls interpolated linearly in ``t/T``."""

@@ -39,9 +39,7 @@ class ContactMechanics:
         if system.time_dependent:
             raise InputError("contact with a time-dependent system is not supported yet; remove the time from the "
                              "contact scene")
-        if system.controls:
-            raise InputError("contact with controls is optimal control through contact, not supported yet")
-        dm = DiscreteMechanics(system, scheme)
+        dm = DiscreteMechanics(system, scheme, control_points="step")
         self.system, self.dm = system, dm
         self.n, self.c, self.e = n, c, e = dm.n, system.ncontact, system.contact.restitution
         #: stage values per part of a step (each step has two parts, split at its sub-node), and the
@@ -59,14 +57,22 @@ class ContactMechanics:
         self.constraint_row = ca.Function("c_con", [qc], [cfun(qc)[0] if m else ca.SX(0, 1)])
         z = ca.SX(0, 1)
         self._z = z
+        # controls (optimal control through contact): one value per step, u_k, constant over both parts of step k,
+        # an input of every element whose rows hold the forces of a step (appended last: a scene without controls
+        # keeps its element functions); the node row holds the forces of two steps, u_{k−1} and u_k
+        self.nu = ncu = dm.nu
+        U, Um = ca.SX.sym("u", ncu), ca.SX.sym("um", ncu)
+        xu, xun = ([U], [Um, U]) if ncu else ([], [])
+        self._U = U
         if system.forced:
             # forces (Force, Damping; no time): the discrete Lagrange–d'Alembert momenta over each part of a
             # step, p⁺ = −D₁L_d − f⁻ and p⁻ = D₂L_d + f⁺, stand where D₁L_d and D₂L_d stand without them
-            D1 = lambda a, Z, b, tau: -dm.p_plus(a, Z, b, tau)  # noqa: E731
-            D2 = lambda a, Z, b, tau: dm.p_minus(a, Z, b, tau)  # noqa: E731
+            ua = (lambda u: [u]) if ncu else (lambda u: [])  # noqa: E731
+            D1 = lambda a, Z, b, tau, u=U: -dm.p_plus(a, Z, b, tau, *ua(u))  # noqa: E731
+            D2 = lambda a, Z, b, tau, u=U: dm.p_minus(a, Z, b, tau, *ua(u))  # noqa: E731
         else:
-            D1 = lambda a, Z, b, tau: dm.D1(a, Z, b, tau)  # noqa: E731
-            D2 = lambda a, Z, b, tau: dm.D2(a, Z, b, tau)  # noqa: E731
+            D1 = lambda a, Z, b, tau, u=None: dm.D1(a, Z, b, tau)  # noqa: E731
+            D2 = lambda a, Z, b, tau, u=None: dm.D2(a, Z, b, tau)  # noqa: E731
         gapf = system.gap
         Mf = system.mass_matrix
         sym = ca.SX.sym
@@ -103,11 +109,11 @@ class ContactMechanics:
         xr = [rho] if self.friction else []
         frn, frs = (rho[:c * d], rho[c * d:]) if self.friction else (None, None)
         # every node and sub-node row of the program, the held step and the march is node_row or sub_row
-        self.initial = ca.Function("c_initial", [q0, qs, b, p0, nu, h] + xl + xr + xz1,
+        self.initial = ca.Function("c_initial", [q0, qs, b, p0, nu, h] + xl + xr + xz1 + xu,
                                    [self.node_row(p0, q0, qs, b, nu, lam, h, frn, zm)])
         hp = sym("hp")
-        self.node = ca.Function("c_node", [qsm, bm, qk, qs, b, nu, hp, h] + xl + xr + xzn,
-                                [self.node_row(D2(qsm, zpm, qk, (1 - am) * hp), qk, qs, b, nu, lam, h, frn, zm)])
+        self.node = ca.Function("c_node", [qsm, bm, qk, qs, b, nu, hp, h] + xl + xr + xzn + xun,
+                                [self.node_row(D2(qsm, zpm, qk, (1 - am) * hp, Um), qk, qs, b, nu, lam, h, frn, zm)])
         # the sub-node's impulse from the first part, μ⁻ with its ratios ρ⁻ (0 but where the march's modes set it): a
         # contact released at an impact's sub-node takes there its share of its force over the first part
         # (release_row), and an arrival caught with friction there takes Stronge's impulse; μ is then the second
@@ -120,19 +126,19 @@ class ContactMechanics:
         rll = rl if self.friction else None
         sub_row, r = self.sub_row(qk, qs, qk1, b, mu, lams, h, frs, zm, zp, mul, rll, rel)
         pm, pp = D2(qk, zm, qs, a * h), -D1(qs, zp, qk1, (1 - a) * h)          # the momenta on either side of q̃
-        self.sub = ca.Function("c_sub", [qk, qs, qk1, b, mu, h] + xleft[:-1] + xls + xr + xzs, [sub_row])
+        self.sub = ca.Function("c_sub", [qk, qs, qk1, b, mu, h] + xleft[:-1] + xls + xr + xzs + xu, [sub_row])
         #: the contacts' normal velocities at the sub-node before its impact, after the released contacts' shares
-        self.release = ca.Function("c_release", [qk, qs, b, h] + xleft + xz1,
+        self.release = ca.Function("c_release", [qk, qs, b, h] + xleft + xz1 + xu,
                                    [self.release_row(qk, qs, b, h, mul, rll, rel, zm)])
         if self.friction:
             #: ... and the slip velocities there (against which a released contact's share sticks or slides)
-            self.left_slip = ca.Function("c_left_slip", [qk, qs, b, h] + xleft + xz1,
+            self.left_slip = ca.Function("c_left_slip", [qk, qs, b, h] + xleft + xz1 + xu,
                                          [self.left_velocity(qk, qs, b, h, mul, rll, rel, zm)])
         if s:
             #: the stage rows of both parts of a step (stage_rows) and the constraints at their stages
             lz = sym("lamz", 2 * self.ms)
             xlz = [lz] if m else []
-            self.stage = ca.Function("c_stage", [qk, qs, qk1, b, h, zm, zp] + xlz,
+            self.stage = ca.Function("c_stage", [qk, qs, qk1, b, h, zm, zp] + xlz + xu,
                                      [self.stage_rows(qk, qs, qk1, b, h, zm, zp, lz)])
             if m:
                 self.stage_constraint = ca.Function("c_stage_con", [zm, zp], [self.stage_constraints(zm, zp)])
@@ -159,19 +165,19 @@ class ContactMechanics:
         # separately (ContactNLP.residual).
         ell = sym("delta", c)
         self.impact_law, self.law_slack = self._law_functions(
-            "", [qk, qs, qk1, b, mu], [h, ell] + xleft + xzs, mu * r * phi(qk1) / ell)
+            "", [qk, qs, qk1, b, mu], [h, ell] + xleft + xzs, mu * r * phi(qk1) / ell, xu)
         # the unweighted law and the next node's gaps, for the residual of real (not caught) impacts
-        self.law_check = ca.Function("c_law_check", [qk, qs, qk1, b, mu, h] + xleft + xzs, [mu * r, phi(qk1)])
+        self.law_check = ca.Function("c_law_check", [qk, qs, qk1, b, mu, h] + xleft + xzs + xu, [mu * r, phi(qk1)])
         self.pair = ca.Function("c_pair", [qk, nu], [ca.vertcat(phi(qk), nu)])
         self.gap_row = ca.Function("c_gap", [qk], [phi(qk)])
         w = sym("w")
         self.split = ca.Function("c_split", [b, w], [w * b * b])
         self._objective_functions()
-        self.p_minus = ca.Function("p_minus_sub", [qk, qs, b, h] + xz1, [pm])
-        self.p_plus = ca.Function("p_plus_sub", [qs, qk1, b, h] + xz2, [pp])
-        self.p_node_plus = ca.Function("p_node_plus", [qk, qs, b, h] + xz1, [-D1(qk, zm, qs, a * h)])
-        self.p_node_minus = ca.Function("p_node_minus", [qsm, bm, qk, h] + xz2, [D2(qsm, zp, qk, (1 - am) * h)])
-        if not s:
+        self.p_minus = ca.Function("p_minus_sub", [qk, qs, b, h] + xz1 + xu, [pm])
+        self.p_plus = ca.Function("p_plus_sub", [qs, qk1, b, h] + xz2 + xu, [pp])
+        self.p_node_plus = ca.Function("p_node_plus", [qk, qs, b, h] + xz1 + xu, [-D1(qk, zm, qs, a * h)])
+        self.p_node_minus = ca.Function("p_node_minus", [qsm, bm, qk, h] + xz2 + xu, [D2(qsm, zp, qk, (1 - am) * h)])
+        if not s and not ncu:
             # a held step of the guess (α = ½): the node row with the incoming momentum p, the sub-node row,
             # and, for the contacts held (mask 1), both gaps closed; the others' force and impulse pinned
             # to 0.  Square in (q̃, q_{k+1}, ν, μ): the discrete motion with the held contacts as
@@ -197,9 +203,18 @@ class ContactMechanics:
             self.flow = ca.Function("flow", [qk, v, tau], [x[:n], x[n:], phi(x[:n])])
             self._flights: Dict[int, ca.Function] = {}
         self._march_function(phi)
-        self.node_law_fn = ca.Function("c_node_law", [p0, qk, qs, b, h] + xz1, [self.node_law(p0, qk, qs, b, h, zm)])
-        self.acc_normal = self.guide.acc_normal if s else ca.Function(
-            "acc_normal", [qk, v], [ca.mtimes(J(qk), acc(qk, v))])
+        self.node_law_fn = ca.Function("c_node_law", [p0, qk, qs, b, h] + xz1 + xu,
+                                       [self.node_law(p0, qk, qs, b, h, zm)])
+        if not ncu:
+            v, acc = sym("v", n), system.acceleration
+            self.acc_normal = self.guide.acc_normal if s else ca.Function(
+                "acc_normal", [qk, v], [ca.mtimes(J(qk), acc(qk, v))])
+        else:
+            # the normal accelerations under the step's control (the march's test of an arrival at a node)
+            qdd = ca.substitute(system._index1_exprs()[0], system.control_vector, U)
+            acc = ca.Function("qdd_u", [system.q, system.qd, U], [qdd])
+            v = sym("v", n)
+            self.acc_normal = ca.Function("acc_normal", [qk, v, U], [ca.mtimes(J(qk), acc(qk, v, U))])
 
     # ------------------------------------------------------------------ stages
     def stage_guess(self, Q, S) -> np.ndarray:
@@ -225,7 +240,8 @@ class ContactMechanics:
         a, ms = 0.5 + b, self.ms
         sr = self.dm.stage_residual
         l1, l2 = (lz[:ms], lz[ms:]) if self.m else (ca.SX(0, 1), ca.SX(0, 1))
-        return ca.vertcat(sr(qk, zm, qs, l1, a * h) * a, sr(qs, zp, qn, l2, (1 - a) * h) * (1 - a))
+        ua = [self._U] if self.nu else []
+        return ca.vertcat(sr(qk, zm, qs, l1, a * h, *ua) * a, sr(qs, zp, qn, l2, (1 - a) * h, *ua) * (1 - a))
 
     def stage_constraints(self, zm, zp):
         """``c(Z_j) = 0`` at every stage of both parts of a step."""
@@ -423,7 +439,8 @@ class ContactMechanics:
                                                  sgn[:c] * release, leftfix, rfixl, vref, self.mu_f))
             extra = [stick, sgn, fix, rfix, arrive, rfixl]
         self.march_step = ca.Function("march_step", [x, qk, p, h, ell, snu, smu, vref, bfix, t, held, closed, law, node,
-                                                      fixed, mufix, nfixed, release, leftfix, mufixl, tslip] + extra,
+                                                      fixed, mufix, nfixed, release, leftfix, mufixl, tslip] + extra
+                                      + ([self._U] if self.nu else []),
                                       [R, ca.jacobian(R, x)])
 
     def friction_rows(self, slip, rho, stick, sgn, fix, rfix, vref, muf=None):
@@ -457,7 +474,7 @@ class ContactMechanics:
             self._flights[K] = ca.Function(f"flights{K}", [q, v, h], [Qs, Vs, Ps])
         return self._flights[K]
 
-    def _law_functions(self, suffix: str, head, tail, law):
+    def _law_functions(self, suffix: str, head, tail, law, xu=()):
         """Newton's law row ``law`` (inputs ``head + tail``, ``head`` ending with ``μ``) and its
         ℓ1 slack form ``law/scale − s⁺ + s⁻`` (inputs ``head + [s⁺, s⁻] + tail + [scale]``).
 
@@ -466,8 +483,9 @@ class ContactMechanics:
         """
         sym, c = ca.SX.sym, self.c
         sp, sm, scale = sym("sp", c), sym("sm", c), sym("scale")
-        return (ca.Function(f"c_law{suffix}", head + tail, [law]),
-                ca.Function(f"c_law_slack{suffix}", head + [sp, sm] + tail + [scale], [law / scale - sp + sm]))
+        xu = list(xu)
+        return (ca.Function(f"c_law{suffix}", head + tail + xu, [law]),
+                ca.Function(f"c_law_slack{suffix}", head + [sp, sm] + tail + [scale] + xu, [law / scale - sp + sm]))
 
     def _objective_functions(self):
         """The objective terms (penalties), built once per system; scales are element arguments."""

@@ -117,7 +117,7 @@ class ContactTranscription:
 
     program = Program
 
-    def __init__(self, cm: ContactMechanics, L: int, h: float, scales, steps=None):
+    def __init__(self, cm: ContactMechanics, L: int, h: float, scales, steps=None, u_bounds=None):
         self.cm, self.L, self.h = cm, L, h
         # step lengths h_k (a grid refined where impacts crowd, see solve.contact.march); h by default
         self.H = np.full(L, float(h)) if steps is None else np.asarray(steps, float).reshape(L)
@@ -170,6 +170,16 @@ class ContactTranscription:
             nlp.variable("zs", L * 2 * s)
             if m:
                 nlp.variable("lam_stage", L * 2 * cm.ms)
+        # controls (optimal control through contact): one value per step, an input of every row that holds the
+        # step's forces (ContactMechanics); a system without controls has none
+        if cm.nu:
+            lo, hi = u_bounds if u_bounds is not None else (np.full(cm.nu, -np.inf), np.full(cm.nu, np.inf))
+            nlp.variable("u", L * cm.nu, lb=np.tile(lo, L), ub=np.tile(hi, L), init=np.tile(np.clip(0.0, lo, hi), L))
+            UI = nlp.index("u").reshape(L, cm.nu)
+            UA = lambda i: [X(UI[i])]  # noqa: E731
+        else:
+            UA = lambda i: []  # noqa: E731
+        self._UA = UA
         nlp.parameter("p0", n)
         nlp.parameter("rho", 1, value=PENALTY[0])
         # weight of the centred-split term (0 where every β is fixed or timed: a decided branch)
@@ -204,23 +214,26 @@ class ContactTranscription:
         rho = P(nlp.parameter_index("rho"))
         nlp.equal_elements("initial", cm.initial,
                            [X(Q[0]), X(S[0]), X(B[0]), P(nlp.parameter_index("p0")), X(NU[0]), Hc[0]] + LAM(0)
-                           + RHO(0) + ZM(0))
+                           + RHO(0) + ZM(0) + UA(0))
         if L > 1:
             i = np.arange(1, L)
             nlp.equal_elements("node", cm.node, [X(S[i - 1]), X(B[i - 1]), X(Q[i]), X(S[i]), X(B[i]),
-                                                 X(NU[i]), Hc[i - 1], Hc[i]] + LAM(i) + RHO(i) + ZP(i - 1) + ZM(i))
+                                                 X(NU[i]), Hc[i - 1], Hc[i]] + LAM(i) + RHO(i) + ZP(i - 1) + ZM(i)
+                               + UA(i - 1) + UA(i))
         nlp.equal_elements("sub", cm.sub, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), Hc] + LEFT(k) + LAMS(k)
-                           + RHO(k) + ZM(k) + ZP(k))
+                           + RHO(k) + ZM(k) + ZP(k) + UA(k))
         # the normal (and slip) velocities before each sub-node's impact, after its first part's closing impulses:
         # zero for a contact released there (its share; the bounds are the march's modes, ContactNLP.solve_modes)
-        nlp.inequality_elements("release", cm.release, [X(Q[k]), X(S[k]), X(B[k]), Hc] + LEFT(k) + [REL] + ZM(k),
+        nlp.inequality_elements("release", cm.release, [X(Q[k]), X(S[k]), X(B[k]), Hc] + LEFT(k) + [REL] + ZM(k) + UA(k),
                                 lb=-np.inf, ub=np.inf)
         if cm.friction:
-            nlp.inequality_elements("left_slip", cm.left_slip, [X(Q[k]), X(S[k]), X(B[k]), Hc] + LEFT(k) + [REL] + ZM(k),
+            nlp.inequality_elements("left_slip", cm.left_slip, [X(Q[k]), X(S[k]), X(B[k]), Hc] + LEFT(k) + [REL] + ZM(k)
+                                    + UA(k),
                                     lb=-np.inf, ub=np.inf)
         if s:
             LAMZ = [X(nlp.index("lam_stage").reshape(L, 2 * cm.ms))] if m else []
-            nlp.equal_elements("stage", cm.stage, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), Hc] + ZM(k) + ZP(k) + LAMZ)
+            nlp.equal_elements("stage", cm.stage, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), Hc] + ZM(k) + ZP(k) + LAMZ
+                               + UA(k))
             if m:
                 nlp.equal_elements("stage_constraint", cm.stage_constraint, ZM(k) + ZP(k))
         if cm.friction:
@@ -243,7 +256,7 @@ class ContactTranscription:
         LL = P(nlp.parameter_index("law_length").reshape(L, c))
         nlp.equal_elements("impact_law", cm.law_slack,
                            [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), X(SP[k]), X(SM[k]), Hc, LL]
-                           + LEFT(k) + [REL] + ZM(k) + ZP(k) + [np.array([self.scales_law])])
+                           + LEFT(k) + [REL] + ZM(k) + ZP(k) + [np.array([self.scales_law])] + UA(k))
         # exact (l1) penalties: complementarity products and the impact-law slacks
         nlp.minimize_elements("node_penalty", cm.product_penalty, [X(Q[k]), X(NU[k]), rho, ell * pref / Hc])
         nlp.minimize_elements("sub_penalty", cm.product_penalty, [X(S[k]), X(MU[k]), rho, np.array([ell * pref])])
@@ -293,8 +306,10 @@ class ContactTranscription:
         MU = values["mu"].reshape(L, c)
         B = values["beta"].reshape(L)
         zm, zp = self._stages(values)
+        U = self._controls(values)
         raw, nxt = (np.asarray(v).reshape(c, L).T for v in cm.law_check.map(L)(Q[:-1].T, S.T, Q[1:].T, B, MU.T, H,
-                                                                               *self._law_extras(values), *[z.T for z in zm + zp]))
+                                                                               *self._law_extras(values), *[z.T for z in zm + zp],
+                                                                               *[u.T for u in U]))
         nxt2 = np.vstack([nxt[1:], nxt[-1:]])
         leaves = (nxt > self.open_gap) | (nxt2 > self.open_gap)
         # ... if the contact arrived faster than the grid resolves (v_z = a h / e): a slower arrival
@@ -302,7 +317,8 @@ class ContactTranscription:
         # accumulation even where the contact opens again soon after
         ks = np.where(np.any(leaves & (MU > 0), axis=1))[0]
         if ks.size:
-            pm = np.asarray(cm.p_minus.map(ks.size)(Q[ks].T, S[ks].T, B[ks], H[ks], *[z[ks].T for z in zm])).T
+            pm = np.asarray(cm.p_minus.map(ks.size)(Q[ks].T, S[ks].T, B[ks], H[ks], *[z[ks].T for z in zm],
+                                                    *[u[ks].T for u in U])).T
             for i, k in enumerate(ks):
                 J = np.asarray(cm.system.gap(S[k])[1])
                 vn = J @ np.linalg.solve(np.asarray(cm.system.mass_matrix(S[k])), pm[i])
@@ -314,10 +330,12 @@ class ContactTranscription:
             k += 1
             if not (nxt[k, j] > self.open_gap or nxt2[k, j] > self.open_gap):
                 continue
-            p_in = np.asarray(cm.p_node_minus(S[k - 1], B[k - 1], Q[k], H[k - 1], *[z[k - 1] for z in zp])).reshape(-1)
+            p_in = np.asarray(cm.p_node_minus(S[k - 1], B[k - 1], Q[k], H[k - 1], *[z[k - 1] for z in zp],
+                                              *[u[k - 1] for u in U])).reshape(-1)
             J = np.asarray(cm.system.gap(Q[k])[1])[j]
             if -(J @ np.linalg.solve(np.asarray(cm.system.mass_matrix(Q[k])), p_in)) > self.v_zeno:
-                r = float(np.asarray(cm.node_law_fn(p_in, Q[k], S[k], B[k], H[k], *[z[k] for z in zm])).reshape(-1)[j])
+                r = float(np.asarray(cm.node_law_fn(p_in, Q[k], S[k], B[k], H[k], *[z[k] for z in zm],
+                                                    *[u[k] for u in U])).reshape(-1)[j])
                 raw[k, j] = max(abs(raw[k, j]), abs(H[k] * NU[k, j] * r))
                 leaves[k, j] = True
         return raw, leaves
@@ -329,6 +347,12 @@ class ContactTranscription:
         if cm.friction:
             left.append(np.asarray(values["fleft"], float).reshape(L, -1).T)
         return left + [np.asarray(self.nlp.parameter_value("release"), float).reshape(L, cm.c).T]
+
+    def _controls(self, values):
+        """``[U]``, the controls per step ``(L, nu)``, or ``[]`` without controls."""
+        if not self.cm.nu:
+            return []
+        return [np.asarray(values["u"], float).reshape(self.L, self.cm.nu)]
 
     def _stages(self, values):
         """``([Z⁻], [Z⁺])`` per step, ``(L, s)`` each (both empty for a two-point scheme)."""
@@ -350,7 +374,7 @@ class ContactTranscription:
         zm, zp = self._stages(values)
         law = np.asarray(cm.impact_law.map(L)(Q[:-1].T, S.T, Q[1:].T, B, MU.T, H,
                                               self._law_length.T, *self._law_extras(values),
-                                              *[z.T for z in zm + zp])).reshape(c, L).T
+                                              *[z.T for z in zm + zp], *[u.T for u in self._controls(values)])).reshape(c, L).T
         # Newton's law of every impact after which the body leaves, unweighted (_raw_law)
         raw, leaves = self._raw_law(values)
         law = np.where(self.law_exempt, 0.0, law)

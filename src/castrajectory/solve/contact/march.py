@@ -51,12 +51,17 @@ MAX_SPLITS = 20
 
 
 def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_splits: int = MAX_SPLITS,
-                   trace: Optional[list] = None) -> Optional[Dict[str, np.ndarray]]:
+                   trace: Optional[list] = None, controls=None) -> Optional[Dict[str, np.ndarray]]:
     """The contact program's point for ``L`` steps of ``h`` from ``(q0, p0)``, solved step by step (module
     docstring), on a grid refined where a step would hold two impacts: the point's arrays, ``steps``
     (the step lengths) and ``base`` (the index of each step's base step); ``None`` where a step's mode
-    search fails."""
+    search fails.  ``controls``: the control of every step, ``(L, nu)``, for a system with controls (a
+    halved step keeps its base step's)."""
     step = _Step(cm, scales)
+    if cm.nu:
+        U = np.asarray(controls, float).reshape(L, cm.nu)
+        # (a chunk's function has a fixed length: its steps past L take the last control, unused)
+        U = np.vstack([U, np.repeat(U[-1:], CHUNK_STEPS, axis=0)])
     c = cm.c
     ell = scales[0]
     tol = TOUCH_TOL * ell          # touching: gap within this
@@ -78,6 +83,8 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
             fm = [(step.fprev[i] if step.fprev[i] not in (FREE, FIX) else STICK) if act[i] else FREE
                   for i in range(2 * cm.c)]
         Qn = None
+        if cm.nu:
+            step.uarg = [U[k]]
         if L - k >= 2 and np.all(~touch | held_prev):
             # steps that keep their modes (open contacts stay open, held ones held: free flight, a body
             # resting or sliding), many in one call: the march's step with those modes (the same rows,
@@ -93,7 +100,8 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
                     x0[sl] = np.asarray(rows[name][-1], float).reshape(-1)[:sl.stop - sl.start]
             try:
                 Qn, Pn, X, Gs, Gn, Rr, SL = (a[:, :K] if a.ndim == 2 else a[:K]
-                                             for a in step.chunk(span, q, p, h, held, fm, x0))
+                                             for a in step.chunk(span, q, p, h, held, fm, x0,
+                                                                 U[k:k + span] if cm.nu else None))
             except RuntimeError:
                 # a singular Newton system (friction rows at zero force: no step before the chunk yet)
                 Qn = None
@@ -142,7 +150,7 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
             step.fprev = list(fmodes)
             qn = out["q"]
             p = np.asarray(cm.p_node_minus(out["qs"], out["beta"], qn, hk,
-                                           *cm.stage_parts(out["zs"])[1])).reshape(-1)
+                                           *cm.stage_parts(out["zs"])[1], *step.uarg)).reshape(-1)
             held_prev = np.array([m in (H, C, _modes.K, _modes.W) for m in modes])
             q, g_q = qn, gn
         k += 1

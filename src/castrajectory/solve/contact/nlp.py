@@ -52,6 +52,33 @@ class ContactNLP(ContactTranscription):
         the modes (the rest fixed at 0), ``β = 0`` in a step without a timed impact, and Newton's law is
         exact at every impact whose contact leaves.  Ipopt then only confirms the point and forms the
         multipliers."""
+        bounds = self.mode_bounds(q0, point)
+        init = self._start(q0, p0, point)
+        opts = {**CONTACT_IPOPT, **BRANCH_IPOPT, **(options or {})}
+        opts["max_iter"] = min(int(opts["max_iter"]), max_iter)
+        # every pair decided with exact zero products and every β fixed or timed: a square feasibility
+        # problem, no penalty and no selection term (its point is then a KKT point with zero multipliers)
+        self.nlp.set_parameter("rho", 0.0)
+        self.nlp.set_parameter("split", 0.0)
+        # a few evaluations only (Ipopt, if it runs, evaluates the VM's kernels): nothing to compile
+        self.nlp.compile_elements = False
+        self.nlp.build(opts, verbose)
+        res = self.nlp.certify(init, certify_tol, bounds)
+        if res.success:
+            resid = self.residual(res.values)
+            res.complementarity_residual = resid
+            res.homotopy = [HomotopyStep(0.0, res.solver_status, 0, res.solve_time_s, resid, parameter="modes")]
+            if resid <= COMPLEMENTARITY_TOL:
+                return res
+        try:
+            return self._ladder(init, opts, bounds, [0.0], verbose, "modes", "the march's branch")
+        finally:
+            self.nlp.set_parameter("split", SPLIT_WEIGHT)
+
+    def mode_bounds(self, q0, point: Dict[str, np.ndarray]) -> Dict[str, tuple]:
+        """The bounds that hold the program on the branch of the march's modes (:meth:`solve_modes`), and the
+        parameters of that branch set (``release``, ``arrive``; ``law_exempt`` and ``turns`` for the residual and
+        the answer)."""
         c, L = self.cm.c, self.L
         modes = np.asarray(point["modes"]).reshape(L, c)
         timed = np.isin(modes, ("I", "C", "T", "K"))
@@ -138,27 +165,7 @@ class ContactNLP(ContactTranscription):
                 bounds["cone"] = (np.where(on, 0.0, -np.inf).reshape(-1), np.full(L * 2 * c, np.inf))
                 sl = np.repeat((fm == "L")[..., None], d, axis=2).reshape(-1)
                 bounds["slide"] = (np.where(sl, 0.0, -np.inf), np.where(sl, 0.0, np.inf))
-        init = self._start(q0, p0, point)
-        opts = {**CONTACT_IPOPT, **BRANCH_IPOPT, **(options or {})}
-        opts["max_iter"] = min(int(opts["max_iter"]), max_iter)
-        # every pair decided with exact zero products and every β fixed or timed: a square feasibility
-        # problem, no penalty and no selection term (its point is then a KKT point with zero multipliers)
-        self.nlp.set_parameter("rho", 0.0)
-        self.nlp.set_parameter("split", 0.0)
-        # a few evaluations only (Ipopt, if it runs, evaluates the VM's kernels): nothing to compile
-        self.nlp.compile_elements = False
-        self.nlp.build(opts, verbose)
-        res = self.nlp.certify(init, certify_tol, bounds)
-        if res.success:
-            resid = self.residual(res.values)
-            res.complementarity_residual = resid
-            res.homotopy = [HomotopyStep(0.0, res.solver_status, 0, res.solve_time_s, resid, parameter="modes")]
-            if resid <= COMPLEMENTARITY_TOL:
-                return res
-        try:
-            return self._ladder(init, opts, bounds, [0.0], verbose, "modes", "the march's branch")
-        finally:
-            self.nlp.set_parameter("split", SPLIT_WEIGHT)
+        return bounds
 
     def solve_branch(self, q0, p0, guess: Dict[str, np.ndarray], options=None, verbose=False,
                      max_iter: int = BRANCH_IPOPT["max_iter"], penalties=PENALTY) -> NLPResult:

@@ -68,8 +68,11 @@ class _Step:
         self.nf = 2 * cm.c * cm.fd if cm.friction else 0
         self.fd = cm.fd
         self.fprev = [FREE] * (2 * cm.c)
+        #: the control of the step marched (optimal control through contact): the last input of every element
+        #: that holds the step's forces; empty without controls
+        self.uarg = []
 
-    def chunk(self, K: int, q, p, h, held, fmodes=None, x0=None):
+    def chunk(self, K: int, q, p, h, held, fmodes=None, x0=None, controls=None):
         """``K`` steps from ``(q, p)`` in one call, the ``held`` contacts held (mode H) and the others
         open (β = 0), with friction the slots in the friction modes ``fmodes`` (stick or slide, kept through
         the chunk): columns of the nodes ``q_{k+1}``, momenta ``p_{k+1}⁻``, unknowns, sub-node and node
@@ -86,6 +89,7 @@ class _Step:
             fin = [st, sg] if self.nf else []
             fz = [st, sg, ca.DM.zeros(2 * c), ca.DM.zeros(2 * c * cm.fd), zero, ca.DM.zeros(c * cm.fd)] if self.nf else []
             xs = ca.MX.sym("x0", cm.nx)
+            us = [ca.MX.sym("u", cm.nu)] if cm.nu else []
             v = ca.solve(cm.system.mass_matrix(qs), ps)
             qm_, qn_ = qs + 0.5 * hs * v, qs + hs * v
             # the flight's guess of the positions (and stages), the previous step's forces, ratios, multipliers
@@ -94,17 +98,17 @@ class _Step:
                            ca.DM.zeros(cm.layout["mul"].stop - cm.layout["mul"].start + self.nf // 2))
             for _ in range(CHUNK_NEWTON):
                 r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero, zero, zero, zero, zero, zero, zero, zero,
-                               zero, *fz)
+                               zero, *fz, *us)
                 x = x - ca.solve(J, r)
             # the size of one more Newton step: the rows' residual in units of the unknowns
             r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero, zero, zero, zero, zero, zero, zero, zero, zero,
-                           *fz)
+                           *fz, *us)
             res = ca.mmax(ca.fabs(ca.solve(J, r)))
             qn, qt = x[n:2 * n], x[:n]
             zp = [x[cm.layout["zs"]][cm.s:]] if cm.s else []
             slip = cm.slip_row(qs, qt, qn, 0.0, hs, zero) if self.nf else ca.DM.zeros(1)
-            one = ca.Function("chunk_step", [qs, ps, xs, hs, hm] + sc + fin,
-                              [qn, cm.p_node_minus(qt, 0.0, qn, hs, *zp), x, cm.gap_row(qt), cm.gap_row(qn), res, slip])
+            one = ca.Function("chunk_step", [qs, ps, xs, hs, hm] + sc + fin + us,
+                              [qn, cm.p_node_minus(qt, 0.0, qn, hs, *zp, *us), x, cm.gap_row(qt), cm.gap_row(qn), res, slip])
             self._chunks[K] = one.mapaccum("chunk_steps", K, [0, 1, 2], [0, 1, 2])
         fargs = []
         if self.nf:
@@ -112,7 +116,10 @@ class _Step:
             fargs = [np.array([f == STICK for f in fm], float),
                      np.array([1.0 if f in (UP, SLIDE) else -1.0 if f == DOWN else 0.0 for f in fm])]
         x0 = np.zeros(self.cm.nx) if x0 is None else x0
-        out = self._chunks[K](q, p, x0, h, held.astype(float), self.ell, self.pref / h, self.pref, self.vref, *fargs)
+        # (the controls of the chunk's steps as columns, one per step: a mapped input)
+        uargs = [np.asarray(controls, float).reshape(K, -1).T] if self.cm.nu else []
+        out = self._chunks[K](q, p, x0, h, held.astype(float), self.ell, self.pref / h, self.pref, self.vref, *fargs,
+                              *uargs)
         return tuple(np.asarray(a) for a in out)
 
     def friction_holds(self, fm, rho, slip) -> np.ndarray:
@@ -178,7 +185,7 @@ class _Step:
                            np.zeros(c * self.fd) if rfixl is None else rfixl)
         small = 0
         for _ in range(NEWTON_ITER):
-            r, Jr = self.fn(x, *args)
+            r, Jr = self.fn(x, *args, *self.uarg)
             r = np.asarray(r).reshape(-1)
             Jr = np.asarray(Jr)
             # rows and columns equilibrated (momentum rows ~ 1/h², gap rows ~ 1/ℓ): the step's
@@ -204,7 +211,7 @@ class _Step:
             small = small + 1 if np.max(np.abs(dx)) <= 1e-14 * (1.0 + float(np.max(np.abs(x)))) else 0
             if small == 2:
                 break
-        r, Jr = self.fn(x, *args)
+        r, Jr = self.fn(x, *args, *self.uarg)
         # each row in units of the unknowns (divided by its largest derivative): rows that go like
         # 1/α near α = 0 are then held to the rounding of the point, not of their size
         r = np.asarray(r).reshape(-1) / np.maximum(np.max(np.abs(np.asarray(Jr)), axis=1), 1e-300)
@@ -286,7 +293,7 @@ def _march_step(step: _Step, q, p, h, g_q, held_prev, tol, finest: bool):
     v = np.linalg.solve(np.asarray(step.cm.system.mass_matrix(q)), p)
     x0 = restage(step.cm, np.concatenate([q + 0.5 * h * v, q + h * v, np.zeros(step.cm.nx - 2 * step.n)]), q)
     # a flight that landed on this node (to rounding) arrives with its impact here: Newton's law at the node
-    an = np.abs(np.asarray(step.cm.acc_normal(q, v)).reshape(-1))
+    an = np.abs(np.asarray(step.cm.acc_normal(q, v, *step.uarg)).reshape(-1))
     arriving = touch & ~held_prev & (-(np.asarray(step.cm.system.gap(q)[1]) @ v) > IMPACT_SPEED_STEPS * an * h)
     modes0 = [N if arriving[j] else H if (touch[j] and held_prev[j]) else O for j in range(c)]
     modes, tried, crossed = list(modes0), set(), set()
@@ -486,7 +493,8 @@ def _slip_turn(step: _Step, q, p, h, modes, x, fmodes):
         return None
     fm = list(fmodes)
     qn = x[n:2 * n]
-    pn = np.asarray(cm.p_node_minus(x[:n], float(x[2 * n]), qn, h, *cm.stage_parts(x[cm.layout["zs"]])[1])).reshape(-1)
+    pn = np.asarray(cm.p_node_minus(x[:n], float(x[2 * n]), qn, h, *cm.stage_parts(x[cm.layout["zs"]])[1],
+                                    *step.uarg)).reshape(-1)
     v0 = cm.dm.velocities(q[None, :], p[None, :])[0]
     v1 = cm.dm.velocities(qn[None, :], pn[None, :])[0]
     s0 = np.asarray(cm.system.tangent(q)).reshape(-1, n) @ v0
@@ -548,7 +556,7 @@ def _slow_arrivals(step: _Step, q, p, h):
     acceleration at the step's node (the arrivals an answer does not list as impacts, :mod:`.solution`)."""
     cm = step.cm
     v = np.linalg.solve(np.asarray(cm.system.mass_matrix(q)), p)
-    an = np.abs(np.asarray(cm.acc_normal(q, v)).reshape(-1))
+    an = np.abs(np.asarray(cm.acc_normal(q, v, *step.uarg)).reshape(-1))
     return -(np.asarray(cm.system.gap(q)[1]) @ v) <= IMPACT_SPEED_STEPS * an * h
 
 
@@ -670,7 +678,7 @@ def _impact_law(step: _Step, q, p, h, x, modes, cascade: bool):
             return None                  # no impact
         qs, b = x[:n], float(x[2 * n])
         # the momentum before the impact: p̃⁻ and the released contacts' shares (ContactMechanics.release_row)
-        pm = np.asarray(cm.p_minus(q, qs, b, h, *cm.stage_parts(x[cm.layout["zs"]])[0])).reshape(-1)
+        pm = np.asarray(cm.p_minus(q, qs, b, h, *cm.stage_parts(x[cm.layout["zs"]])[0], *step.uarg)).reshape(-1)
         sh = x[cm.layout["mul"]] * releases(modes)
         if np.any(sh):
             pm = pm + np.asarray(cm.system.gap(qs)[1]).T @ sh

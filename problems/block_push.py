@@ -1,0 +1,88 @@
+"""Block push: contact-implicit optimal control of a block on a floor with Coulomb friction, from rest at 0 to
+rest at d in T, minimising ∫u² dt, against the closed form.
+
+The block (a point of mass m on the floor y >= 0, friction μ) is moved by a horizontal force |u| <= u_max.  The
+whole MPCC (the floor's gap ⟂ its forces, the friction's slips ⟂ the cone) is one program; the answer is
+certified by marching its controls with the contact march.  Closed form (castrajectory.models.block_push): the
+optimum slides for τ = min(T, τ*), τ* = √(6d/(μg)), and sticks the rest of the horizon, at the cost
+J* = 12m²d²/τ³ + (μmg)²τ; while it slides the whole horizon the midpoint optimum on N steps is exactly
+(12m²d²/T³)N²/(N²−1) + (μmg)²T.
+
+    python problems/block_push.py
+    python problems/block_push.py --T 2 --n 160 --json          # sticks for T − τ* = 0.57 s
+"""
+import sys
+
+import casadi as ca
+import numpy as np
+
+from castrajectory import cli
+from castrajectory.models.block_push import BlockPush
+from castrajectory.models.contact import Contact
+from castrajectory.models.control import Control
+from castrajectory.models.mechanics import Atoms, Force, Gravity, LagrangianSystem, velocity
+from castrajectory.solve.optimal_control import OptimalControl
+from castrajectory.validation import InputError
+
+
+def parser():
+    p = cli.scene_parser("block_push.py", __doc__.splitlines()[0])
+    p.add_argument("--distance", type=float, default=1.0, help="distance d in m")
+    p.add_argument("--T", type=float, default=1.0, help="horizon T in s (> 0)")
+    p.add_argument("--mass", type=float, default=1.0, help="mass m (> 0)")
+    p.add_argument("--mu", type=float, default=0.3, help="friction coefficient μ (> 0)")
+    p.add_argument("--g", type=float, default=9.81, help="gravity (> 0)")
+    p.add_argument("--u-max", type=float, default=20.0, help="bound on the force |u| (> 0)")
+    p.add_argument("--n", type=int, default=40, help="number of time steps N (>= 2)")
+    cli.add_scheme(p)
+    cli.add_plot(p)
+    p.add_argument("--animate", metavar="PATH", help="write an animation (.gif, or .mp4 when ffmpeg is present)")
+    return p
+
+
+def problem(d, T, m, mu, g, u_max, n, scheme="midpoint"):
+    """The block on its floor and its optimal-control problem."""
+    q = ca.SX.sym("q", 2)
+    u = Control("u", 1, lower=-u_max, upper=u_max)
+    system = LagrangianSystem(q, Atoms([q], [m]), [Gravity(g), Force(ca.vertcat(u, 0))], names=["x", "y"],
+                              contact=Contact([q[1]], restitution=0.0, friction=mu, slip=[velocity(q)[0]],
+                                              names=["floor"]))
+    ocp = OptimalControl(system, T=T, N=n, scheme=scheme)
+    ocp.initial(q=[0.0, 0.0], qd=[0.0, 0.0])
+    ocp.final(q=[d, 0.0], qd=[0.0, 0.0])
+    ocp.minimize(running=u ** 2)
+    return system, ocp
+
+
+def run(args):
+    cli.finite_flags(args, "distance", "T", "mass", "mu", "g", "u_max")
+    for flag in ("T", "mass", "mu", "g", "u_max"):
+        if getattr(args, flag) <= 0:
+            raise InputError(f"--{flag.replace('_', '-')} must be positive (got {getattr(args, flag):g})")
+    cli.check_animation_path(args.animate)
+    d, T, m, mu, g, N = args.distance, args.T, args.mass, args.mu, args.g, args.n
+    exact = BlockPush(m, mu, d, T, g, args.u_max)
+    system, ocp = problem(d, T, m, mu, g, args.u_max, N, args.scheme)
+    sol = ocp.solve(options=cli.ipopt_options(args), verbose=args.verbose)
+    rest = np.abs(sol.v[:, 0]) <= 1e-9 * max(1.0, float(np.max(np.abs(sol.v[:, 0]))))
+    stuck = float(np.sum(rest[:-1] & rest[1:])) * T / N          # the steps at rest at both ends
+    JN = exact.discrete_cost(N) if args.scheme == "midpoint" else float("nan")
+    lines = [f"closed form: slides {exact.slide:.6g} s of {T:g} (τ* = √(6d/(μg)) = {exact.free_slide:.6g} s), "
+             f"J* = {exact.cost:.12g}; J − J* = {sol.cost - exact.cost:.2e}"
+             + (f"; the midpoint optimum on N steps {JN:.12g}, J − J_N = {sol.cost - JN:.2e}" if JN == JN else ""),
+             f"the answer is at rest for {stuck:.4g} s (the closed form: {T - exact.slide:.4g} s); complementarity "
+             f"{sol.complementarity:.1e}"]
+    if not exact.bound_inactive:
+        lines.append(f"the closed form's peak force {exact.peak_force:.4g} exceeds --u-max: it is not this "
+                     f"problem's optimum")
+    extra = {**exact.as_dict(), "error_vs_exact": abs(sol.cost - exact.cost), "discrete_optimum": JN,
+             "stuck_time": stuck, "complementarity": sol.complementarity}
+    return cli.control_outcome("block push", system, sol, extra=extra, extra_lines=lines, exact_u=exact.control)
+
+
+def main(argv=None):
+    return cli.run_scene(parser(), run, argv)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

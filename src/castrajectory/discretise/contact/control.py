@@ -1,0 +1,230 @@
+"""Contact-implicit optimal control: the contact transcription with controls, a cost and boundary conditions.
+
+The program is the initial-value contact program of :mod:`.transcription` (the same node, sub-node, stage
+and impact-law rows, the same exact ℓ1 penalties of the complementarity pairs) on ``N`` steps with no
+look-ahead, and on top of it, as in DMOC (:mod:`..optimal_control`):
+
+* the controls ``u_k``, one per step, constant over both parts of step ``k`` (bounds on the variables), in
+  every row that holds the step's forces (:class:`.elements.ContactMechanics`);
+* the running cost, the scheme's quadrature of ``ℓ(q, q̇, u)`` over each part of every step (``[q_k, q̃_k]`` of
+  length ``αh``, ``[q̃_k, q_{k+1}]`` of ``(1 − α)h``), and a final cost ``φ(q_N, q̇_N, T)``;
+* the end: the given entries of ``q_N`` fixed by bounds; a given final velocity by the end node's momentum
+  balance ``p_N⁻ + h(∇φ(q_N)ᵀ + D(q_N)ᵀρ_N)ν_N = p(q_N, q̇_N)``: the end node's contact force ``ν_N ≥ 0``
+  (complementary to ``φ(q_N)``, an ℓ1 penalty like every node's) is what lets a body end at rest on a
+  surface that pushes it (without it ``p_N⁻ = 0`` would ask the last part of the step to be free of gravity);
+* Coulomb friction (planar, one slip component per contact) by maximal dissipation as complementarity: each
+  slot's slip velocity ``s`` (the rows :meth:`ContactMechanics.slip` of the initial-value program, whose modes
+  there come from the march) splits as ``s/v_ref = s⁺ − s⁻``, ``s± ≥ 0``, with ``(μ_f + ρ) ⟂ s⁺`` and
+  ``(μ_f − ρ) ⟂ s⁻`` in the penalty: a slot that slides has its ratio on the cone's edge against its slip, one
+  that sticks any ratio inside it.
+
+A point of this program with every penalty term zero is a solution of the contact program under its own
+controls: the march of those controls (:mod:`castrajectory.solve.contact.march`) must reproduce it, which
+is the certificate (``docs/derivations.md``, "Contact-implicit DMOC").
+"""
+from __future__ import annotations
+
+from typing import Optional
+
+import casadi as ca
+import numpy as np
+
+from ..program import P, X
+from .elements import ContactMechanics
+from .transcription import ContactTranscription
+
+
+class ContactControlTranscription(ContactTranscription):
+    """One grid of a contact-implicit optimal-control problem (see the module docstring).
+
+    ``T`` the horizon (``h = T/N``); ``scales`` as for :class:`ContactTranscription`; ``end_velocity``: whether
+    the final velocity is given (its momentum is the parameter ``pN``); ``running(q, v, u)`` and
+    ``final(q, v, T)``: CasADi functions of the costs (``None``: none); ``u_bounds``: ``(lo, hi)`` per control.
+    """
+
+    def __init__(self, cm: ContactMechanics, N: int, T: float, scales, end_velocity: bool,
+                 running: Optional[ca.Function], final: Optional[ca.Function], u_bounds=None):
+        super().__init__(cm, N, T / N, scales, u_bounds=u_bounds)
+        nlp, L, n, c = self.nlp, N, cm.n, cm.c
+        self.N, self.T = N, float(T)
+        h = self.h
+        ell, pref, vref = scales[0], scales[1], scales[2]
+        self.scales_v, self.scales_pref = vref, pref
+        Q = nlp.index("q").reshape(L + 1, n)
+        S = nlp.index("qs").reshape(L, n)
+        B = nlp.index("beta").reshape(L, 1)
+        k = np.arange(L)
+        Hc = self.H.reshape(-1, 1)
+        rho = P(nlp.parameter_index("rho"))
+        UA = self._UA
+        s = cm.s
+        ZI = nlp.index("zs").reshape(L, 2 * s) if s else None
+        ZM = (lambda i: [X(ZI[i, :s])]) if s else (lambda i: [])  # noqa: E731
+        ZP = (lambda i: [X(ZI[i, s:])]) if s else (lambda i: [])  # noqa: E731
+        self.end_velocity = end_velocity
+        # a node force acts only on a contact that stays closed through the step's first part: φ(q̃_k) ⟂ ν_k.  (The
+        # initial-value program needs no such pair, its march picks the branch; here the cost would otherwise
+        # buy a launch: a node force at a closed node that throws the body off, saving the friction of sliding.)
+        NU = nlp.index("nu").reshape(L, c)
+        # (both factors' scales: φ(q̃_k) of a launch is O(v h), so the product φ ν is scaled by v_ref p_ref: a product
+        # scaled as the node pair's, φ h ν/(ℓ p_ref), priced a launch at O(h) and the cost bought it at N = 40)
+        nlp.minimize_elements("launch_penalty", cm.product_penalty,
+                              [X(S[k]), X(NU[k]), rho, np.array([vref * pref])])
+        nlp.declared_pairs.update({"launch": L * c})
+        # a sub-node impulse in a step where its contact does not arrive (held, resting: the parameter "timed" is 0)
+        # holds the body: the contact is closed again at the next node, φ(q_{k+1}) ⟂ μ_k.  (Newton's law, weighted by
+        # φ(q_{k+1}), is waived for a caught body; a launch from rest by a sub-node impulse met it only weakly, and
+        # the cost bought one.)
+        nlp.parameter("timed", L * c, value=0.0)
+        TM = P(nlp.parameter_index("timed").reshape(L, c))
+        MU = nlp.index("mu").reshape(L, c)
+        nlp.minimize_elements("catch_penalty", self._catch_penalty(cm), [X(Q[k + 1]), X(MU[k]), TM, rho,
+                                                                         vref * pref * Hc])
+        self._extra_pairs = dict(launch=(S, NU, vref * pref * np.ones(L)), catch=(Q[1:], MU, vref * pref * self.H))
+        # Newton's law weighted by φ(q_{k+1})/δ with δ = v_ref h, the next node's gap after a bounce (δ = ℓ, the
+        # initial-value program's default, weighs it by O(h))
+        self.delta = vref * h
+        nlp.declared_pairs.update({"catch": L * c})
+        if cm.friction:
+            if cm.fd != 1:
+                raise ValueError("contact-implicit optimal control takes planar friction (one slip component)")
+            # maximal dissipation as complementarity: the slip split into its signs, s/v_ref = s⁺ − s⁻
+            nlp.variable("slip_plus", L * 2 * c, lb=0.0)
+            nlp.variable("slip_minus", L * 2 * c, lb=0.0)
+            AR = P(nlp.parameter_index("arrive").reshape(L, c))
+            nlp.equal_elements("slip_split", self._slip_split(cm, vref),
+                               [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), Hc, AR,
+                                X(nlp.index("slip_plus").reshape(L, 2 * c)),
+                                X(nlp.index("slip_minus").reshape(L, 2 * c))])
+            # (an open contact's slot has no force, so its ratio is free: the pair sets it against a flight's slip, and
+            # nothing follows from it.  Weighted by the slot's normal force, three factors, the penalty stopped being
+            # exact: Ipopt converged with residuals of 0.1-50 on the push to a target, the friction pushing forward)
+            nlp.minimize_elements("slip_penalty", self._slip_penalty(cm),
+                                  [X(nlp.index("fratio").reshape(L, 2 * c)), X(nlp.index("slip_plus").reshape(L, 2 * c)),
+                                   X(nlp.index("slip_minus").reshape(L, 2 * c)), rho])
+            nlp.declared_pairs.update({"slip": L * 4 * c})
+        if end_velocity:
+            # the end node's contact force and its friction ratio (bounds by the final slip: _end_bounds)
+            nlp.variable("nu_end", c, lb=0.0)
+            if cm.friction:
+                nlp.variable("fratio_end", c, lb=-cm.mu_f, ub=cm.mu_f)
+            nlp.parameter("pN", n)
+            nlp.equal_elements("final_momentum", self._end_row(cm),
+                               [X(S[L - 1]), X(B[L - 1]), X(Q[L]), Hc[L - 1], X(nlp.index("nu_end")),
+                                P(nlp.parameter_index("pN"))]
+                               + ([X(nlp.index("fratio_end"))] if cm.friction else []) + ZP(L - 1) + UA(L - 1))
+            nlp.minimize_elements("end_node_penalty", cm.product_penalty,
+                                  [X(Q[L]), X(nlp.index("nu_end")), rho, np.array([ell * pref / h])])
+            nlp.declared_pairs.update({"end_node": c})
+        self.running_fn = self._running(cm, running) if running is not None else None
+        self.final_fn = self._final(cm, final, N) if final is not None else None
+        if running is not None:
+            nlp.minimize_elements("running", self.running_fn,
+                                  [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), Hc] + ZM(k) + ZP(k) + UA(k))
+        if final is not None:
+            nlp.minimize_elements("final", self.final_fn,
+                                  [X(S[L - 1]), X(B[L - 1]), X(Q[L]), Hc[L - 1]] + ZP(L - 1) + UA(L - 1))
+
+    def cost(self, V) -> float:
+        """The running and final costs at the values ``V`` (the objective without the penalties)."""
+        cm, L, n = self.cm, self.L, self.cm.n
+        Q, S, B = V["q"].reshape(L + 1, n), V["qs"].reshape(L, n), V["beta"].reshape(L)
+        Z = V["zs"].reshape(L, 2 * cm.s) if cm.s else None
+        zm, zp = ([Z[:, :cm.s]], [Z[:, cm.s:]]) if cm.s else ([], [])
+        U = [V["u"].reshape(L, cm.nu)] if cm.nu else []
+        total = 0.0
+        if self.running_fn is not None:
+            total += float(np.sum(np.asarray(self.running_fn.map(L)(Q[:-1].T, S.T, Q[1:].T, B, self.H,
+                                                                     *[z.T for z in zm + zp], *[u.T for u in U]))))
+        if self.final_fn is not None:
+            total += float(self.final_fn(S[-1], B[-1], Q[-1], self.H[-1], *[z[-1] for z in zp], *[u[-1] for u in U]))
+        return total
+
+    def residual(self, values) -> float:
+        """The initial-value program's complementarity residual, and this program's own pairs: the launch and
+        catch pairs, the friction's slips against their ratios and the end node's force against its gap (each
+        scaled as in its penalty)."""
+        cm, L, c = self.cm, self.L, self.cm.c
+        out = [super().residual(values)]
+        g = lambda A: np.asarray(cm.gap_row.map(A.shape[0])(A.T)).reshape(c, -1).T  # noqa: E731
+        n = cm.n
+        Q, S = values["q"].reshape(L + 1, n), values["qs"].reshape(L, n)
+        NU, MU = values["nu"].reshape(L, c), values["mu"].reshape(L, c)
+        tm = np.asarray(self.nlp.parameter_value("timed"), float).reshape(L, c)
+        sc = self._extra_pairs
+        out.append(float(np.max(np.abs(g(S) * NU) / sc["launch"][2][:, None])))
+        out.append(float(np.max(np.abs((1 - tm) * g(Q[1:]) * MU) / sc["catch"][2][:, None])))
+        if cm.friction:
+            r = values["fratio"].reshape(L, 2 * c)
+            muf = np.concatenate([cm.mu_f, cm.mu_f])[None, :]
+            sp, sm = values["slip_plus"].reshape(L, 2 * c), values["slip_minus"].reshape(L, 2 * c)
+            out.append(float(np.max(np.abs((muf + r) * sp) + np.abs((muf - r) * sm))))
+        if self.end_velocity:
+            out.append(float(np.max(np.abs(g(Q[L:]) * values["nu_end"]))) * self.h / self.scales_p)
+        return float(max(out))
+
+    # ------------------------------------------------------------------ the elements of the control problem
+    @staticmethod
+    def _slip_split(cm: ContactMechanics, vref: float) -> ca.Function:
+        """``s/v_ref − s⁺ + s⁻`` per slot (node and sub-node of every contact)."""
+        sym, n, c = ca.SX.sym, cm.n, cm.c
+        qk, qs, qn, b, h, arrive = sym("q", n), sym("qs", n), sym("qn", n), sym("b"), sym("h"), sym("arrive", c)
+        sp, sm = sym("sp", 2 * c), sym("sm", 2 * c)
+        return ca.Function("c_slip_split", [qk, qs, qn, b, h, arrive, sp, sm],
+                           [cm.slip(qk, qs, qn, b, h, arrive) / vref - sp + sm])
+
+    @staticmethod
+    def _slip_penalty(cm: ContactMechanics) -> ca.Function:
+        """``ρ Σ [(μ_f + r) s⁺ + (μ_f − r) s⁻]`` over a step's slots (``r`` their friction ratios)."""
+        sym, c = ca.SX.sym, cm.c
+        r, sp, sm, w = sym("r", 2 * c), sym("sp", 2 * c), sym("sm", 2 * c), sym("rho")
+        muf = ca.DM(np.concatenate([cm.mu_f, cm.mu_f]))
+        return ca.Function("c_slip_pen", [r, sp, sm, w], [w * (ca.dot(muf + r, sp) + ca.dot(muf - r, sm))])
+
+    @staticmethod
+    def _catch_penalty(cm: ContactMechanics) -> ca.Function:
+        """``ρ Σ_j (1 − timed_j) φ_j(q_{k+1}) μ_j / scale``."""
+        sym, c = ca.SX.sym, cm.c
+        q, mu, tm, w, sc = sym("q", cm.n), sym("mu", c), sym("timed", c), sym("rho"), sym("scale")
+        return ca.Function("c_catch_pen", [q, mu, tm, w, sc], [w * ca.dot((1 - tm) * cm.system.gap(q)[0], mu) / sc])
+
+    @staticmethod
+    def _end_row(cm: ContactMechanics) -> ca.Function:
+        """``(p_N⁻ + h(∇φ(q_N)ᵀ + D(q_N)ᵀρ_N)ν_N − p_N)/h``: the end node's momentum balance."""
+        sym, n, c = ca.SX.sym, cm.n, cm.c
+        qs, b, q, h, nu, pN = sym("qs", n), sym("b"), sym("q", n), sym("h"), sym("nu", c), sym("pN", n)
+        r = sym("r", c)
+        zp = [sym("zp", cm.s)] if cm.s else []
+        u = [cm._U] if cm.nu else []
+        pm = cm.p_node_minus(qs, b, q, h, *zp, *u)
+        J = cm.system.gap(q)[1]
+        imp = ca.mtimes(J.T, nu)
+        if cm.friction:
+            imp = imp + ca.mtimes(cm.system.tangent(q).T, r * nu)
+        return ca.Function("c_end", [qs, b, q, h, nu, pN] + ([r] if cm.friction else []) + zp + u,
+                           [(pm + h * imp - pN) / h])
+
+    @staticmethod
+    def _running(cm: ContactMechanics, running: ca.Function) -> ca.Function:
+        """The scheme's quadrature of ``ℓ(q, q̇, u)`` over both parts of a step."""
+        sym, n, s = ca.SX.sym, cm.n, cm.s
+        st = cm.dm.scheme
+        qk, qs, qn, b, h = sym("q", n), sym("qs", n), sym("qn", n), sym("b"), sym("h")
+        zm, zp = (sym("zm", s), sym("zp", s)) if s else (ca.SX(0, 1), ca.SX(0, 1))
+        u = cm._U
+        a = 0.5 + b
+        f = lambda q, v, t: running(q, v, u)  # noqa: E731
+        parts = [[qk] + [zm[j * n:(j + 1) * n] for j in range(st.stages)] + [qs],
+                 [qs] + [zp[j * n:(j + 1) * n] for j in range(st.stages)] + [qn]]
+        val = st.discrete_lagrangian(f, parts[0], a * h, None) + st.discrete_lagrangian(f, parts[1], (1 - a) * h, None)
+        return ca.Function("c_running", [qk, qs, qn, b, h] + ([zm, zp] if s else []) + ([u] if cm.nu else []), [val])
+
+    @staticmethod
+    def _final(cm: ContactMechanics, final: ca.Function, N: int) -> ca.Function:
+        """``φ(q_N, q̇_N, T)``, ``q̇_N = M⁻¹p_N⁻`` (the last part's momentum; no holonomic constraints here)."""
+        sym, n, s = ca.SX.sym, cm.n, cm.s
+        qs, b, q, h = sym("qs", n), sym("b"), sym("q", n), sym("h")
+        zp = [sym("zp", s)] if s else []
+        u = [cm._U] if cm.nu else []
+        v = ca.solve(cm.system.mass_matrix(q), cm.p_node_minus(qs, b, q, h, *zp, *u))
+        return ca.Function("c_final", [qs, b, q, h] + zp + u, [final(q, v, N * h)])

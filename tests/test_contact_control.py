@@ -1,0 +1,105 @@
+"""Contact-implicit optimal control (#27): the contact rows with controls, the march of a control history, and
+``ct.OptimalControl`` on systems with contact, against closed forms and exact discrete optima, certified.
+
+Oracles: the block push (castrajectory.models.block_push): a block on a floor with friction μ moved from rest at
+0 to rest at d in T at least ∫u²; it slides τ = min(T, τ*), τ* = √(6d/(μg)), at the cost 12m²d²/τ³ + (μmg)²τ,
+and on the midpoint rule with N steps, sliding the whole horizon, exactly (12m²d²/T³)N²/(N²−1) + (μmg)²T; a
+block pushed by a constant force above μmg slides at the constant acceleration u/m − μg, which the midpoint
+rule follows exactly.
+"""
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+import pytest
+
+import castrajectory as ct
+from castrajectory.models.block_push import BlockPush
+from castrajectory.validation import InputError
+
+
+def block(mu=0.3, u_max=20.0, m=1.0, g=9.81):
+    q = ca.SX.sym("q", 2)
+    u = ct.Control("u", 1, lower=-u_max, upper=u_max)
+    system = ct.LagrangianSystem(q, ct.Atoms([q], [m]), [ct.Gravity(g), ct.Force(ca.vertcat(u, 0))],
+                                 contact=ct.Contact([q[1]], restitution=0.0, friction=mu, slip=[ct.velocity(q)[0]]))
+    return system, u
+
+
+def push(N, T=1.0, d=1.0, mu=0.3):
+    system, u = block(mu)
+    ocp = ct.OptimalControl(system, T=T, N=N)
+    ocp.initial(q=[0.0, 0.0], qd=[0.0, 0.0])
+    ocp.final(q=[d, 0.0], qd=[0.0, 0.0])
+    ocp.minimize(running=u ** 2)
+    return ocp.solve()
+
+
+def test_the_march_takes_a_control_history():
+    """A block pushed by u = 5 > μmg from rest: x = ½(u/m − μg)t², exact on the midpoint rule (measured 4.4e-16 m);
+    then u = −2 (|u| < μmg) brakes it at μg + 2 until it stops inside a step (the march times the stop there) and
+    it sticks, at the closed form's rest position to rounding: each step's force is its own step's control."""
+    from castrajectory.solve.contact.control import mechanics
+    from castrajectory.solve.contact.march import discrete_march
+    system, _ = block()
+    cm = mechanics(system, "midpoint")
+    N, h = 40, 0.025
+    U = np.r_[np.full(20, 5.0), np.full(20, -2.0)][:, None]
+    point = discrete_march(cm, np.zeros(2), np.zeros(2), N, h, (1.0, 3.13, 3.13, 9.81), controls=U)
+    x = np.asarray(point["q"]).reshape(-1, 2)[:, 0]
+    t = h * np.arange(N + 1)
+    a = 5.0 - 0.3 * 9.81
+    x_exact = np.where(t <= 0.5, 0.5 * a * t * t, np.nan)
+    assert np.nanmax(np.abs(x - x_exact)) < 1e-13
+    v1, dec = a * 0.5, 0.3 * 9.81 + 2.0
+    t_stop = 0.5 + v1 / dec
+    assert t_stop < 1.0
+    assert abs(x[-1] - (0.5 * a * 0.25 + v1 * v1 / (2 * dec))) < 1e-13       # measured 6.1e-16
+    assert np.max(np.abs(np.asarray(point["q"]).reshape(-1, 2)[:, 1])) < 1e-15     # on the floor throughout
+
+
+def test_block_push_hits_the_exact_discrete_optimum_and_is_certified():
+    """Sliding the whole horizon (T = 1 < τ* = 1.43): the cost is the midpoint optimum on N steps, exactly
+    (measured 6e-11 at N = 20); the march of its controls reproduces it (3e-12); the block never leaves the floor."""
+    exact = BlockPush(1.0, 0.3, 1.0, 1.0)
+    sol = push(20)
+    assert sol.success, sol.message
+    assert abs(sol.cost - exact.discrete_cost(20)) < 5e-9
+    assert sol.certificate < 1e-10 and sol.complementarity < 1e-10
+    assert np.max(np.abs(sol.q[:, 1])) < 1e-10
+    # the friction slides against the motion at the cone's edge, and the force is the closed form's to O(h²)
+    assert np.allclose(sol.fratio, -0.3, atol=1e-8)
+    assert np.max(np.abs(sol.u[:, 0] - exact.control(sol.t_u))) < 0.04
+
+
+def test_block_push_finds_where_it_sticks():
+    """T = 2 > τ*: the optimum slides τ* and sticks T − τ* = 0.572 s; the answer finds the stick (its time at rest
+    within a step of it: measured 0.55 s at N = 80) and the cost J* = (4/3)(μmg)²τ* (measured 1.3e-3 at N = 80,
+    5.0e-3 at N = 40: order 1.9), certified (1e-11)."""
+    exact = BlockPush(1.0, 0.3, 1.0, 2.0)
+    assert exact.sticks and abs(exact.cost - 4 / 3 * (0.3 * 9.81) ** 2 * exact.free_slide) < 1e-12
+    sol = push(80, T=2.0)
+    assert sol.success, sol.message
+    assert sol.certificate < 1e-9
+    assert 0 < sol.cost - exact.cost < 3e-3
+    h = 2.0 / 80
+    rest = np.abs(sol.v[:, 0]) <= 1e-9
+    stuck = np.sum(rest[:-1] & rest[1:]) * h
+    assert abs(stuck - (2.0 - exact.free_slide)) <= 1.5 * h
+
+
+def test_contact_optimal_control_refuses_what_it_does_not_take():
+    system, u = block()
+    ocp = ct.OptimalControl(system, T=(0.5, 2.0), N=10)
+    ocp.initial(q=[0.0, 0.0], qd=[0.0, 0.0])
+    ocp.minimize(running=u ** 2)
+    with pytest.raises(InputError, match="fixed final time"):
+        ocp.solve()
+    ocp = ct.OptimalControl(system, T=1.0, N=10)
+    ocp.initial(q=[0.0, 0.0])
+    ocp.minimize(running=u ** 2)
+    with pytest.raises(InputError, match="initial state given in full"):
+        ocp.solve()
+    ocp.initial(q=[0.0, -0.1], qd=[0.0, 0.0])
+    with pytest.raises(InputError, match="penetrates"):
+        ocp.solve()
