@@ -13,14 +13,10 @@ J* = 12m²d²/τ³ + (μmg)²τ; while it slides the whole horizon the midpoint 
 """
 import sys
 
-import casadi as ca
 import numpy as np
 
 from castrajectory import cli
-from castrajectory.models.block_push import BlockPush
-from castrajectory.models.contact import Contact
-from castrajectory.models.control import Control
-from castrajectory.models.mechanics import Atoms, Force, Gravity, LagrangianSystem, velocity
+from castrajectory.models.block_push import BlockPush, pushed_particle
 from castrajectory.solve.optimal_control import OptimalControl
 from castrajectory.validation import InputError
 
@@ -42,11 +38,8 @@ def parser():
 
 def problem(d, T, m, mu, g, u_max, n, scheme="midpoint"):
     """The block on its floor and its optimal-control problem."""
-    q = ca.SX.sym("q", 2)
-    u = Control("u", 1, lower=-u_max, upper=u_max)
-    system = LagrangianSystem(q, Atoms([q], [m]), [Gravity(g), Force(ca.vertcat(u, 0))], names=["x", "y"],
-                              contact=Contact([q[1]], restitution=0.0, friction=mu, slip=[velocity(q)[0]],
-                                              names=["floor"]))
+    system = pushed_particle(m, mu, g, u_max)
+    u = system.controls[0]
     ocp = OptimalControl(system, T=T, N=n, scheme=scheme)
     ocp.initial(q=[0.0, 0.0], qd=[0.0, 0.0])
     ocp.final(q=[d, 0.0], qd=[0.0, 0.0])

@@ -26,7 +26,24 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import casadi as ca
 import numpy as np
+
+from .contact import Contact
+from .control import Control
+from .mechanics import Atoms, Force, Gravity, LagrangianSystem, velocity
+
+
+def pushed_particle(mass: float = 1.0, friction: float = 0.3, g: float = 9.81, u_max: float = math.inf,
+                    restitution: float = 0.0) -> LagrangianSystem:
+    """A point of mass ``m`` in the plane, ``q = (x, y)``, over the floor ``y ≥ 0`` (restitution ``e``, Coulomb
+    friction ``μ`` against the slip ``ẋ``), under gravity and a horizontal force ``u``, ``|u| ≤ u_max``: the block
+    of the block push, and the particle of the push to a target."""
+    q = ca.SX.sym("q", 2)
+    u = Control("u", 1, lower=-u_max, upper=u_max)
+    return LagrangianSystem(q, Atoms([q], [mass]), [Gravity(g), Force(ca.vertcat(u, 0))], names=["x", "y"],
+                            contact=Contact([q[1]], restitution=restitution, friction=friction,
+                                            slip=[velocity(q)[0]], names=["floor"]))
 
 
 @dataclass(frozen=True)

@@ -101,7 +101,7 @@ class OptimalControl:
     def __init__(self, system: LagrangianSystem, T, N: int, scheme: str = "midpoint", controls: str = "quadrature"):
         if not isinstance(system, LagrangianSystem):
             raise InputError(f"system must be a LagrangianSystem (got {type(system).__name__})")
-        if not system.controls:
+        if not system.controls and system.contact is None:
             raise InputError("the system has no control: put a ct.Control in a ct.Force")
         self.system = system
         self.N = integer_at_least("N", N, 2)
@@ -147,7 +147,8 @@ class OptimalControl:
         s = self.system
         qv = _vector(f"{which} q", q, s.nq, s.names)
         qv = np.full(s.nq, np.nan) if qv is None else qv
-        vv = _vector(f"{which} qd", qd, s.nq, s.names, allow_none=False)
+        # (an entry None of the initial velocity: an unknown, with contact: a launch to be found)
+        vv = _vector(f"{which} qd", qd, s.nq, s.names, allow_none=which == "initial" and s.contact is not None)
         if vv is not None and np.any(np.isnan(qv)):
             raise InputError(f"a {which} velocity needs the {which} configuration given in full")
         if s.nc and not np.any(np.isnan(qv)):
@@ -217,7 +218,7 @@ class OptimalControl:
 
     # -------------------------------------------------------------- the solve
     def solve(self, guess: Optional[Dict[str, np.ndarray]] = None, options: Optional[dict] = None,
-              verbose: bool = False) -> ControlResult:
+              verbose: bool = False, keep_modes: bool = False) -> ControlResult:
         """Solve the whole DMOC program with Ipopt from ``guess`` (``{"q": (N+1, n), "u": (N, nu), "T": …}``,
         any part; the rest: the boundary conditions interpolated, zero controls clipped to their bounds),
         then certify the answer (see the module docstring).
@@ -230,7 +231,9 @@ class OptimalControl:
         39-289 on the cart-pole).  A rung that fails is dropped: the grid then starts from the boundary
         conditions.  ``grids`` lists the grids solved."""
         if self.system.contact is not None:
-            return self._solve_contact(guess, options, verbose)
+            return self._solve_contact(guess, options, verbose, keep_modes)
+        if keep_modes:
+            raise InputError("keep_modes is for a system with contact (the contact modes of the guess's march)")
         rungs: List[int] = []
         if guess is None and self.N > LADDER_MAX:
             coarse = copy.copy(self)
@@ -246,7 +249,7 @@ class OptimalControl:
             out.solve_time_s += spent
         return out
 
-    def _solve_contact(self, guess, options, verbose) -> "ControlResult":
+    def _solve_contact(self, guess, options, verbose, keep_modes=False) -> "ControlResult":
         """Contact-implicit optimal control (:mod:`castrajectory.solve.contact.control`): the whole MPCC in one
         program, its guess the contact march of the controls' guess, its answer certified by the march."""
         from .contact.control import solve_contact_control
@@ -257,8 +260,6 @@ class OptimalControl:
         if v0 is None or np.any(np.isnan(q0)):
             raise InputError("optimal control through contact needs the initial state given in full "
                              "(ocp.initial(q=..., qd=...))")
-        if self._is_free_time():
-            raise InputError("optimal control through contact takes a fixed final time")
         if self._path:
             raise InputError("optimal control through contact takes no path constraints yet (bound the controls)")
         if s.nc:
@@ -272,10 +273,10 @@ class OptimalControl:
         running = ca.Function("l", [q, qd, u], [ca.substitute(self._running, s.t, 0)]) \
             if self._running is not None else None
         final = ca.Function("phi", [q, qd, self.T_symbol], [self._final]) if self._final is not None else None
-        lo = np.concatenate([c.lower for c in self._controls])
-        hi = np.concatenate([c.upper for c in self._controls])
+        lo = np.concatenate([c.lower for c in self._controls]) if self._controls else np.zeros(0)
+        hi = np.concatenate([c.upper for c in self._controls]) if self._controls else np.zeros(0)
         return solve_contact_control(s, self.T, self.N, self.scheme, (q0, v0), (qN, vN), running, final, (lo, hi),
-                                     self._controls, guess, options, verbose)
+                                     self._controls, guess, options, verbose, keep_modes)
 
     def _interpolated(self, prior: "ControlResult") -> Dict[str, np.ndarray]:
         """A coarser answer on this grid: nodes and controls interpolated linearly in ``t/T``."""

@@ -39,11 +39,16 @@ class ContactControlTranscription(ContactTranscription):
 
     ``T`` the horizon (``h = T/N``); ``scales`` as for :class:`ContactTranscription`; ``end_velocity``: whether
     the final velocity is given (its momentum is the parameter ``pN``); ``running(q, v, u)`` and
-    ``final(q, v, T)``: CasADi functions of the costs (``None``: none); ``u_bounds``: ``(lo, hi)`` per control.
+    ``final(q, v, T)``: CasADi functions of the costs (``None``: none); ``u_bounds``: ``(lo, hi)`` per control;
+    ``free_time``: ``(lo, hi)`` of a free final time (the step length ``h`` is then an unknown, ``T`` its guess);
+    ``start_velocity``: the initial velocity is an unknown ``v0`` (its given entries fixed by bounds), the initial
+    row's momentum ``p(q_0, v0)``.
     """
 
     def __init__(self, cm: ContactMechanics, N: int, T: float, scales, end_velocity: bool,
-                 running: Optional[ca.Function], final: Optional[ca.Function], u_bounds=None):
+                 running: Optional[ca.Function], final: Optional[ca.Function], u_bounds=None, free_time=None,
+                 start_velocity: bool = False):
+        self.free_time, self.start_velocity = free_time, start_velocity
         super().__init__(cm, N, T / N, scales, u_bounds=u_bounds)
         nlp, L, n, c = self.nlp, N, cm.n, cm.c
         self.N, self.T = N, float(T)
@@ -55,6 +60,7 @@ class ContactControlTranscription(ContactTranscription):
         B = nlp.index("beta").reshape(L, 1)
         k = np.arange(L)
         Hc = self.H.reshape(-1, 1)
+        HA = self._HA
         rho = P(nlp.parameter_index("rho"))
         UA = self._UA
         s = cm.s
@@ -68,22 +74,41 @@ class ContactControlTranscription(ContactTranscription):
         NU = nlp.index("nu").reshape(L, c)
         # (both factors' scales: φ(q̃_k) of a launch is O(v h), so the product φ ν is scaled by v_ref p_ref: a product
         # scaled as the node pair's, φ h ν/(ℓ p_ref), priced a launch at O(h) and the cost bought it at N = 40)
-        nlp.minimize_elements("launch_penalty", cm.product_penalty,
-                              [X(S[k]), X(NU[k]), rho, np.array([vref * pref])])
+        # (waived where the node force is an impact at the node itself, the parameter "node_impact": a flight that
+        # lands on a node, the march's mode N -- bounces at equal intervals, e = 1, land on nodes)
+        nlp.parameter("node_impact", L * c, value=0.0)
+        NI = P(nlp.parameter_index("node_impact").reshape(L, c))
+        nlp.minimize_elements("launch_penalty", self._catch_penalty(cm),
+                              [X(S[k]), X(NU[k]), NI, rho, np.array([vref * pref])])
         nlp.declared_pairs.update({"launch": L * c})
-        # a sub-node impulse in a step where its contact does not arrive (held, resting: the parameter "timed" is 0)
-        # holds the body: the contact is closed again at the next node, φ(q_{k+1}) ⟂ μ_k.  (Newton's law, weighted by
-        # φ(q_{k+1}), is waived for a caught body; a launch from rest by a sub-node impulse met it only weakly, and
-        # the cost bought one.)
+        # Newton's law, and the catch.  Each sub-node impulse is a bounce (the parameter "bounce" 1: a contact that
+        # arrives and leaves again, the march's mode I), where Newton's law holds exactly, μ r = 0 (an ℓ1 slack
+        # penalty), or else holds the body (resting, or caught: the march's H and C), where the contact is closed
+        # again at the next node, φ(q_{k+1}) ⟂ μ_k.  Which impulses are bounces is read from each answer (the solve's
+        # timing rounds).  (The initial-value program weighs one law by φ(q_{k+1})/δ for both; here that weight let
+        # a late bounce (small next gap) leave with its law violated by 0.11 on the bounce to a target, and a launch
+        # from rest by a sub-node impulse met it only weakly, which the cost bought.)  The initial-value program's
+        # weighted law stays, with δ = v_ref h (the next node's gap after a bounce; δ = ℓ weighs it by O(h)).
         nlp.parameter("timed", L * c, value=0.0)
-        TM = P(nlp.parameter_index("timed").reshape(L, c))
+        nlp.parameter("bounce", L * c, value=0.0)
+        BO = P(nlp.parameter_index("bounce").reshape(L, c))
         MU = nlp.index("mu").reshape(L, c)
+        TM = P(nlp.parameter_index("timed").reshape(L, c))
         nlp.minimize_elements("catch_penalty", self._catch_penalty(cm), [X(Q[k + 1]), X(MU[k]), TM, rho,
                                                                          vref * pref * Hc])
         self._extra_pairs = dict(launch=(S, NU, vref * pref * np.ones(L)), catch=(Q[1:], MU, vref * pref * self.H))
-        # Newton's law weighted by φ(q_{k+1})/δ with δ = v_ref h, the next node's gap after a bounce (δ = ℓ, the
-        # initial-value program's default, weighs it by O(h))
+        nlp.variable("law_plus", L * c, lb=0.0)
+        nlp.variable("law_minus", L * c, lb=0.0)
+        REL = P(nlp.parameter_index("release").reshape(L, c))
+        LEFT = [X(nlp.index("mul").reshape(L, c))] + ([X(nlp.index("fleft").reshape(L, c * cm.fd))] if cm.friction else [])
+        nlp.equal_elements("exact_law", self._exact_law(cm),
+                           [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), HA(k)] + LEFT + [REL] + ZM(k) + ZP(k)
+                           + UA(k) + [BO, X(nlp.index("law_plus").reshape(L, c)),
+                                      X(nlp.index("law_minus").reshape(L, c)), np.array([self.scales_law])])
+        nlp.minimize_elements("exact_law_penalty", cm.slack_penalty,
+                              [X(nlp.index("law_plus").reshape(L, c)), X(nlp.index("law_minus").reshape(L, c)), rho])
         self.delta = vref * h
+        nlp.declared_pairs.update({"exact_law": L * c})
         nlp.declared_pairs.update({"catch": L * c})
         if cm.friction:
             if cm.fd != 1:
@@ -93,7 +118,7 @@ class ContactControlTranscription(ContactTranscription):
             nlp.variable("slip_minus", L * 2 * c, lb=0.0)
             AR = P(nlp.parameter_index("arrive").reshape(L, c))
             nlp.equal_elements("slip_split", self._slip_split(cm, vref),
-                               [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), Hc, AR,
+                               [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), HA(k), AR,
                                 X(nlp.index("slip_plus").reshape(L, 2 * c)),
                                 X(nlp.index("slip_minus").reshape(L, 2 * c))])
             # (an open contact's slot has no force, so its ratio is free: the pair sets it against a flight's slip, and
@@ -110,7 +135,7 @@ class ContactControlTranscription(ContactTranscription):
                 nlp.variable("fratio_end", c, lb=-cm.mu_f, ub=cm.mu_f)
             nlp.parameter("pN", n)
             nlp.equal_elements("final_momentum", self._end_row(cm),
-                               [X(S[L - 1]), X(B[L - 1]), X(Q[L]), Hc[L - 1], X(nlp.index("nu_end")),
+                               [X(S[L - 1]), X(B[L - 1]), X(Q[L]), HA(L - 1), X(nlp.index("nu_end")),
                                 P(nlp.parameter_index("pN"))]
                                + ([X(nlp.index("fratio_end"))] if cm.friction else []) + ZP(L - 1) + UA(L - 1))
             nlp.minimize_elements("end_node_penalty", cm.product_penalty,
@@ -120,10 +145,10 @@ class ContactControlTranscription(ContactTranscription):
         self.final_fn = self._final(cm, final, N) if final is not None else None
         if running is not None:
             nlp.minimize_elements("running", self.running_fn,
-                                  [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), Hc] + ZM(k) + ZP(k) + UA(k))
+                                  [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), HA(k)] + ZM(k) + ZP(k) + UA(k))
         if final is not None:
             nlp.minimize_elements("final", self.final_fn,
-                                  [X(S[L - 1]), X(B[L - 1]), X(Q[L]), Hc[L - 1]] + ZP(L - 1) + UA(L - 1))
+                                  [X(S[L - 1]), X(B[L - 1]), X(Q[L]), HA(L - 1)] + ZP(L - 1) + UA(L - 1))
 
     def cost(self, V) -> float:
         """The running and final costs at the values ``V`` (the objective without the penalties)."""
@@ -134,11 +159,38 @@ class ContactControlTranscription(ContactTranscription):
         U = [V["u"].reshape(L, cm.nu)] if cm.nu else []
         total = 0.0
         if self.running_fn is not None:
-            total += float(np.sum(np.asarray(self.running_fn.map(L)(Q[:-1].T, S.T, Q[1:].T, B, self.H,
+            total += float(np.sum(np.asarray(self.running_fn.map(L)(Q[:-1].T, S.T, Q[1:].T, B, self.steps(V),
                                                                      *[z.T for z in zm + zp], *[u.T for u in U]))))
         if self.final_fn is not None:
-            total += float(self.final_fn(S[-1], B[-1], Q[-1], self.H[-1], *[z[-1] for z in zp], *[u[-1] for u in U]))
+            total += float(self.final_fn(S[-1], B[-1], Q[-1], self.steps(V)[-1], *[z[-1] for z in zp],
+                                         *[u[-1] for u in U]))
         return total
+
+    # ------------------------------------------------------------------ a free final time, a free start
+    def _step_argument(self, nlp, Hc):
+        if self.free_time is None:
+            return super()._step_argument(nlp, Hc)
+        lo, hi = self.free_time
+        nlp.variable("h", 1, lb=lo / self.L, ub=hi / self.L, init=self.h)
+        hx = X(nlp.index("h"))
+        return lambda rows: hx
+
+    def _initial_element(self, nlp):
+        if not self.start_velocity:
+            return super()._initial_element(nlp)
+        cm = self.cm
+        f = cm.initial
+        ins = [ca.SX.sym(f"a{j}", f.size1_in(j), f.size2_in(j)) for j in range(f.n_in())]
+        v0 = ca.SX.sym("v0", cm.n)
+        p0 = cm.system.momentum(ins[0], v0)
+        fn = ca.Function("c_initial_v", ins[:3] + [v0] + ins[4:], [f(*(ins[:3] + [p0] + ins[4:]))])
+        nlp.variable("v0", cm.n)
+        return fn, X(nlp.index("v0"))
+
+    def steps(self, values) -> np.ndarray:
+        if self.free_time is None:
+            return self.H
+        return np.full(self.L, float(np.asarray(values["h"]).reshape(-1)[0]))
 
     def residual(self, values) -> float:
         """The initial-value program's complementarity residual, and this program's own pairs: the launch and
@@ -150,9 +202,12 @@ class ContactControlTranscription(ContactTranscription):
         n = cm.n
         Q, S = values["q"].reshape(L + 1, n), values["qs"].reshape(L, n)
         NU, MU = values["nu"].reshape(L, c), values["mu"].reshape(L, c)
+        bo = np.asarray(self.nlp.parameter_value("bounce"), float).reshape(L, c)
+        out.append(float(np.max(np.abs(bo * self._raw_law(values)[0]))) / self.scales_law)
         tm = np.asarray(self.nlp.parameter_value("timed"), float).reshape(L, c)
         sc = self._extra_pairs
-        out.append(float(np.max(np.abs(g(S) * NU) / sc["launch"][2][:, None])))
+        ni = np.asarray(self.nlp.parameter_value("node_impact"), float).reshape(L, c)
+        out.append(float(np.max(np.abs((1 - ni) * g(S) * NU) / sc["launch"][2][:, None])))
         out.append(float(np.max(np.abs((1 - tm) * g(Q[1:]) * MU) / sc["catch"][2][:, None])))
         if cm.friction:
             r = values["fratio"].reshape(L, 2 * c)
@@ -182,10 +237,20 @@ class ContactControlTranscription(ContactTranscription):
         return ca.Function("c_slip_pen", [r, sp, sm, w], [w * (ca.dot(muf + r, sp) + ca.dot(muf - r, sm))])
 
     @staticmethod
-    def _catch_penalty(cm: ContactMechanics) -> ca.Function:
-        """``ρ Σ_j (1 − timed_j) φ_j(q_{k+1}) μ_j / scale``."""
+    def _exact_law(cm: ContactMechanics) -> ca.Function:
+        """``bounce · μ r / scale − s⁺ + s⁻`` per contact: Newton's law of a bounce, unweighted."""
+        f = cm.law_check
+        ins = [ca.SX.sym(f"a{j}", f.size1_in(j), f.size2_in(j)) for j in range(f.n_in())]
         sym, c = ca.SX.sym, cm.c
-        q, mu, tm, w, sc = sym("q", cm.n), sym("mu", c), sym("timed", c), sym("rho"), sym("scale")
+        bo, sp, sm, sc = sym("bounce", c), sym("sp", c), sym("sm", c), sym("scale")
+        return ca.Function("c_exact_law", ins + [bo, sp, sm, sc], [bo * f(*ins)[0] / sc - sp + sm])
+
+    @staticmethod
+    def _catch_penalty(cm: ContactMechanics) -> ca.Function:
+        """``ρ Σ_j (1 − w_j) φ_j(q) λ_j / scale``: a pair waived where ``w`` is 1 (the catch: ``q = q_{k+1}``, ``λ = μ_k``,
+        ``w`` the bounces; the launch: ``q = q̃_k``, ``λ = ν_k``, ``w`` the impacts at the node)."""
+        sym, c = ca.SX.sym, cm.c
+        q, mu, tm, w, sc = sym("q", cm.n), sym("mu", c), sym("bounce", c), sym("rho"), sym("scale")
         return ca.Function("c_catch_pen", [q, mu, tm, w, sc], [w * ca.dot((1 - tm) * cm.system.gap(q)[0], mu) / sc])
 
     @staticmethod

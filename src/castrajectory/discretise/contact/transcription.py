@@ -210,29 +210,32 @@ class ContactTranscription:
         ZM = (lambda i: [X(ZI[i, :s])]) if s else (lambda i: [])  # noqa: E731
         ZP = (lambda i: [X(ZI[i, s:])]) if s else (lambda i: [])  # noqa: E731
         Hc = self.H.reshape(-1, 1)
+        # the step lengths as element arguments (numbers; an unknown h for a free final time, _step_argument)
+        HA = self._HA = self._step_argument(nlp, Hc)
         k = np.arange(L)
         rho = P(nlp.parameter_index("rho"))
-        nlp.equal_elements("initial", cm.initial,
-                           [X(Q[0]), X(S[0]), X(B[0]), P(nlp.parameter_index("p0")), X(NU[0]), Hc[0]] + LAM(0)
+        fn0, p0arg = self._initial_element(nlp)
+        nlp.equal_elements("initial", fn0,
+                           [X(Q[0]), X(S[0]), X(B[0]), p0arg, X(NU[0]), HA(0)] + LAM(0)
                            + RHO(0) + ZM(0) + UA(0))
         if L > 1:
             i = np.arange(1, L)
             nlp.equal_elements("node", cm.node, [X(S[i - 1]), X(B[i - 1]), X(Q[i]), X(S[i]), X(B[i]),
-                                                 X(NU[i]), Hc[i - 1], Hc[i]] + LAM(i) + RHO(i) + ZP(i - 1) + ZM(i)
+                                                 X(NU[i]), HA(i - 1), HA(i)] + LAM(i) + RHO(i) + ZP(i - 1) + ZM(i)
                                + UA(i - 1) + UA(i))
-        nlp.equal_elements("sub", cm.sub, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), Hc] + LEFT(k) + LAMS(k)
+        nlp.equal_elements("sub", cm.sub, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), HA(k)] + LEFT(k) + LAMS(k)
                            + RHO(k) + ZM(k) + ZP(k) + UA(k))
         # the normal (and slip) velocities before each sub-node's impact, after its first part's closing impulses:
         # zero for a contact released there (its share; the bounds are the march's modes, ContactNLP.solve_modes)
-        nlp.inequality_elements("release", cm.release, [X(Q[k]), X(S[k]), X(B[k]), Hc] + LEFT(k) + [REL] + ZM(k) + UA(k),
+        nlp.inequality_elements("release", cm.release, [X(Q[k]), X(S[k]), X(B[k]), HA(k)] + LEFT(k) + [REL] + ZM(k) + UA(k),
                                 lb=-np.inf, ub=np.inf)
         if cm.friction:
-            nlp.inequality_elements("left_slip", cm.left_slip, [X(Q[k]), X(S[k]), X(B[k]), Hc] + LEFT(k) + [REL] + ZM(k)
+            nlp.inequality_elements("left_slip", cm.left_slip, [X(Q[k]), X(S[k]), X(B[k]), HA(k)] + LEFT(k) + [REL] + ZM(k)
                                     + UA(k),
                                     lb=-np.inf, ub=np.inf)
         if s:
             LAMZ = [X(nlp.index("lam_stage").reshape(L, 2 * cm.ms))] if m else []
-            nlp.equal_elements("stage", cm.stage, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), Hc] + ZM(k) + ZP(k) + LAMZ
+            nlp.equal_elements("stage", cm.stage, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), HA(k)] + ZM(k) + ZP(k) + LAMZ
                                + UA(k))
             if m:
                 nlp.equal_elements("stage_constraint", cm.stage_constraint, ZM(k) + ZP(k))
@@ -241,12 +244,12 @@ class ContactTranscription:
             # (which contacts arrive at their sub-node: their slip is the one after it, ContactMechanics.slip)
             nlp.parameter("arrive", L * c, value=0.0)
             AR = P(nlp.parameter_index("arrive").reshape(L, c))
-            nlp.inequality_elements("slip", cm.slip_row, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), Hc, AR],
+            nlp.inequality_elements("slip", cm.slip_row, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), HA(k), AR],
                                     lb=-np.inf, ub=np.inf)
             if cm.fd == 2:
                 # the tangent plane's circular cone, and sliding against the slip (bounds by the modes)
                 nlp.inequality_elements("cone", cm.cone_row, RHO(k), lb=-np.inf, ub=np.inf)
-                nlp.inequality_elements("slide", cm.slide_row, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), Hc, AR] + RHO(k),
+                nlp.inequality_elements("slide", cm.slide_row, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), HA(k), AR] + RHO(k),
                                         lb=-np.inf, ub=np.inf)
         if m:
             nlp.equal_elements("node_constraint", cm.constraint_row, [X(Q[1:])])
@@ -255,7 +258,7 @@ class ContactTranscription:
         nlp.inequality_elements("sub_gap", cm.gap_row, [X(S)], lb=0.0)
         LL = P(nlp.parameter_index("law_length").reshape(L, c))
         nlp.equal_elements("impact_law", cm.law_slack,
-                           [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), X(SP[k]), X(SM[k]), Hc, LL]
+                           [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), X(SP[k]), X(SM[k]), HA(k), LL]
                            + LEFT(k) + [REL] + ZM(k) + ZP(k) + [np.array([self.scales_law])] + UA(k))
         # exact (l1) penalties: complementarity products and the impact-law slacks
         nlp.minimize_elements("node_penalty", cm.product_penalty, [X(Q[k]), X(NU[k]), rho, ell * pref / Hc])
@@ -268,6 +271,19 @@ class ContactTranscription:
         # the pairs those penalties hold, per contact: gap ⟂ node force, sub-node gap ⟂ impulse, Newton's
         # law ⟂ impulse (the slacks), and the end node's gap ⟂ the last node force
         nlp.declared_pairs.update({"node": L * cm.c, "sub": L * cm.c, "impact_law": L * cm.c, "end": cm.c})
+
+    # ------------------------------------------------------------------ hooks of the control problem
+    def _step_argument(self, nlp, Hc):
+        """The step lengths as element arguments, ``rows -> argument`` (here the numbers ``H``)."""
+        return lambda rows: Hc[rows]
+
+    def _initial_element(self, nlp):
+        """The initial row's function and its momentum argument (here the parameter ``p0``)."""
+        return self.cm.initial, P(nlp.parameter_index("p0"))
+
+    def steps(self, values) -> np.ndarray:
+        """The step lengths of a point (here ``H``, fixed)."""
+        return self.H
 
     def law_lengths(self, guess) -> np.ndarray:
         """Weight length δ_kj of Newton's law, ``W = φ_j(q_{k+1})/δ_kj``, per step and contact.
@@ -300,7 +316,7 @@ class ContactTranscription:
         impact, ``h ν`` times the node's law), and where the body leaves after the impulse: one of the next two nodes open by more than the hop of a resting
         body, a h²/8.  Its check holds an impact late in its step (small next-node gap, small
         weight) to the same tolerance, and rejects a "catch" that lifts off again."""
-        cm, L, H, c = self.cm, self.L, self.H, self.cm.c
+        cm, L, H, c = self.cm, self.L, self.steps(values), self.cm.c
         Q = values["q"].reshape(L + 1, cm.n)
         S = values["qs"].reshape(L, cm.n)
         MU = values["mu"].reshape(L, c)
@@ -362,7 +378,7 @@ class ContactTranscription:
 
     def residual(self, values) -> float:
         """Largest complementarity violation: |φ ν h|, |φ μ| and |μ r| (scaled as in the penalties)."""
-        cm, L, H = self.cm, self.L, self.H
+        cm, L, H = self.cm, self.L, self.steps(values)
         n, c = cm.n, cm.c
         Q = values["q"].reshape(L + 1, n)
         S = values["qs"].reshape(L, n)

@@ -35,6 +35,7 @@ from ...discretise.optimal_control import split_controls
 from ...result import NLPResult
 from ..nlp import NLP
 from ...result import ControlResult
+from ...validation import InputError
 from .march import discrete_march
 from .nlp import CONTACT_IPOPT, ContactNLP
 from .strategy import _length_scale
@@ -51,6 +52,8 @@ OCP_CONTACT_IPOPT = {"max_iter": 3000, "mumps_pivtol": 1e-8, "mu_init": 1e-1, "m
 OCP_PENALTY = (1e3, 1e4, 1e5, 1e6)
 #: Solves with the arrivals read from the last answer, at most (step 2 of the module docstring).
 TIMING_ROUNDS = 6
+#: Ipopt iterations of one step of the end conditions' continuation (keep_modes).
+CONTINUATION_ITER = 150
 #: Solves on the march's branch at most (step 5 of the module docstring).
 POLISH_ROUNDS = 3
 #: A grid of more steps than this starts from the controls of the answer on half as many (see solve_contact_control).
@@ -93,10 +96,15 @@ class ContactControlResult(ControlResult):
     complementarity: float = math.nan
     homotopy: list = field(default_factory=list)
     timing_rounds: int = 0
+    #: the cost's error estimated from the ladder's previous grid (half the steps) at order 2, |J_N − J_{N/2}|/3
+    #: (NaN without a previous grid); the cost's order is the scheme's at most, and 2 where a contact switches inside
+    #: a step's part
+    cost_estimate: float = math.nan
 
     def as_dict(self) -> dict:
         return {**super().as_dict(), "qs": self.qs, "t_sub": self.t_sub, "mu": self.mu, "nu": self.nu,
                 "fratio": self.fratio, "impact_times": self.impact_times, "complementarity": self.complementarity,
+                "cost_estimate": self.cost_estimate,
                 "timing_rounds": self.timing_rounds,
                 "homotopy": [vars(h) for h in self.homotopy]}
 
@@ -120,62 +128,104 @@ def arrivals(cm: ContactMechanics, Q, S, tol: float) -> np.ndarray:
     return (gq[:-1] > tol) & (np.minimum(gs, gq[1:]) <= tol) if L else np.zeros((0, cm.c), bool)
 
 
-def solve_contact_control(system, T: float, N: int, scheme: str, start, end, running, final, u_bounds,
+def bounces(prog, Q, timed: np.ndarray) -> np.ndarray:
+    """Per step and contact: an arrival (``timed``) after which the contact is open again at one of the next two nodes
+    by more than a resting body's hop (the march's mode I: Newton's law holds), not caught (mode C)."""
+    cm, L = prog.cm, prog.L
+    g = np.asarray(cm.gap_row.map(L + 1)(Q.T)).reshape(cm.c, -1).T
+    nxt, nxt2 = g[1:], np.vstack([g[2:], g[-1:]])
+    return timed & ((nxt > prog.open_gap) | (nxt2 > prog.open_gap))
+
+
+def solve_contact_control(system, T, N: int, scheme: str, start, end, running, final, u_bounds,
                           controls, guess: Optional[dict] = None, options: Optional[dict] = None,
-                          verbose: bool = False) -> ContactControlResult:
-    """Solve a contact-implicit optimal-control problem (module docstring).  ``start``, ``end``: ``(q, q̇)``
-    with NaN for a free entry (``q̇`` ``None``: free; the start must be given in full); ``running(q, v, u)``,
-    ``final(q, v, T)``: CasADi functions or ``None``; ``u_bounds``: ``(lo, hi)``; ``controls``: the system's
-    :class:`Control` list (for the answer's ``controls`` by name)."""
+                          verbose: bool = False, keep_modes: bool = False) -> ContactControlResult:
+    """Solve a contact-implicit optimal-control problem (module docstring).  ``T``: the horizon, or ``(lo, hi)`` for
+    a free final time; ``start``, ``end``: ``(q, q̇)`` with NaN for a free entry (``q̇`` ``None``: free; the start's
+    ``q`` given in full, NaN entries of its ``q̇`` are unknowns); ``running(q, v, u)``, ``final(q, v, T)``: CasADi
+    functions or ``None``; ``u_bounds``: ``(lo, hi)``; ``controls``: the system's :class:`Control` list (for the
+    answer's ``controls`` by name); ``guess``: any of ``u`` (per step), ``T`` and ``qd0`` (the free start's);
+    ``keep_modes``: the answer keeps the contact modes of the guess's march (its impacts in their steps, its holds
+    and slides), solved on that branch alone: the number and order of the impacts are the guess's choice (a bounce
+    to a target after k bounces), and no homotopy runs."""
     t_all = _time.perf_counter()
+    free_time = tuple(T) if isinstance(T, (tuple, list)) else None
     rungs: List[int] = []
+    prior = None
     if guess is None and N > LADDER_MAX:
         # the ladder of grids (as for the smooth problem, OptimalControl.solve): the answer on half the steps, its
-        # controls interpolated at this grid's steps, is the controls' guess here
+        # controls interpolated at this grid's steps (and its horizon and start), is the guess here
         prior = solve_contact_control(system, T, (N + 1) // 2, scheme, start, end, running, final, u_bounds, controls,
-                                      None, options, verbose)
-        if prior.success:
-            tu = T / N * (np.arange(N) + 0.5)
-            guess = {"u": np.column_stack([np.interp(tu, prior.t_u, prior.u[:, j]) for j in range(prior.u.shape[1])])}
+                                      None, options, verbose, keep_modes) if not keep_modes else None
+        if prior is not None and prior.success:
+            tu = prior.T / N * (np.arange(N) + 0.5)
+            guess = {"u": np.column_stack([np.interp(tu, prior.t_u, prior.u[:, j]) for j in range(prior.u.shape[1])]),
+                     "T": prior.T, "qd0": prior.v[0]}
             rungs = prior.grids
     cm = mechanics(system, scheme)
     (q0, v0), (qN, vN) = start, end
     n, nu = cm.n, cm.nu
     lo, hi = u_bounds
-    h = T / N
-    U0 = np.tile(np.clip(0.0, lo, hi), (N, 1))
-    if guess and "u" in guess:
+    guess = dict(guess or {})
+    Tg = float(guess.get("T", T if free_time is None else 0.5 * sum(free_time)))
+    if free_time is not None:
+        Tg = min(max(Tg, free_time[0]), free_time[1])
+    h = Tg / N
+    free_v = np.isnan(v0)
+    v0g = np.where(free_v, np.asarray(guess.get("qd0", np.zeros(n)), float).reshape(n), v0)
+    U0 = np.tile(np.clip(0.0, lo, hi), (N, 1)) if nu else np.zeros((N, 0))
+    if nu and "u" in guess:
         U0 = np.clip(np.asarray(guess["u"], float).reshape(N, nu), lo, hi)
     length = _length_scale(system, q0)
-    scales = _scales(system, cm, q0, v0, length, U0[0])
+    scales = _scales(system, cm, q0, v0g, length, U0[0] if nu else np.zeros(0))
     tol = TOUCH_TOL * length
-    p0 = np.asarray(system.momentum(q0, v0)).reshape(-1)
+    p0 = np.asarray(system.momentum(q0, v0g)).reshape(-1)
     t_guess = _time.perf_counter()
-    point = discrete_march(cm, q0, p0, N, h, scales, controls=U0)
+    point = discrete_march(cm, q0, p0, N, h, scales, controls=U0 if nu else None)
     if point is not None and point["steps"].size != N:
         point = None          # the march halved a step (two impacts in it): its grid is not the program's
+    marched = point
     if point is None:
+        if keep_modes:
+            raise InputError("keep_modes needs the guess's march on the program's grid (it stopped, or halved a "
+                             "step for two impacts in it): give another guess or more steps")
         point = _straight(cm, q0, qN, N)
     guess_time = _time.perf_counter() - t_guess
-    prog = _Program(cm, N, T, scales, vN is not None, running, final, (lo, hi))
+    prog = _Program(cm, N, Tg, scales, vN is not None, running, final, (lo, hi), free_time=free_time,
+                    start_velocity=bool(np.any(free_v)))
     prog.nlp.set_parameter("split", 0.0)
     if vN is not None:
         prog.nlp.set_parameter("pN", np.asarray(system.momentum(qN, vN)).reshape(-1))
     init = prog._start(q0, p0, {k: v for k, v in point.items() if k in prog.nlp.variable_names})
-    init["u"] = U0.reshape(-1)
+    if nu:
+        init["u"] = U0.reshape(-1)
+    bounds = {"q": _q_bounds(prog, q0, qN)}
+    if free_time is not None:
+        init["h"] = np.array([h])
+    if prog.start_velocity:
+        init["v0"] = v0g.copy()
+        bounds["v0"] = (np.where(free_v, -np.inf, v0g), np.where(free_v, np.inf, v0g))
     if cm.friction:
         init.update(_slips(cm, prog, init, scales[2]))
-    bounds = {"q": _q_bounds(prog, q0, qN)}
     if vN is not None and cm.friction:
         bounds["fratio_end"] = _end_ratio_bounds(cm, qN, vN, scales[2])
     opts = {**CONTACT_IPOPT, **OCP_CONTACT_IPOPT, **(options or {})}
     Q, S = init["q"].reshape(N + 1, n), init["qs"].reshape(N, n)
     timed = arrivals(cm, Q, S, tol)
     steps, res, rounds, seen = [], None, 0, set()
-    while rounds < TIMING_ROUNDS:
+    if keep_modes:
+        res = _continued(cm, prog, q0, marched, init, bounds, opts, verbose, scales, qN, vN, steps)
+        rounds = TIMING_ROUNDS + 1          # (no timing rounds)
+    # each round's bounces (arrivals that leave again: Newton's law) are read from the point it starts from.  (Freeing
+    # the split of the arrivals' neighbours too, so that an impact could move by a step within a round, took 188
+    # iterations where 42 did on the push to a target at N = 40, and is not needed where the impacts' steps are kept)
+    Qc = init["q"].reshape(N + 1, n)
+    bounce = bounces(prog, Qc, timed)
+    while rounds < TIMING_ROUNDS and not keep_modes:
         rounds += 1
-        seen.add(timed.tobytes())
+        seen.add((timed.tobytes(), bounce.tobytes()))
         prog.nlp.set_parameter("timed", timed.astype(float).reshape(-1))
+        prog.nlp.set_parameter("bounce", bounce.astype(float).reshape(-1))
         if cm.friction:
             prog.nlp.set_parameter("arrive", timed.astype(float).reshape(-1))
         free = np.any(timed, axis=1)
@@ -187,63 +237,131 @@ def solve_contact_control(system, T: float, N: int, scheme: str, start, end, run
         steps.extend(res.homotopy)
         if not res.success:
             break
-        V = res.values
-        now = arrivals(cm, V["q"].reshape(N + 1, n), V["qs"].reshape(N, n), tol)
-        if np.array_equal(now, timed):
+        Qc = res.values["q"].reshape(N + 1, n)
+        now = arrivals(cm, Qc, res.values["qs"].reshape(N, n), tol)
+        bnow = bounces(prog, Qc, now)
+        if np.array_equal(now, timed) and np.array_equal(bnow, bounce):
             break
-        if now.tobytes() in seen:
+        if (now.tobytes(), bnow.tobytes()) in seen:
             res.fail("Timing_Cycles", "the steps that hold an impact changed back to an earlier set: the impacts' "
                      "steps did not settle")
             break
-        timed = now
+        timed, bounce = now, bnow
     else:
-        res.fail("Timing_Not_Settled", f"the steps that hold an impact still changed after {TIMING_ROUNDS} solves")
+        if not keep_modes:
+            res.fail("Timing_Not_Settled", f"the steps that hold an impact still changed after {TIMING_ROUNDS} solves")
     cert = math.nan
     if res.success:
-        res, cert, polished = _polish(cm, prog, res, q0, p0, N, h, scales, bounds, opts, verbose, steps)
-        rounds += polished
-    out = _answer(system, cm, prog, res, steps, rounds, q0, p0, N, h, controls, cert,
+        res, cert, polished = _polish(cm, prog, res, q0, N, scales, bounds, opts, verbose, steps)
+        rounds = (1 if keep_modes else rounds) + polished
+    out = _answer(system, cm, prog, res, steps, rounds, q0, N, controls, cert,
                   _time.perf_counter() - t_all, guess_time)
     out.grids = rungs + [N]
+    if prior is not None and prior.success and out.success:
+        out.cost_estimate = abs(out.cost - prior.cost) / 3.0
     return out
 
 
-def _polish(cm, prog, res, q0, p0, N, h, scales, bounds, opts, verbose, steps):
+def _start_of(prog, V, q0):
+    """``(h, p0, U)`` of the values ``V``: the step length, the initial momentum and the controls per step."""
+    cm, N = prog.cm, prog.L
+    h = float(prog.steps(V)[0])
+    if prog.start_velocity:
+        p0 = np.asarray(cm.system.momentum(q0, V["v0"])).reshape(-1)
+    else:
+        p0 = np.asarray(prog.nlp.parameter_value("p0"), float).reshape(-1)
+    U = V["u"].reshape(N, cm.nu) if cm.nu else np.zeros((N, 0))
+    return h, p0, U
+
+
+def _polish(cm, prog, res, q0, N, scales, bounds, opts, verbose, steps):
     """Step 5: march the answer's controls; where the march does not reproduce the answer, solve again on the
     march's branch (its modes fixed, :meth:`ContactNLP.mode_bounds`; the controls free), and march again.
     ``(result, certificate, solves)``: the certificate is the last march's distance (``inf`` where it stopped)."""
     rho = float(np.asarray(prog.nlp.parameter_value("rho")).reshape(-1)[0])
     solves = 0
     while True:
-        U = res.values["u"].reshape(N, cm.nu)
-        point = discrete_march(cm, q0, p0, N, h, scales, controls=U)
+        h, p0, U = _start_of(prog, res.values, q0)
+        point = discrete_march(cm, q0, p0, N, h, scales, controls=U if cm.nu else None)
         cert = _distance(point, res.values["q"].reshape(N + 1, cm.n), N, h)
         if cert <= CERTIFICATE_TOL or solves >= POLISH_ROUNDS or point is None or point["steps"].size != N:
             return res, cert, solves
         solves += 1
-        branch = prog.mode_bounds(q0, point)
-        branch.update({k: v for k, v in bounds.items() if k != "beta"})
-        if cm.friction:
-            # a slot without friction force (an open contact: no force, so its ratio is free; the march fixes it at 0)
-            # keeps its ratio in the cone, where the slip pair sets it against the slip
-            free = np.asarray(point["fmodes"]).reshape(-1) == "-"
-            lo_r, hi_r = branch["fratio"]
-            muf = np.tile(np.concatenate([cm.mu_f, cm.mu_f]), N)
-            branch["fratio"] = (np.where(free, -muf, lo_r), np.where(free, muf, hi_r))
-        arrive = np.isin(np.asarray(point["modes"]).reshape(N, cm.c), ("I", "C", "T", "F", "K"))
-        prog.nlp.set_parameter("timed", arrive.astype(float).reshape(-1))
-        init = {k: np.asarray(v, float).reshape(-1).copy() for k, v in point.items() if k in prog.nlp.variable_names}
-        for k, v in res.values.items():
-            init.setdefault(k, v.copy())
-        init["u"] = U.reshape(-1)
-        if cm.friction:
-            init.update(_slips(cm, prog, init, scales[2]))
-        prog.nlp.set_parameter("law_length", prog.law_lengths(point).reshape(-1))
-        got = prog._ladder(init, opts, branch, [rho], verbose, "branch", "the march's branch")
+        got = _branch(cm, prog, q0, point, res.values, bounds, opts, rho, verbose, scales)
         steps.extend(got.homotopy)
         if not got.success:
-            return res, _distance(point, res.values["q"].reshape(N + 1, cm.n), N, h), solves
+            return res, cert, solves
         res = got
+
+
+def _continued(cm, prog, q0, point, init, bounds, opts, verbose, scales, qN, vN, steps):
+    """The branch of the guess's march (``keep_modes``), its end moved from the march's own end state to the asked
+    one: a continuation in the end conditions (the step doubled after a success, halved after a failure, down to
+    1/1024), each solve warm from the last.  The guess's march ends where it ends, not where it is asked to: the bounce
+    to a target from a launch at √(2gp) with k = 5, e = 0.7 needs a launch 6 times faster, which the branch solved
+    directly did not find (Ipopt: infeasible after 1175 iterations)."""
+    N, n = prog.L, cm.n
+    Qg = np.asarray(point["q"], float).reshape(N + 1, n)
+    h = float(prog.steps(init)[0])
+    zp = cm.stage_parts(np.asarray(point["zs"]).reshape(N, -1)[-1])[1] if cm.s else []
+    U = [np.asarray(init["u"]).reshape(N, cm.nu)[-1]] if cm.nu else []
+    pg = np.asarray(cm.p_node_minus(np.asarray(point["qs"]).reshape(N, n)[-1], float(np.asarray(point["beta"])[-1]),
+                                    Qg[-1], h, *zp, *U)).reshape(-1)
+    given = ~np.isnan(qN)
+    qlo, qhi = (b.reshape(N + 1, n).copy() for b in bounds["q"])
+    pN = np.asarray(cm.system.momentum(qN, vN)).reshape(-1) if vN is not None else None
+    s, ds, values, res = 0.0, 1.0, init, None
+    # (each step's Ipopt capped: a step too long fails fast and is halved; an uncapped one ran 3000 iterations)
+    opts = dict(opts, max_iter=min(int(opts.get("max_iter", 3000)), CONTINUATION_ITER))
+    while s < 1.0:
+        t = min(1.0, s + ds)
+        qlo[N, given] = qhi[N, given] = (1 - t) * Qg[-1, given] + t * qN[given]
+        stage = dict(bounds, q=(qlo.reshape(-1), qhi.reshape(-1)))
+        if pN is not None:
+            prog.nlp.set_parameter("pN", (1 - t) * pg + t * pN)
+        got = _branch(cm, prog, q0, point, values, stage, opts, OCP_PENALTY[0], verbose, scales, warm=res is not None)
+        steps.extend(got.homotopy)
+        if got.success:
+            s, values, res = t, got.values, got
+            ds = min(2 * ds, 1.0)
+        else:
+            ds /= 2
+            if ds < 1.0 / 1024:
+                got.fail(got.solver_status, f"the continuation of the end conditions stopped at {s:.3g} of the way "
+                         f"from the guess's end ({got.message})")
+                return got
+    return res
+
+
+def _branch(cm, prog, q0, point, values, bounds, opts, rho, verbose, scales, warm=False):
+    """The program on the branch of the march ``point`` (its modes fixed, :meth:`ContactNLP.mode_bounds`; the
+    controls, a free final time and a free start free), from ``point`` (the rest from ``values``)."""
+    N = prog.L
+    branch = prog.mode_bounds(q0, point)
+    branch.update({k: v for k, v in bounds.items() if k != "beta"})
+    if cm.friction:
+        # a slot without friction force (an open contact: no force, so its ratio is free; the march fixes it at 0)
+        # keeps its ratio in the cone, where the slip pair sets it against the slip
+        free = np.asarray(point["fmodes"]).reshape(-1) == "-"
+        lo_r, hi_r = branch["fratio"]
+        muf = np.tile(np.concatenate([cm.mu_f, cm.mu_f]), N)
+        branch["fratio"] = (np.where(free, -muf, lo_r), np.where(free, muf, hi_r))
+    modes = np.asarray(point["modes"]).reshape(N, cm.c)
+    arrive = np.isin(modes, ("I", "C", "T", "F", "K"))
+    prog.nlp.set_parameter("timed", arrive.astype(float).reshape(-1))
+    prog.nlp.set_parameter("bounce", ((modes == "I") & np.asarray(point["bounced"], bool).reshape(N, cm.c))
+                           .astype(float).reshape(-1))
+    prog.nlp.set_parameter("node_impact", np.isin(modes, ("N", "P")).astype(float).reshape(-1))
+    if warm:       # (a continuation's next step: from the last answer on the same branch)
+        init = {k: np.asarray(v, float).copy() for k, v in values.items()}
+    else:
+        init = {k: np.asarray(v, float).reshape(-1).copy() for k, v in point.items() if k in prog.nlp.variable_names}
+        for k, v in values.items():
+            init.setdefault(k, np.asarray(v, float).copy())
+        if cm.friction:
+            init.update(_slips(cm, prog, init, scales[2]))
+    prog.nlp.set_parameter("law_length", prog.law_lengths(point).reshape(-1))
+    return prog._ladder(init, opts, branch, [rho], verbose, "branch", "the march's branch")
 
 
 def _straight(cm: ContactMechanics, q0, qN, N: int) -> dict:
@@ -259,7 +377,7 @@ def _slips(cm: ContactMechanics, prog, init, vref) -> dict:
     N, n, c = prog.L, cm.n, cm.c
     Q, S = init["q"].reshape(N + 1, n), init["qs"].reshape(N, n)
     ar = np.asarray(prog.nlp.parameter_value("arrive"), float).reshape(N, c)
-    sl = np.asarray(cm.slip_row.map(N)(Q[:-1].T, S.T, Q[1:].T, init["beta"].reshape(N), prog.H, ar.T)).T / vref
+    sl = np.asarray(cm.slip_row.map(N)(Q[:-1].T, S.T, Q[1:].T, init["beta"].reshape(N), prog.steps(init), ar.T)).T / vref
     return {"slip_plus": np.maximum(sl, 0.0).reshape(-1), "slip_minus": np.maximum(-sl, 0.0).reshape(-1)}
 
 
@@ -282,32 +400,35 @@ def _end_ratio_bounds(cm: ContactMechanics, qN, vN, vref):
     return lo, hi
 
 
-def _answer(system, cm, prog, res: NLPResult, steps, rounds, q0, p0, N, h, controls, cert, wall,
+def _answer(system, cm, prog, res: NLPResult, steps, rounds, q0, N, controls, cert, wall,
             guess_time) -> ContactControlResult:
     n, c, nu = cm.n, cm.c, cm.nu
     V = res.values
+    h, p0, U = _start_of(prog, V, q0)
     Q, S = V["q"].reshape(N + 1, n), V["qs"].reshape(N, n)
     B = V["beta"].reshape(N)
-    U = V["u"].reshape(N, nu)
     MU, NU = V["mu"].reshape(N, c), V["nu"].reshape(N, c)
     times = h * np.arange(N + 1)
     t_sub = times[:-1] + (0.5 + B) * h
     # the cost: the running and final terms at the answer (the objective also holds the penalties)
     cost = prog.cost(V)
     arr = arrivals(cm, Q, S, TOUCH_TOL * max(1.0, float(np.max(np.abs(q0)))))
-    impact_times = [[float(t_sub[k]) for k in range(N) if arr[k, j] and MU[k, j] > 0.0] for j in range(c)]
+    # (and the impacts at a node: a flight that landed on it, its node force an impulse, the march's mode N)
+    node = np.asarray(prog.nlp.parameter_value("node_impact"), float).reshape(N, c) > 0
+    impact_times = [sorted([float(t_sub[k]) for k in range(N) if arr[k, j] and MU[k, j] > 0.0]
+                           + [float(times[k]) for k in range(N) if node[k, j] and NU[k, j] > 0.0]) for j in range(c)]
     # velocities: the mean of the one-sided momenta at each node (the node's impulse split between them)
-    pp = np.asarray(cm.p_node_plus.map(N)(Q[:-1].T, S.T, B, h, *_zparts(cm, V, N, 0), U.T)).T
-    pm = np.asarray(cm.p_node_minus.map(N)(S.T, B, Q[1:].T, h, *_zparts(cm, V, N, 1), U.T)).T
+    ua = [U.T] if nu else []
+    pp = np.asarray(cm.p_node_plus.map(N)(Q[:-1].T, S.T, B, h, *_zparts(cm, V, N, 0), *ua)).T
+    pm = np.asarray(cm.p_node_minus.map(N)(S.T, B, Q[1:].T, h, *_zparts(cm, V, N, 1), *ua)).T
     p = np.vstack([p0[None, :], 0.5 * (pp[1:] + pm[:-1]), pm[-1:]])
     if prog.end_velocity:            # the end node's momentum after its own force: the given final one
         p[-1] = np.asarray(prog.nlp.parameter_value("pN"), float).reshape(-1)
     v = cm.dm.velocities(Q, p)
-    march = cert
     out = ContactControlResult(
         success=res.success, solver_status=res.solver_status, message=res.message, iterations=sum(st.iterations for st in steps),
         build_time_s=res.build_time_s, solve_time_s=wall - res.build_time_s, cost=cost, T=N * h, t=times, q=Q, v=v,
-        u=U, t_u=times[:-1] + 0.5 * h, controls=split_controls(U, controls, N), certificate=cert, march_distance=march,
+        u=U, t_u=times[:-1] + 0.5 * h, controls=split_controls(U, controls, N), certificate=cert, march_distance=cert,
         scheme=cm.dm.scheme.name, qs=S, t_sub=t_sub, mu=MU, nu=NU,
         fratio=V["fratio"].reshape(N, -1) if cm.friction else None, impact_times=impact_times,
         complementarity=float(prog.residual(V)), homotopy=steps, timing_rounds=rounds)
