@@ -270,8 +270,7 @@ class OptimalControl:
         if np.any(phi0 < -1e-9 * max(1.0, float(np.max(np.abs(q0))))):
             raise InputError(f"the initial configuration penetrates a contact (gap {float(np.min(phi0)):.3g})")
         q, qd, u = s.q, s.qd, self._u
-        running = ca.Function("l", [q, qd, u], [ca.substitute(self._running, s.t, 0)]) \
-            if self._running is not None else None
+        running = ca.Function("l", [q, qd, u, s.t], [self._running]) if self._running is not None else None
         final = ca.Function("phi", [q, qd, self.T_symbol], [self._final]) if self._final is not None else None
         lo = np.concatenate([c.lower for c in self._controls]) if self._controls else np.zeros(0)
         hi = np.concatenate([c.upper for c in self._controls]) if self._controls else np.zeros(0)

@@ -39,7 +39,7 @@ class ContactControlTranscription(ContactTranscription):
 
     ``T`` the horizon (``h = T/N``); ``scales`` as for :class:`ContactTranscription`; ``end_velocity``: whether
     the final velocity is given (its momentum is the parameter ``pN``); ``running(q, v, u)`` and
-    ``final(q, v, T)``: CasADi functions of the costs (``None``: none); ``u_bounds``: ``(lo, hi)`` per control;
+    ``final(q, v, T)``: CasADi functions of the costs (``None``: none; ``running(q, v, u, t)``); ``u_bounds``: ``(lo, hi)`` per control;
     ``free_time``: ``(lo, hi)`` of a free final time (the step length ``h`` is then an unknown, ``T`` its guess);
     ``start_velocity``: the initial velocity is an unknown ``v0`` (its given entries fixed by bounds), the initial
     row's momentum ``p(q_0, v0)``.
@@ -145,7 +145,8 @@ class ContactControlTranscription(ContactTranscription):
         self.final_fn = self._final(cm, final, N) if final is not None else None
         if running is not None:
             nlp.minimize_elements("running", self.running_fn,
-                                  [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), HA(k)] + ZM(k) + ZP(k) + UA(k))
+                                  [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), HA(k), k[:, None] * 1.0] + ZM(k) + ZP(k)
+                                  + UA(k))
         if final is not None:
             nlp.minimize_elements("final", self.final_fn,
                                   [X(S[L - 1]), X(B[L - 1]), X(Q[L]), HA(L - 1)] + ZP(L - 1) + UA(L - 1))
@@ -160,6 +161,7 @@ class ContactControlTranscription(ContactTranscription):
         total = 0.0
         if self.running_fn is not None:
             total += float(np.sum(np.asarray(self.running_fn.map(L)(Q[:-1].T, S.T, Q[1:].T, B, self.steps(V),
+                                                                     np.arange(L, dtype=float)[None, :],
                                                                      *[z.T for z in zm + zp], *[u.T for u in U]))))
         if self.final_fn is not None:
             total += float(self.final_fn(S[-1], B[-1], Q[-1], self.steps(V)[-1], *[z[-1] for z in zp],
@@ -271,18 +273,22 @@ class ContactControlTranscription(ContactTranscription):
 
     @staticmethod
     def _running(cm: ContactMechanics, running: ca.Function) -> ca.Function:
-        """The scheme's quadrature of ``ℓ(q, q̇, u)`` over both parts of a step."""
+        """The scheme's quadrature of ``ℓ(q, q̇, u, t)`` over both parts of a step ``k`` (its input, as a number: the
+        parts start at ``t_k = k h`` and ``t_k + αh``)."""
         sym, n, s = ca.SX.sym, cm.n, cm.s
         st = cm.dm.scheme
-        qk, qs, qn, b, h = sym("q", n), sym("qs", n), sym("qn", n), sym("b"), sym("h")
+        qk, qs, qn, b, h, kk = sym("q", n), sym("qs", n), sym("qn", n), sym("b"), sym("h"), sym("k")
         zm, zp = (sym("zm", s), sym("zp", s)) if s else (ca.SX(0, 1), ca.SX(0, 1))
         u = cm._U
         a = 0.5 + b
-        f = lambda q, v, t: running(q, v, u)  # noqa: E731
+        f = lambda q, v, t: running(q, v, u, t)  # noqa: E731
         parts = [[qk] + [zm[j * n:(j + 1) * n] for j in range(st.stages)] + [qs],
                  [qs] + [zp[j * n:(j + 1) * n] for j in range(st.stages)] + [qn]]
-        val = st.discrete_lagrangian(f, parts[0], a * h, None) + st.discrete_lagrangian(f, parts[1], (1 - a) * h, None)
-        return ca.Function("c_running", [qk, qs, qn, b, h] + ([zm, zp] if s else []) + ([u] if cm.nu else []), [val])
+        tk = kk * h
+        val = st.discrete_lagrangian(f, parts[0], a * h, tk) + st.discrete_lagrangian(f, parts[1], (1 - a) * h,
+                                                                                     tk + a * h)
+        return ca.Function("c_running", [qk, qs, qn, b, h, kk] + ([zm, zp] if s else []) + ([u] if cm.nu else []),
+                           [val])
 
     @staticmethod
     def _final(cm: ContactMechanics, final: ca.Function, N: int) -> ca.Function:

@@ -142,7 +142,7 @@ def solve_contact_control(system, T, N: int, scheme: str, start, end, running, f
                           verbose: bool = False, keep_modes: bool = False) -> ContactControlResult:
     """Solve a contact-implicit optimal-control problem (module docstring).  ``T``: the horizon, or ``(lo, hi)`` for
     a free final time; ``start``, ``end``: ``(q, q̇)`` with NaN for a free entry (``q̇`` ``None``: free; the start's
-    ``q`` given in full, NaN entries of its ``q̇`` are unknowns); ``running(q, v, u)``, ``final(q, v, T)``: CasADi
+    ``q`` given in full, NaN entries of its ``q̇`` are unknowns); ``running(q, v, u, t)``, ``final(q, v, T)``: CasADi
     functions or ``None``; ``u_bounds``: ``(lo, hi)``; ``controls``: the system's :class:`Control` list (for the
     answer's ``controls`` by name); ``guess``: any of ``u`` (per step), ``T`` and ``qd0`` (the free start's);
     ``keep_modes``: the answer keeps the contact modes of the guess's march (its impacts in their steps, its holds
