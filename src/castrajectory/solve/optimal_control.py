@@ -260,8 +260,6 @@ class OptimalControl:
         if v0 is None or np.any(np.isnan(q0)):
             raise InputError("optimal control through contact needs the initial state given in full "
                              "(ocp.initial(q=..., qd=...))")
-        if self._path:
-            raise InputError("optimal control through contact takes no path constraints yet (bound the controls)")
         if s.nc:
             raise InputError("optimal control through contact takes no holonomic constraints yet")
         if s.contact.friction is not None and np.any(np.asarray(s.contact.friction) > 0) and s.contact.slip_dim != 1:
@@ -274,8 +272,9 @@ class OptimalControl:
         final = ca.Function("phi", [q, qd, self.T_symbol], [self._final]) if self._final is not None else None
         lo = np.concatenate([c.lower for c in self._controls]) if self._controls else np.zeros(0)
         hi = np.concatenate([c.upper for c in self._controls]) if self._controls else np.zeros(0)
+        path = [(ca.Function(f"g{j}", [q, u, s.t], [g]), lb, ub) for j, (g, lb, ub) in enumerate(self._path)]
         return solve_contact_control(s, self.T, self.N, self.scheme, (q0, v0), (qN, vN), running, final, (lo, hi),
-                                     self._controls, guess, options, verbose, keep_modes)
+                                     self._controls, guess, options, verbose, keep_modes, path)
 
     def _interpolated(self, prior: "ControlResult") -> Dict[str, np.ndarray]:
         """A coarser answer on this grid: nodes and controls interpolated linearly in ``t/T``."""

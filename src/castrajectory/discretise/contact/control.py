@@ -47,7 +47,7 @@ class ContactControlTranscription(ContactTranscription):
 
     def __init__(self, cm: ContactMechanics, N: int, T: float, scales, end_velocity: bool,
                  running: Optional[ca.Function], final: Optional[ca.Function], u_bounds=None, free_time=None,
-                 start_velocity: bool = False):
+                 start_velocity: bool = False, path=()):
         self.free_time, self.start_velocity = free_time, start_velocity
         super().__init__(cm, N, T / N, scales, u_bounds=u_bounds)
         nlp, L, n, c = self.nlp, N, cm.n, cm.c
@@ -147,6 +147,15 @@ class ContactControlTranscription(ContactTranscription):
             nlp.minimize_elements("running", self.running_fn,
                                   [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), HA(k), k[:, None] * 1.0] + ZM(k) + ZP(k)
                                   + UA(k))
+        # path constraints g(q, u, t) in [lb, ub]: at every node (the control of the step it starts; the last node's
+        # its step's) and at every sub-node (its step's control, at its time t_k + αh)
+        kn = np.arange(L + 1)
+        for j, (fn, lb, ub) in enumerate(path):
+            gn, gs = self._path_elements(cm, fn)
+            nlp.inequality_elements(f"path{j}", gn, [X(Q[kn]), HA(np.minimum(kn, L - 1)), kn[:, None] * 1.0]
+                                    + UA(np.minimum(kn, L - 1)), lb=np.tile(lb, L + 1), ub=np.tile(ub, L + 1))
+            nlp.inequality_elements(f"path{j}_sub", gs, [X(S[k]), X(B[k]), HA(k), k[:, None] * 1.0] + UA(k),
+                                    lb=np.tile(lb, L), ub=np.tile(ub, L))
         if final is not None:
             nlp.minimize_elements("final", self.final_fn,
                                   [X(S[L - 1]), X(B[L - 1]), X(Q[L]), HA(L - 1)] + ZP(L - 1) + UA(L - 1))
@@ -289,6 +298,17 @@ class ContactControlTranscription(ContactTranscription):
                                                                                      tk + a * h)
         return ca.Function("c_running", [qk, qs, qn, b, h, kk] + ([zm, zp] if s else []) + ([u] if cm.nu else []),
                            [val])
+
+    @staticmethod
+    def _path_elements(cm: ContactMechanics, fn: ca.Function):
+        """``g(q_k, u, k h)`` at a node and ``g(q̃_k, u_k, (k + ½ + β) h)`` at a sub-node."""
+        sym, n = ca.SX.sym, cm.n
+        q, b, h, k = sym("q", n), sym("b"), sym("h"), sym("k")
+        u = cm._U
+        uin = [u] if cm.nu else []
+        ua = u if cm.nu else ca.SX(0, 1)
+        return (ca.Function("c_path", [q, h, k] + uin, [fn(q, ua, k * h)]),
+                ca.Function("c_path_sub", [q, b, h, k] + uin, [fn(q, ua, (k + 0.5 + b) * h)]))
 
     @staticmethod
     def _final(cm: ContactMechanics, final: ca.Function, N: int) -> ca.Function:

@@ -1,0 +1,171 @@
+#!/usr/bin/env python
+"""A battery of seeded random contact-implicit optimal-control problems, each solved whole (one MPCC) and
+certified by the contact march of its answer.
+
+This is a measurement, not a test: it exits 0 (2 for bad flags).  Families (``--count`` problems in all, shared
+round-robin):
+
+* bounce to a target with random height, bounces and restitution (launch speed and horizon unknown; the number of
+  bounces the guess's, kept), against the closed form (castrajectory.models.bounce);
+* push to a target with random start heights, goals and friction (a fall, an inelastic landing, a slide and a
+  stick), against the free fall's landing time, its cost's error estimated from the previous grid;
+* block pushes with random friction, distance and horizon, against the closed form (castrajectory.models.block_push):
+  J* = 12 m²d²/τ³ + (μmg)²τ with the slide τ = min(T, √(6d/(μg))), and, sliding the whole horizon, the exact
+  midpoint optimum;
+* with ``--hopper``, hopper goals (nosnoc's hopper, castrajectory.models.hopper); not in the default run: its answers
+  are not yet certified (the march of their controls departs from them).
+
+Each row: the status (ok only with a certificate), the error against the oracle, the cost, the iterations, the
+time, the certificate, and for a failure the homotopy's last penalty and its complementarity residual.  Goals: at
+least 90 % solved with a certificate, every unsolved one reported as a failure, no case over 60 s.
+
+    python scripts/contact_ocp_battery.py
+    python scripts/contact_ocp_battery.py --count 60 --seed 3
+"""
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import math
+import pathlib
+import sys
+import time
+
+import numpy as np
+
+import castrajectory as ct
+from castrajectory.models.block_push import BlockPush, pushed_particle
+from castrajectory.models.bounce import bounce_to_target
+
+GOAL_SOLVED = 0.90
+GOAL_SECONDS = 60.0
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+
+
+def _problem_module(name):
+    spec = importlib.util.spec_from_file_location(name, ROOT / "problems" / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+BOUNCE = _problem_module("bounce_to_target")
+
+
+def bounce(rng):
+    p, k, e = rng.uniform(0.2, 2.0), int(rng.integers(0, 5)), rng.uniform(0.5, 0.95)
+    # the grid resolves the k-th flight by about 6 steps (its share of the horizon is e^(k-1)(1 - e)/2 at least)
+    N = int(min(400, max(40, math.ceil(12 / (e ** max(k - 1, 0) * (1 - e))))))
+    system = BOUNCE.ball(e, 9.81)
+    v0g, Tg = BOUNCE.launch_guess(system, p, k, 9.81)
+    ocp = ct.OptimalControl(system, T=(1e-3 * Tg, 1e3 * Tg), N=N)
+    ocp.initial(q=[0.0], qd=[None])
+    ocp.final(q=[p], qd=[0.0])
+    ocp.minimize(final=0 * ocp.T_symbol)
+    exact = bounce_to_target(p, k, e, 9.81)
+
+    def check(sol):
+        imp = sol.impact_times[0] if sol.impact_times else []
+        if len(imp) != k:
+            return math.inf
+        err = max(abs(sol.v[0, 0] - exact.launch_speed), abs(sol.T - exact.horizon))
+        return max([err] + [abs(a - b) for a, b in zip(imp, exact.impact_times)])
+
+    return (f"bounce p = {p:.2f}, k = {k}, e = {e:.2f}, N = {N}", lambda: ocp.solve(guess={"qd0": [v0g], "T": Tg},
+                                                                                  keep_modes=True), check)
+
+
+def push(rng):
+    y0, goal, mu = rng.uniform(0.3, 2.0), rng.uniform(1.0, 3.0), rng.uniform(0.1, 0.6)
+    system = pushed_particle(1.0, mu, 9.81, 10.0)
+    u = system.controls[0]
+    ocp = ct.OptimalControl(system, T=2.0, N=80)
+    ocp.initial(q=[0.0, y0], qd=[0.0, 0.0])
+    ocp.final(q=[goal, 0.0], qd=[0.0, 0.0])
+    ocp.minimize(running=u ** 2)
+    landing = math.sqrt(2 * y0 / 9.81)
+
+    def check(sol):
+        imp = sol.impact_times[0] if sol.impact_times else []
+        return abs(imp[0] - landing) if len(imp) == 1 else math.inf
+
+    return f"push from y0 = {y0:.2f} to x = {goal:.2f}, μ = {mu:.2f}", ocp.solve, check
+
+
+def block(rng):
+    mu, d, T = rng.uniform(0.1, 0.6), rng.uniform(0.3, 2.0), rng.uniform(0.5, 2.5)
+    exact = BlockPush(1.0, mu, d, T, 9.81)
+    N = 80
+    system = pushed_particle(1.0, mu, 9.81, 2 * exact.peak_force + 1.0)
+    u = system.controls[0]
+    ocp = ct.OptimalControl(system, T=T, N=N)
+    ocp.initial(q=[0.0, 0.0], qd=[0.0, 0.0])
+    ocp.final(q=[d, 0.0], qd=[0.0, 0.0])
+    ocp.minimize(running=u ** 2)
+
+    def check(sol):
+        # sliding the whole horizon: the exact midpoint optimum; sticking: the closed form, within its O(h²)
+        return abs(sol.cost - (exact.cost if exact.sticks else exact.discrete_cost(N))) / exact.cost
+
+    return (f"block μ = {mu:.2f}, d = {d:.2f}, T = {T:.2f} ({'sticks' if exact.sticks else 'slides'})", ocp.solve,
+            check)
+
+
+def hopper(rng):
+    from castrajectory.models import hopper as _hopper
+    goal = rng.uniform(0.4, 1.0)
+    ocp = _hopper.problem(goal=goal)
+
+    def check(sol):
+        return abs(sol.q[-1, 0] - goal)
+    return f"hopper to x = {goal:.2f}", lambda: ocp.solve(guess=ocp.guess), check
+
+
+FAMILIES = [bounce, push, block]
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--count", type=int, default=30, help="problems in all (>= 3)")
+    p.add_argument("--seed", type=int, default=1, help="the random generator's seed")
+    p.add_argument("--hopper", action="store_true", help="add the hopper's goals (not yet certified: see #27's note)")
+    args = p.parse_args(argv)
+    if args.hopper:
+        FAMILIES.append(hopper)
+    if args.count < 3:
+        p.error("--count must be at least 3")
+    rng = np.random.default_rng(args.seed)
+    rows = []
+    print(f"contact-implicit OCP battery: {args.count} problems, seed {args.seed}; families: "
+          + ", ".join(f.__name__ for f in FAMILIES))
+    print(f"  {'#':>3s} {'problem':50s} {'status':26s} {'error':>8s} {'cost':>11s} {'iter':>5s} {'time s':>7s} "
+          f"{'cert':>8s}  last penalty, residual")
+    for i in range(args.count):
+        name, solve, check = FAMILIES[i % len(FAMILIES)](rng)
+        t0 = time.perf_counter()
+        sol = solve()
+        wall = time.perf_counter() - t0
+        err = check(sol) if sol.success else math.nan
+        last = sol.homotopy[-1] if sol.homotopy else None
+        tail = "" if sol.success or last is None else f"  {last.parameter} {last.sigma:g}, {last.complementarity_residual:.1e}"
+        rows.append({"name": name, "success": sol.success, "status": sol.status, "error": err, "time": wall,
+                     "certificate": sol.certificate})
+        cert = f"{sol.certificate:.1e}" if math.isfinite(sol.certificate) else "-"
+        print(f"  {i:3d} {name:50s} {sol.status[:26]:26s} {err:8.1e} {sol.cost:11.6g} {sol.iterations:5d} {wall:7.2f} "
+              f"{cert:>8s}{tail}", flush=True)
+    good = [r for r in rows if r["success"]]
+    share = len(good) / len(rows)
+    slow = [r for r in rows if r["time"] > GOAL_SECONDS]
+    print(f"\nsolved with a certificate: {len(good)} of {len(rows)} ({share:.0%}); unsolved, each reported as a "
+          f"failure: {len(rows) - len(good)}; over {GOAL_SECONDS:g} s: {len(slow)}")
+    print(f"time: median {np.median([r['time'] for r in rows]):.2f} s, worst {max(r['time'] for r in rows):.2f} s; "
+          f"largest error against an oracle of an ok answer: "
+          f"{max((r['error'] for r in good), default=float('nan')):.1e}")
+    ok = share >= GOAL_SOLVED and not slow
+    print(f"goal: {'PASS' if ok else 'MISS'}  at least {GOAL_SOLVED:.0%} solved with a certificate, none over "
+          f"{GOAL_SECONDS:g} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
