@@ -149,6 +149,11 @@ def test_console_list_run_and_report(quick_report):
     cost, states = head.index("order of J"), head.index("order of (x, ẋ)")
     for scheme, order in (("midpoint", 2), ("galerkin4", 4), ("gauss4", 4), ("galerkin6", 6)):
         assert abs(float(rows[scheme][cost]) - order) < 0.1 and abs(float(rows[scheme][states]) - order) < 0.1
+    # the contact-implicit section (#27): each scene ok against its oracle, certified (no battery in the quick size)
+    cic = summary.split("## Contact-implicit optimal control")[1].split("\n## ")[0]
+    for stem in ("block_push", "block_push_sticks", "bounce_to_target", "push_to_target"):
+        assert f"({stem}_plot.png)" in cic and (out / f"{stem}.json").exists()
+    assert "FAILED" not in cic and cic.count("status: ok") == 4
     # the built-in scenes' derivations, generated and linked (sympy is in CI's extras)
     assert "(derivation_double_pendulum.md)" in summary
     assert "## The Euler–Lagrange equations" in (out / "derivation_double_pendulum.md").read_text()

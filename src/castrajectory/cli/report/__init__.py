@@ -18,14 +18,14 @@ from typing import List
 
 from ...inspect import files
 from ...solve import interrupt
-from . import (carries, collisions, contact, contact_work_precision, derivations, droplet, drops_gravity, headline,
-               long_horizon,
-               mechanics, optimal_control, rigid_bodies, rigid_body_work_precision, stability_table, work_precision)
+from . import (carries, collisions, contact, contact_control, contact_work_precision, derivations, droplet, drops_gravity,
+               headline, long_horizon, mechanics, optimal_control, rigid_bodies, rigid_body_work_precision,
+               stability_table, work_precision)
 from .common import Context
 
 #: The sections, in the report's order.
 SECTIONS = [droplet, drops_gravity, collisions, contact, contact_work_precision, mechanics, work_precision, long_horizon,
-            rigid_bodies, rigid_body_work_precision, optimal_control, stability_table, derivations]
+            rigid_bodies, rigid_body_work_precision, optimal_control, contact_control, stability_table, derivations]
 
 
 def _progress_printer(quiet: bool):

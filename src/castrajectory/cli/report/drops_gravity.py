@@ -5,7 +5,6 @@ stability rows (a puddle, θ = 175° under gravity, a pendant drop just below an
 the droplet scene's cases in the registry, shown in the stability table."""
 from __future__ import annotations
 
-import math
 import os
 import time
 
