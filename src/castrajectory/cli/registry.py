@@ -220,6 +220,8 @@ SCENES: List[Scene] = [
     Scene("bounce_to_target", "contact-implicit optimal control", report=(
         Entry("bounce_to_target", (), "bounce to a target: launch speed and horizon unknown, k = 2, e = 0.9 "
               "(rockit's case), against the closed form"),)),
+    # (not in the report yet: not certified, see problems/hopper.py)
+    Scene("hopper", "contact-implicit optimal control"),
     Scene("push_to_target", "contact-implicit optimal control", report=(
         Entry("push_to_target", (), "push to a target: falls, lands at √(2 y0/g), slides and sticks; e = 0, μ = 0.6"),)),
 ]
