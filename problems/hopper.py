@@ -1,8 +1,8 @@
 """Hopper: nosnoc's hopping robot (a body on a telescopic leg, Coulomb friction at the foot) tracks a hop to a goal,
 contact-implicit, against nosnoc's own solution (scripts/bench_contact_ocp.py --hopper).
 
-The model and the problem are castrajectory.models.hopper (nosnoc's hopper_ocp: T = 1.5, goal x = 0.7, the staged
-parabolic reference, the tracking weights, the bounds 0.1 <= l <= 0.5).  Not yet certified: the answer's stance
+The model is castrajectory.models.hopper, the problem nosnoc's hopper_ocp (problem() below: T = 1.5, goal x = 0.7,
+the staged parabolic reference, the tracking weights, the bounds 0.1 <= l <= 0.5).  Not yet certified: the answer's stance
 slides and its slip reverses inside steps, which the contact march times at a sub-node (its mode W) and the program
 does not, so the march of the answer's controls departs from it; the run then exits 1 with the certificate's
 distance.  nosnoc's stance is no-slip, this one Coulomb's.
@@ -12,10 +12,12 @@ distance.  nosnoc's stance is no-slip, this one Coulomb's.
 """
 import sys
 
+import casadi as ca
 import numpy as np
 
 from castrajectory import cli
 from castrajectory.models import hopper as model
+from castrajectory.solve.optimal_control import OptimalControl
 from castrajectory.validation import InputError
 
 
@@ -32,12 +34,31 @@ def parser():
     return p
 
 
+def problem(goal: float = 0.7, T: float = 1.5, N: int = 60, scheme: str = "midpoint", mu: float = model.MU):
+    """nosnoc's hopper optimal-control problem (castrajectory.models.hopper's doc) as an OptimalControl, with its
+    controls' guess (``ocp.guess``: the leg holding the body, u = (0, (m_b + m_l) g)); ``N`` a multiple of the
+    reference's 20 stages keeps each step inside one stage."""
+    system = model.hopper(mu)
+    q, qd, u = system.q, system.qd, system.controls[0]
+    zref, ze = model.reference(goal, T)
+    dz = ca.vertcat(q, qd) - zref(system.t)
+    running = ca.dot(ca.DM(model.Q_RUN) * dz, dz) + ca.dot(ca.DM(model.R_RUN) * u, u)
+    dze = ca.vertcat(q, qd) - ca.DM(ze)
+    ocp = OptimalControl(system, T=T, N=N, scheme=scheme)
+    ocp.initial(q=list(model.START), qd=[0.0] * 4)
+    ocp.minimize(running=running, final=ca.dot(ca.DM(model.Q_END) * dze, dze))
+    ocp.subject_to(0 <= q[0], q[0] <= goal + 0.1, 0 <= q[1], q[1] <= 1.5, -np.pi <= q[2], q[2] <= np.pi,
+                   0.1 <= q[3], q[3] <= 0.5)
+    ocp.guess = {"u": np.tile([0.0, (model.MB + model.ML) * model.G], (N, 1))}
+    return ocp
+
+
 def run(args):
     cli.finite_flags(args, "goal", "T", "mu")
     if args.goal <= 0.1 or args.T <= 0 or args.mu < 0:
         raise InputError("--goal must be above 0.1, --T positive and --mu >= 0")
     cli.check_animation_path(args.animate)
-    ocp = model.problem(goal=args.goal, T=args.T, N=args.n, scheme=args.scheme, mu=args.mu)
+    ocp = problem(goal=args.goal, T=args.T, N=args.n, scheme=args.scheme, mu=args.mu)
     sol = ocp.solve(guess=ocp.guess, options=cli.ipopt_options(args), verbose=args.verbose)
     imp = sol.impact_times[0] if sol.impact_times else []
     lines = [f"end x = {sol.q[-1, 0]:.6g} (goal {args.goal:g}); {len(imp)} landing(s) at "

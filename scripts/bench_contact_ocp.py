@@ -13,7 +13,7 @@ homotopy, every answer certified by the contact march), wall time (build + solve
 formulation of the same problem (scripts/nosnoc_ocp.py: time freezing, FESD Radau IIA, Scholtes homotopy) at its
 example's defaults and at its tightest setting, its cost, time and complementarity; nosnoc gives no certificate.
 
-The hopper (castrajectory.models.hopper; nosnoc's hopper_ocp) is run by both with --hopper and printed; its
+The hopper (problems/hopper.py; nosnoc's hopper_ocp) is run by both with --hopper and printed; its
 castrajectory answer is not yet certified (#27's note).
 
 Goal (issue #27): a certified cost within 1e-6 of the reference at least 10x faster than nosnoc at equal accuracy.
@@ -128,7 +128,9 @@ def main(argv=None):
     print("(nosnoc's 1e-6 of castrajectory's reference is not reached by either: nosnoc stays at its own optimum, "
           "castrajectory's cost converges at order 2 -- the ceiling above)")
     if args.hopper:
-        from castrajectory.models import hopper as H
+        spec = importlib.util.spec_from_file_location("hopper", HERE.parent / "problems" / "hopper.py")
+        H = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(H)
         ocp = H.problem()
         t0 = time.perf_counter()
         sol = ocp.solve(guess=ocp.guess)

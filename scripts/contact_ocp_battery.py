@@ -12,7 +12,7 @@ round-robin):
 * block pushes with random friction, distance and horizon, against the closed form (castrajectory.models.block_push):
   J* = 12 m²d²/τ³ + (μmg)²τ with the slide τ = min(T, √(6d/(μg))), and, sliding the whole horizon, the exact
   midpoint optimum;
-* with ``--hopper``, hopper goals (nosnoc's hopper, castrajectory.models.hopper); not in the default run: its answers
+* with ``--hopper``, hopper goals (nosnoc's hopper, problems/hopper.py); not in the default run: its answers
   are not yet certified (the march of their controls departs from them).
 
 Each row: the status (ok only with a certificate), the error against the oracle, the cost, the iterations, the
@@ -112,9 +112,8 @@ def block(rng):
 
 
 def hopper(rng):
-    from castrajectory.models import hopper as _hopper
     goal = rng.uniform(0.4, 1.0)
-    ocp = _hopper.problem(goal=goal)
+    ocp = _problem_module("hopper").problem(goal=goal)
 
     def check(sol):
         return abs(sol.q[-1, 0] - goal)

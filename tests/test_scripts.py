@@ -753,6 +753,7 @@ def test_friction_on_the_rectangle_scenes(name, extra):
     assert d["frictional_law_error"] <= 1e-8
 
 
+@pytest.mark.slow       # (9 s; the same physics in the default run: test_friction_3d.py's box in a 3-D bowl)
 def test_bowl3d_with_friction():
     """--friction on the box in the 3-D bowl (μ = 0.5, e = 0.5): friction on each corner's tangent plane, every
     bounce loses kinetic energy (measured at least 0.71 of it), the tangential impulses inside the

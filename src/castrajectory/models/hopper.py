@@ -1,16 +1,16 @@
 """The hopper (nosnoc's): a body on a telescopic leg, which hops along a floor with Coulomb friction.
 
 Coordinates ``q = (x, y, θ, l)``: the body's position, the leg's angle from the vertical and the leg's length; the
-foot is at ``(x − l sin θ, y − l cos θ)``.  As in nosnoc's ``hopper_ocp`` (MATLAB ``examples/time_freezing/
+foot is at ``(x + l sin θ, y − l cos θ)``.  As in nosnoc's ``hopper_ocp`` (MATLAB ``examples/time_freezing/
 time_freezing_hopper_ocp``; nosnoc_py ``examples/hopper_robot``): a constant mass matrix ``M = diag(m_b + m_l,
 m_b + m_l, I_b + I_l, m_l)`` with ``m_b = 1``, ``m_l = 0.1``, ``I_b = 0.25``, ``I_l = 0.025``, gravity ``(m_b + m_l) g``
 on ``y``, and the controls through ``B(q) = [[0, −sin θ], [0, cos θ], [1, 0], [0, 1]]``: ``u₁`` a torque on the leg's
 angle, ``u₂`` a force along the leg, both in ``[−50, 50]``.  The foot's gap is ``y − l cos θ ≥ 0`` (restitution 0),
-its slip the foot's horizontal velocity ``ẋ − l̇ sin θ − l θ̇ cos θ``, the friction ``μ = 0.45``.  (nosnoc's third
+its slip the foot's horizontal velocity ``ẋ + l̇ sin θ + l θ̇ cos θ`` (nosnoc's ``J_t``), the friction ``μ = 0.45``.  (nosnoc's third
 control is a slack of its no-slip formulation, and its stance is no-slip; here the stance is Coulomb's, sticking
 inside the cone.)
 
-The optimal-control problem (:func:`problem`) is nosnoc's: from ``(0.1, 0.5, 0, 0.5)`` at rest over ``T = 1.5``,
+The optimal-control problem (``problems/hopper.py``, ``problem()``) is nosnoc's: from ``(0.1, 0.5, 0, 0.5)`` at rest over ``T = 1.5``,
 minimise ``∫ (z − z_ref)ᵀQ(z − z_ref) + uᵀRu dt + (z_N − z_end)ᵀQ_T(z_N − z_end)``, ``z = (q, q̇)``, with ``Q = diag(50,
 50, 20, 50, 0.1, 0.1, 0.1, 0.1)``, ``R = diag(0.01, 0.01)``, ``Q_T = diag(300, 300, 300, 300, 0.1, 0.1, 0.1, 0.1)``; the
 reference constant on each of 20 stages, ``z_ref,k = P(k/19)``, ``P`` the parabola through ``z0`` at 0, ``z_mid =
@@ -45,8 +45,10 @@ def hopper(mu: float = MU, g: float = G, u_max: float = 50.0) -> LagrangianSyste
     x, y, th, leg = q[0], q[1], q[2], q[3]
     B = ca.vertcat(ca.horzcat(0, -ca.sin(th)), ca.horzcat(0, ca.cos(th)), ca.horzcat(1, 0), ca.horzcat(0, 1))
     v = velocity(q)
-    slip = v[0] - v[3] * ca.sin(th) - leg * v[2] * ca.cos(th)
-    foot = ca.vertcat(x - leg * ca.sin(th), y - leg * ca.cos(th))
+    # the foot at (x + l sin θ, y − l cos θ): the leg force u₂ pushes the body along (−sin θ, cos θ), from the foot
+    # (nosnoc's B, its J_n and J_t; its example's animation draws the foot at x − l sin θ, which does not match them)
+    slip = v[0] + v[3] * ca.sin(th) + leg * v[2] * ca.cos(th)
+    foot = ca.vertcat(x + leg * ca.sin(th), y - leg * ca.cos(th))
     return LagrangianSystem(q, MassMatrix(ca.diag(ca.DM([MB + ML, MB + ML, IB + IL, ML]))),
                             [Potential((MB + ML) * g * y, "gravity"), Force(ca.mtimes(B, u))],
                             names=["x", "y", "theta", "leg"], points_expr=[ca.vertcat(x, y), foot],
@@ -64,23 +66,3 @@ def reference(goal: float, T: float):
     s = ca.fmin(ca.floor(t / (T / STAGES) + 1e-9), STAGES - 1) / (STAGES - 1)
     P = ca.DM(z0) * (1 - s) * (1 - 2 * s) + 4 * ca.DM(zm) * s * (1 - s) + ca.DM(ze) * s * (2 * s - 1)
     return ca.Function("z_ref", [t], [P]), ze
-
-
-def problem(goal: float = 0.7, T: float = 1.5, N: int = 60, scheme: str = "midpoint", mu: float = MU):
-    """nosnoc's hopper optimal-control problem (module doc) as a :class:`castrajectory.OptimalControl` (``N`` a multiple
-    of the reference's 20 stages keeps each step inside one stage)."""
-    from ..solve.optimal_control import OptimalControl
-    system = hopper(mu)
-    q, qd, u = system.q, system.qd, system.controls[0]
-    zref, ze = reference(goal, T)
-    z = ca.vertcat(q, qd)
-    dz = z - zref(system.t)
-    running = ca.dot(ca.DM(Q_RUN) * dz, dz) + ca.dot(ca.DM(R_RUN) * u, u)
-    dze = z - ca.DM(ze)
-    ocp = OptimalControl(system, T=T, N=N, scheme=scheme)
-    ocp.initial(q=list(START), qd=[0.0] * 4)
-    ocp.minimize(running=running, final=ca.dot(ca.DM(Q_END) * dze, dze))
-    ocp.subject_to(0 <= q[0], q[0] <= goal + 0.1, 0 <= q[1], q[1] <= 1.5, -np.pi <= q[2], q[2] <= np.pi,
-                   0.1 <= q[3], q[3] <= 0.5)
-    ocp.guess = {"u": np.tile([0.0, (MB + ML) * G], (N, 1))}
-    return ocp

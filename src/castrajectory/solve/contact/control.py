@@ -57,6 +57,8 @@ OCP_PENALTY = (1e3, 1e4, 1e5, 1e6)
 TIMING_ROUNDS = 6
 #: Ipopt iterations of one step of the end conditions' continuation (keep_modes).
 CONTINUATION_ITER = 150
+#: Ipopt iterations of a branch solve's first try, from its march's motion with a small barrier (see _branch).
+BRANCH_SMALL_ITER = 500
 #: Solves on the march's branch at most (step 5 of the module docstring).
 POLISH_ROUNDS = 3
 #: A grid of more steps than this starts from the controls of the answer on half as many (see solve_contact_control).
@@ -402,12 +404,19 @@ def _branch(cm, prog, q0, point, values, bounds, opts, rho, verbose, scales, war
         if cm.friction:
             init.update(_slips(cm, prog, init, scales[2]))
     prog.nlp.set_parameter("law_length", prog.law_lengths(point).reshape(-1))
-    # (the branch starts from a motion that satisfies its rows: Ipopt's barrier starts small and keeps the point, as
-    # for the initial-value program's branch; with the homotopy's start, 0.1 and bound pushes of 1e-2, the push to a
-    # target at N = 320 spent 3000 iterations on the branch of one slip that stops inside a step)
-    opts = {**opts, **{k: CONTACT_IPOPT[k] for k in ("mu_init", "bound_push", "bound_frac", "slack_bound_push",
-                                                     "slack_bound_frac")}, "mu_strategy": "monotone"}
-    return prog._ladder(init, opts, branch, [rho], verbose, "branch", "the march's branch")
+    # (the branch starts from a motion that satisfies its rows.  Two barriers, measured on the push to a target: the
+    # initial-value branch's small start (1e-8, pushes 1e-8) keeps that point and solved the branch of a slip that
+    # stops inside a step at N = 320, where the homotopy's (0.1 adaptive, pushes 1e-2) spent 3000 iterations; at
+    # N = 80 the other way round.  The small one first, capped, then the homotopy's)
+    small = {**opts, **{k: CONTACT_IPOPT[k] for k in ("mu_init", "bound_push", "bound_frac", "slack_bound_push",
+                                                      "slack_bound_frac")}, "mu_strategy": "monotone",
+             "max_iter": min(int(opts.get("max_iter", 3000)), BRANCH_SMALL_ITER)}
+    got = prog._ladder(init, small, branch, [rho], verbose, "branch", "the march's branch")
+    if got.success:
+        return got
+    again = prog._ladder(init, opts, branch, [rho], verbose, "branch", "the march's branch")
+    again.homotopy = list(got.homotopy) + list(again.homotopy)
+    return again
 
 
 def _straight(cm: ContactMechanics, q0, qN, N: int) -> dict:
