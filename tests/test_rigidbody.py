@@ -120,9 +120,10 @@ def test_flip_interval_sensitivity_against_the_naive_form_away_from_the_separatr
     assert g == pytest.approx([1732.0, -24.07, -5196.2], rel=1e-3)
 
 
+@pytest.mark.slow       # (16 s a case: the default run is at its 10-minute guideline; the closed form's own tests,
+#                         test_flip_interval_closed_form and the separatrix ones, stay in it)
 @pytest.mark.parametrize("inertia,w0", [((1.0, 2.0, 3.0), (0.05, 1.0, 0.02)),
-                                        # the other two cases in the slow run (16 s each: the default run
-                                        # is near its 10-minute guideline; the first case keeps the oracle)
+                                        # (the RK4 integration of Euler's equations against the closed form)
                                         pytest.param((2.0, 3.0, 4.5), (0.1, 0.8, 0.0),   # L² < 2E I₂ side
                                                      marks=pytest.mark.slow),
                                         pytest.param((1.0, 2.0, 3.0), (0.0, 1.0, 0.05), marks=pytest.mark.slow)])
