@@ -68,6 +68,19 @@ def launch_guess(system, p, k, g):
     return c * v0, c * (imp.t + up / g)
 
 
+def problem(p, k, e, g, n, scheme="midpoint", scale=1.0):
+    """The ball, its launch guess (``scale`` times the scene's: a launch that much faster, followed to its apex
+    after k bounces) and the optimal-control problem in (v0, T): ``(system, ocp, guess)``."""
+    system = ball(e, g)
+    v0g, Tg = launch_guess(system, p, k, g)
+    v0g, Tg = scale * v0g, scale * Tg
+    ocp = OptimalControl(system, T=(1e-3 * Tg, 1e3 * Tg), N=n, scheme=scheme)
+    ocp.initial(q=[0.0], qd=[None])
+    ocp.final(q=[p], qd=[0.0])
+    ocp.minimize(final=0 * ocp.T_symbol)            # a feasibility problem: its point is isolated
+    return system, ocp, {"qd0": [v0g], "T": Tg}
+
+
 def run(args):
     cli.finite_flags(args, "height", "restitution", "g")
     if args.height <= 0 or args.g <= 0:
@@ -79,14 +92,9 @@ def run(args):
     cli.check_animation_path(args.animate)
     p, k, e, g = args.height, args.bounces, args.restitution, args.g
     exact = bounce_to_target(p, k, e, g)
-    system = ball(e, g)
-    v0g, Tg = launch_guess(system, p, k, g)
-    ocp = OptimalControl(system, T=(1e-3 * Tg, 1e3 * Tg), N=args.n, scheme=args.scheme)
-    ocp.initial(q=[0.0], qd=[None])
-    ocp.final(q=[p], qd=[0.0])
-    ocp.minimize(final=0 * ocp.T_symbol)            # a feasibility problem: its point is isolated
-    sol = ocp.solve(guess={"qd0": [v0g], "T": Tg}, options=cli.ipopt_options(args), verbose=args.verbose,
-                    keep_modes=True)
+    system, ocp, guess = problem(p, k, e, g, args.n, args.scheme)
+    v0g, Tg = guess["qd0"][0], guess["T"]
+    sol = ocp.solve(guess=guess, options=cli.ipopt_options(args), verbose=args.verbose, keep_modes=True)
     v0 = float(sol.v[0, 0])
     impacts = sol.impact_times[0] if sol.impact_times else []
     ok = len(impacts) == len(exact.impact_times)

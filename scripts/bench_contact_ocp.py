@@ -39,26 +39,21 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 
-import castrajectory as ct  # noqa: E402
-from castrajectory.models.block_push import pushed_particle  # noqa: E402
 
 HERE = pathlib.Path(__file__).resolve().parent
 
 
-def _peer():
-    spec = importlib.util.spec_from_file_location("nosnoc_ocp", HERE / "nosnoc_ocp.py")
+def _module(path: pathlib.Path, name: str):
+    spec = importlib.util.spec_from_file_location(name, path)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod
 
 
 def push(N: int):
-    system = pushed_particle(1.0, 0.6, 9.81, 10.0)
-    u = system.controls[0]
-    ocp = ct.OptimalControl(system, T=2.0, N=N)
-    ocp.initial(q=[0.0, 1.5], qd=[0.0, 0.0])
-    ocp.final(q=[3.0, 0.0], qd=[0.0, 0.0])
-    ocp.minimize(running=u ** 2)
+    """The push to a target (problems/push_to_target.py, its defaults) on N steps: (answer, wall time)."""
+    _, ocp = _module(HERE.parent / "problems" / "push_to_target.py", "push_to_target").problem(
+        1.5, 3.0, 0.6, 10.0, 2.0, 9.81, N)
     t0 = time.perf_counter()
     sol = ocp.solve()
     return sol, time.perf_counter() - t0
@@ -93,7 +88,7 @@ def main(argv=None):
     need = nmax * (err_max / 1e-6) ** (1 / max(order, 1e-3))
     print(f"ceiling: 1e-6 of J_ref needs N ~ {need:.0f} at order {order:.2f} (not run: the finest here, N = {nmax}, "
           f"is {err_max:.1e} away)")
-    peer = _peer()
+    peer = _module(HERE / "nosnoc_ocp.py", "nosnoc_ocp")
     if not peer.available():
         print("nosnoc is not installed (pip install castrajectory[bench]): the comparison is skipped")
         return 0
@@ -128,10 +123,7 @@ def main(argv=None):
     print("(nosnoc's 1e-6 of castrajectory's reference is not reached by either: nosnoc stays at its own optimum, "
           "castrajectory's cost converges at order 2 -- the ceiling above)")
     if args.hopper:
-        spec = importlib.util.spec_from_file_location("hopper", HERE.parent / "problems" / "hopper.py")
-        H = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(H)
-        ocp = H.problem()
+        ocp = _module(HERE.parent / "problems" / "hopper.py", "hopper").problem()
         t0 = time.perf_counter()
         sol = ocp.solve(guess=ocp.guess)
         wall = time.perf_counter() - t0

@@ -33,8 +33,7 @@ import time
 
 import numpy as np
 
-import castrajectory as ct
-from castrajectory.models.block_push import BlockPush, pushed_particle
+from castrajectory.models.block_push import BlockPush
 from castrajectory.models.bounce import bounce_to_target
 
 GOAL_SOLVED = 0.90
@@ -56,12 +55,7 @@ def bounce(rng):
     p, k, e = rng.uniform(0.2, 2.0), int(rng.integers(0, 5)), rng.uniform(0.5, 0.95)
     # the grid resolves the k-th flight by about 6 steps (its share of the horizon is e^(k-1)(1 - e)/2 at least)
     N = int(min(400, max(40, math.ceil(12 / (e ** max(k - 1, 0) * (1 - e))))))
-    system = BOUNCE.ball(e, 9.81)
-    v0g, Tg = BOUNCE.launch_guess(system, p, k, 9.81)
-    ocp = ct.OptimalControl(system, T=(1e-3 * Tg, 1e3 * Tg), N=N)
-    ocp.initial(q=[0.0], qd=[None])
-    ocp.final(q=[p], qd=[0.0])
-    ocp.minimize(final=0 * ocp.T_symbol)
+    _, ocp, guess = BOUNCE.problem(p, k, e, 9.81, N)
     exact = bounce_to_target(p, k, e, 9.81)
 
     def check(sol):
@@ -71,18 +65,13 @@ def bounce(rng):
         err = max(abs(sol.v[0, 0] - exact.launch_speed), abs(sol.T - exact.horizon))
         return max([err] + [abs(a - b) for a, b in zip(imp, exact.impact_times)])
 
-    return (f"bounce p = {p:.2f}, k = {k}, e = {e:.2f}, N = {N}", lambda: ocp.solve(guess={"qd0": [v0g], "T": Tg},
-                                                                                  keep_modes=True), check)
+    return (f"bounce p = {p:.2f}, k = {k}, e = {e:.2f}, N = {N}", lambda: ocp.solve(guess=guess, keep_modes=True),
+            check)
 
 
 def push(rng):
     y0, goal, mu = rng.uniform(0.3, 2.0), rng.uniform(1.0, 3.0), rng.uniform(0.1, 0.6)
-    system = pushed_particle(1.0, mu, 9.81, 10.0)
-    u = system.controls[0]
-    ocp = ct.OptimalControl(system, T=2.0, N=80)
-    ocp.initial(q=[0.0, y0], qd=[0.0, 0.0])
-    ocp.final(q=[goal, 0.0], qd=[0.0, 0.0])
-    ocp.minimize(running=u ** 2)
+    _, ocp = _problem_module("push_to_target").problem(y0, goal, mu, 10.0, 2.0, 9.81, 80)
     landing = math.sqrt(2 * y0 / 9.81)
 
     def check(sol):
@@ -96,12 +85,7 @@ def block(rng):
     mu, d, T = rng.uniform(0.1, 0.6), rng.uniform(0.3, 2.0), rng.uniform(0.5, 2.5)
     exact = BlockPush(1.0, mu, d, T, 9.81)
     N = 80
-    system = pushed_particle(1.0, mu, 9.81, 2 * exact.peak_force + 1.0)
-    u = system.controls[0]
-    ocp = ct.OptimalControl(system, T=T, N=N)
-    ocp.initial(q=[0.0, 0.0], qd=[0.0, 0.0])
-    ocp.final(q=[d, 0.0], qd=[0.0, 0.0])
-    ocp.minimize(running=u ** 2)
+    _, ocp = _problem_module("block_push").problem(d, T, 1.0, mu, 9.81, 2 * exact.peak_force + 1.0, N)
 
     def check(sol):
         # sliding the whole horizon: the exact midpoint optimum; sticking: the closed form, within its O(h²)

@@ -136,22 +136,23 @@ def test_contact_optimal_control_refuses_what_it_does_not_take():
         ocp.solve()
 
 
-def _bounce(k, e, p, N, scheme="midpoint"):
+def _problem(name):
+    """A problem script's module (problems/NAME.py), for its problem() and helpers."""
     import importlib.util
     import pathlib
-    path = pathlib.Path(__file__).resolve().parents[1] / "problems" / "bounce_to_target.py"
-    spec = importlib.util.spec_from_file_location("bounce_to_target", path)
+    path = pathlib.Path(__file__).resolve().parents[1] / "problems" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(name, path)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
-    system = mod.ball(e, 9.81)
-    v0g, Tg = mod.launch_guess(system, p, k, 9.81)
+    return mod
+
+
+def _bounce(k, e, p, N, scheme="midpoint"):
+    mod = _problem("bounce_to_target")
     # (the scene's guess is exact to 1e-11 -- a simulated parabola, scaled; here a launch 10 % too fast, followed
     # to its apex after k bounces: the same impacts' steps, the end 21 % too high)
-    v0g, Tg = 1.1 * v0g, 1.1 * Tg
-    ocp = ct.OptimalControl(system, T=(1e-3 * Tg, 1e3 * Tg), N=N, scheme=scheme)
-    ocp.initial(q=[0.0], qd=[None])
-    ocp.final(q=[p], qd=[0.0])
-    ocp.minimize(final=0 * ocp.T_symbol)
+    _, ocp, guess = mod.problem(p, k, e, 9.81, N, scheme, scale=1.1)
+    v0g, Tg = guess["qd0"][0], guess["T"]
     return ocp.solve(guess={"qd0": [v0g], "T": Tg}, keep_modes=True), (v0g, Tg)
 
 
@@ -179,14 +180,7 @@ def test_push_to_target_lands_at_the_free_fall_time_and_is_certified():
     """nosnoc's inelastic 2-D problem: from rest at (0, 1.5) to (3, 0) at rest at T = 2, |u| <= 10, μ = 0.6.  The
     landing is the free fall's √(3/g) whatever the push (measured 1.8e-12 s at N = 80); the answer ends at rest on
     the target and sticks there before T (0.475 s at N = 80); certified (2e-11)."""
-    from castrajectory.models.block_push import pushed_particle
-    system = pushed_particle(1.0, 0.6, 9.81, 10.0)
-    u = system.controls[0]
-    ocp = ct.OptimalControl(system, T=2.0, N=40)
-    ocp.initial(q=[0.0, 1.5], qd=[0.0, 0.0])
-    ocp.final(q=[3.0, 0.0], qd=[0.0, 0.0])
-    ocp.minimize(running=u ** 2)
-    sol = ocp.solve()
+    sol = _problem("push_to_target").problem(1.5, 3.0, 0.6, 10.0, 2.0, 9.81, 40)[1].solve()
     assert sol.success, sol.message
     assert sol.certificate < 1e-9 and sol.complementarity < 1e-10
     assert len(sol.impact_times[0]) == 1 and abs(sol.impact_times[0][0] - (3 / 9.81) ** 0.5) < 1e-10
@@ -200,16 +194,9 @@ def test_push_to_target_lands_at_the_free_fall_time_and_is_certified():
 @pytest.mark.slow
 def test_push_to_target_cost_converges_at_second_order():
     """Costs at N = 40, 80, 160: 67.9073, 67.8945, 67.8910 (measured), differences in ratio 3.6: order 1.9."""
-    from castrajectory.models.block_push import pushed_particle
     costs = []
     for N in (40, 80, 160):
-        system = pushed_particle(1.0, 0.6, 9.81, 10.0)
-        u = system.controls[0]
-        ocp = ct.OptimalControl(system, T=2.0, N=N)
-        ocp.initial(q=[0.0, 1.5], qd=[0.0, 0.0])
-        ocp.final(q=[3.0, 0.0], qd=[0.0, 0.0])
-        ocp.minimize(running=u ** 2)
-        sol = ocp.solve()
+        sol = _problem("push_to_target").problem(1.5, 3.0, 0.6, 10.0, 2.0, 9.81, N)[1].solve()
         assert sol.success and sol.certificate < 1e-9
         costs.append(sol.cost)
     order = np.log2((costs[0] - costs[1]) / (costs[1] - costs[2]))

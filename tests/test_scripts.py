@@ -777,3 +777,17 @@ def test_rolling_sphere_on_so3():
     assert abs(d["rolling_time"] - d["rolling_time_exact"]) <= 1e-3
     assert 0 <= d["rolling_node_time"] - d["rolling_time_exact"] <= 2 * 1.0 / 200
     assert abs(d["top_spin_final"] - 10.0) <= 1e-10 and d["quaternion_norm_error"] <= 1e-13
+
+
+def test_hopper_runs_headless_and_says_it_failed(tmp_path):
+    """problems/hopper.py (#27, not yet certified) at a small size with a run-wide cap of 40 Ipopt iterations: it
+    stops there and says so (exit 1, the JSON's status not ok, the cap kept, no picture written), and refuses bad
+    input before any solve (exit 2, one line).  Measured: 2.2 s."""
+    out = tmp_path / "hopper.png"
+    p = run([script("hopper"), "--n", "20", "--max-iter", "40", "--json", "--plot", str(out)])
+    assert p.returncode == 1, p.stderr
+    d = json.loads(p.stdout)
+    assert d["status"] != "ok" and d["iterations"] <= 40 and not out.exists()
+    assert "failed" in p.stderr and "Traceback" not in p.stderr
+    p = run([script("hopper"), "--goal", "0.05"])
+    assert p.returncode == 2 and len(p.stderr.strip().splitlines()) == 1

@@ -96,7 +96,6 @@ class ContactControlTranscription(ContactTranscription):
         TM = P(nlp.parameter_index("timed").reshape(L, c))
         nlp.minimize_elements("catch_penalty", self._catch_penalty(cm), [X(Q[k + 1]), X(MU[k]), TM, rho,
                                                                          vref * pref * Hc])
-        self._extra_pairs = dict(launch=(S, NU, vref * pref * np.ones(L)), catch=(Q[1:], MU, vref * pref * self.H))
         nlp.variable("law_plus", L * c, lb=0.0)
         nlp.variable("law_minus", L * c, lb=0.0)
         REL = P(nlp.parameter_index("release").reshape(L, c))
@@ -216,10 +215,10 @@ class ContactControlTranscription(ContactTranscription):
         bo = np.asarray(self.nlp.parameter_value("bounce"), float).reshape(L, c)
         out.append(float(np.max(np.abs(bo * self._raw_law(values)[0]))) / self.scales_law)
         tm = np.asarray(self.nlp.parameter_value("timed"), float).reshape(L, c)
-        sc = self._extra_pairs
         ni = np.asarray(self.nlp.parameter_value("node_impact"), float).reshape(L, c)
-        out.append(float(np.max(np.abs((1 - ni) * g(S) * NU) / sc["launch"][2][:, None])))
-        out.append(float(np.max(np.abs((1 - tm) * g(Q[1:]) * MU) / sc["catch"][2][:, None])))
+        vp = self.scales_v * self.scales_pref          # the launch pair's scale; the catch pair's is v_p h
+        out.append(float(np.max(np.abs((1 - ni) * g(S) * NU))) / vp)
+        out.append(float(np.max(np.abs((1 - tm) * g(Q[1:]) * MU) / self.steps(values)[:, None])) / vp)
         if cm.friction:
             r = values["fratio"].reshape(L, 2 * c)
             muf = np.concatenate([cm.mu_f, cm.mu_f])[None, :]

@@ -21,7 +21,7 @@ its pairs that the whole program's solution has.  Each contact is in one of thes
 A step starts from the modes the previous step ended in (held contacts held, the others open) and
 changes one contact's mode per Newton solve, the one whose gap or multiplier is most violated, until
 every gap is ≥ 0 and every multiplier ≥ 0 (each set of modes is tried once); if that cycles, every
-combination of the involved contacts' modes is tried (:mod:`.step`).  A step that would need two
+combination of the involved contacts' modes is tried (:mod:`.search`).  A step that would need two
 impacts at different times is halved, down to ``h / 2**max_splits``.  Steps that keep their modes are
 marched many at a time (:meth:`.step._Step.chunk`).  A step that no search solves stops the march: the
 caller then falls back to the event-located guess.
@@ -34,8 +34,10 @@ import numpy as np
 
 from ...discretise.contact.elements import ContactMechanics
 from ...discretise.contact.transcription import TOUCH_TOL
-from . import step as _modes
-from .step import FIX, FREE, STICK, C, H, I, O, _march_step, _Step
+from . import modes as _modes
+from .modes import FIX, FREE, STICK, C, H, I, O
+from .search import _march_step
+from .step import _Step
 
 #: Steps that keep their modes (open or held) marched in one call (step.CHUNK_NEWTON Newton steps
 #: each; its rows are those of the march step, each checked after).
@@ -118,7 +120,7 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
             if cm.friction:
                 ok &= step.friction_holds(fm, X[lay["fratio"]], SL)
                 # a sliding contact whose slip turns inside a step (planar): that step is marched alone, where its
-                # sub-node times the turn (mode W, step._slip_turn)
+                # sub-node times the turn (mode W, search._slip_turn)
                 ok &= ~_turns(cm, fm, held, np.column_stack([q, Qn]), np.column_stack([p, Pn]))
             i = int(np.argmin(ok)) if not np.all(ok) else K
             span = min(2 * span, CHUNK_STEPS) if i == K else 8
@@ -172,7 +174,7 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
 def _turns(cm, fm, held, Q, Pm) -> np.ndarray:
     """Per chunk step (columns of its nodes ``Q`` and momenta ``p⁻`` there, the step's start first): a held contact
     sliding through the step (its node slot UP or DOWN, planar friction) has its slip turn or stop inside it
-    (:func:`.step.turn_fraction`)."""
+    (:func:`.modes.turn_fraction`)."""
     K = Q.shape[1] - 1
     out = np.zeros(K, bool)
     if cm.fd != 1:

@@ -10,7 +10,7 @@ from ...result import HomotopyStep, NLPResult, Result
 from ...discretise.contact.elements import ContactMechanics
 from ...discretise.contact.transcription import LOOKAHEAD, TOUCH_TOL
 from .nlp import ContactNLP
-from .step import IMPACT_SPEED_STEPS
+from .modes import IMPACT_SPEED_STEPS
 
 
 #: ... and its impulse exceeds this fraction of the momentum scale (interior-point noise is far below).

@@ -1,0 +1,48 @@
+"""The march's vocabulary: the contact modes of a step and the friction modes of its slots, and what follows from
+them alone (which contacts release at a step's impact, where a slip turns).  The compiled step is :mod:`.step`, the
+search for a step's modes :mod:`.search`, the march :mod:`.march`."""
+from __future__ import annotations
+
+import numpy as np
+
+#: contact modes (:mod:`.march`'s docstring): open, held, released at the sub-node, impact, caught, impact at the
+#: node, an impulse fixed by the sequential law (F at the sub-node, T timing it), P the same at the node
+O, H, R, I, C, N, F, T, P = "O", "H", "R", "I", "C", "N", "F", "T", "P"
+#: a plastic arrival with friction caught at its sub-node (closed after it) whose impulse is Stronge's, fixed as the
+#: first part's closing impulse μ⁻ (its normal and its ratio; the second part's μ holds the contact closed after)
+K = "K"
+#: a held contact with planar friction whose slip stops or turns at the sub-node, which it times (its slip velocity
+#: there vanishes after its share of the first part's force; it slides through the first part, and sticks or
+#: slides the other way through the second)
+W = "W"
+#: friction modes of a contact in a step: no friction force, sticking, sliding with a positive slip
+#: velocity (ρ = −μ_f), sliding with a negative one (ρ = μ_f)
+FREE, STICK, UP, DOWN = "-", "S", "U", "D"
+#: ... and a ratio fixed by the frictional impact law (its tangential impulse over its normal one)
+FIX = "X"
+#: ... and, on a tangent plane (3-D), sliding against the slip's direction at the circular cone's edge
+SLIDE = "L"
+#: A contact approaching faster than this many steps' worth of its normal acceleration arrives with an
+#: impact (resting contact approaches at about ½ step's worth): touching at a step's first node it takes the
+#: impact there (mode N), and an answer lists its impulse as an impact (solution.py).
+IMPACT_SPEED_STEPS = 2.0
+
+
+def releases(modes) -> np.ndarray:
+    """Per contact, 1 where its sub-node impulse μ⁻ is its share of the first part's force
+    (:meth:`ContactMechanics.release_row`): held until an impact's sub-node and released there (mode R in a step
+    with an impact at its sub-node: I, C, T, F or K), or held with its slip stopping or turning there (W)."""
+    impact = any(m in (I, C, T, F, K) for m in modes)
+    return np.array([float(impact and m == R or m == W) for m in modes])
+
+
+def turn_fraction(s0: float, s1: float):
+    """Where in a step a slip turns, from the slip velocities (signed along the sliding direction) of the momenta
+    ``p_k⁻`` and ``p_{k+1}⁻`` at its ends, or None where it does not turn in it.  Those momenta miss half of their
+    node's friction impulse, so each is half a step's change ahead of the slip at its node: the slip's values
+    at the nodes are ``s − Δ/2`` (``Δ = s0 − s1``)."""
+    d = s0 - s1
+    a, b = s0 - 0.5 * d, s1 - 0.5 * d
+    if not (a > 0.0 and b <= 0.0):
+        return None
+    return a / (a - b)

@@ -1,0 +1,604 @@
+"""The search for a step's contact and friction modes: greedy (one change per solve, at the most violated
+condition), then every combination of the involved contacts' modes; the impact laws (Newton's, the sequential
+cascade, Stronge's with friction) and the slip that stops or turns inside a step (:mod:`.march`'s docstring)."""
+from __future__ import annotations
+
+from itertools import product
+
+import numpy as np
+
+from ...discretise.contact.transcription import ALPHA_MIN
+from ...models.impact import (frictional_impact, frictional_impact_plane, sequential_frictional_impact,
+                               sequential_impact)
+from .modes import (DOWN, FIX, FREE, IMPACT_SPEED_STEPS, SLIDE, STICK, UP, C, F, H, I, K, N, O, P, R, T, W,
+                    releases, turn_fraction)
+from .step import _Step, restage
+
+#: Mode changes tried per step before the march gives up.
+MODE_ROUNDS = 12
+#: A contact whose gap at an impact's sub-node is within this (times the length scale) takes part in
+#: that impact (a flat landing: one simultaneous impact).
+SIMULTANEOUS_GAP = 1e-9
+
+
+def _timed_by_bracket(step: _Step, x, q, p, h, modes, j: int):
+    """The step with contact ``j`` timing its sub-node, by regula falsi (Illinois) on ``β``: each trial
+    solves the step with ``β`` fixed, and the sub-node's gap of ``j`` is positive at the step's start
+    (``α = ALPHA_MIN``) and negative at the crossing the free flight showed.  ``(x, ok)``."""
+    n = step.n
+    gapf = step.cm.system.gap
+
+    def f(b, start):
+        xb, ok = step.solve(start, q, p, h, modes, bfix=b)
+        return (float(np.asarray(gapf(xb[:n])[0]).reshape(-1)[j]) if ok else np.nan), xb
+
+    lo, hi = ALPHA_MIN - 0.5, 0.5 - ALPHA_MIN
+    flo, xlo = f(lo, x)
+    fhi, xhi = f(0.0, x)
+    if fhi >= 0.0:
+        lo, flo, xlo = 0.0, fhi, xhi
+        fhi, xhi = f(hi, x)
+    else:
+        hi = 0.0
+    if not (flo > 0.0 and fhi < 0.0):
+        return x, False
+    side = 0
+    for _ in range(100):
+        b = hi - fhi * (hi - lo) / (fhi - flo)
+        fb, xb = f(b, xlo if side <= 0 else xhi)
+        if not np.isfinite(fb):
+            return x, False
+        if abs(fb) <= 1e-15 * step.ell or hi - lo <= 1e-15:
+            break
+        if fb > 0.0:
+            lo, flo, xlo = b, fb, xb
+            if side > 0:
+                fhi *= 0.5
+            side = 1
+        else:
+            hi, fhi, xhi = b, fb, xb
+            if side < 0:
+                flo *= 0.5
+            side = -1
+    # the timed rows from there (one or two Newton steps); the bracket's point if Newton leaves it
+    xt, ok = step.solve(xb, q, p, h, modes)
+    if ok and ALPHA_MIN - 0.5 <= xt[2 * n] <= 0.5 - ALPHA_MIN:
+        return xt, True
+    return xb, abs(fb) <= 1e-12 * step.ell
+
+
+def _crossing_fraction(g0, gs, gn, alpha):
+    """Estimated time fraction in the step at which a gap that is positive at ``q_k`` crosses zero, from
+    its values at the node, the sub-node (fraction ``alpha``) and the next node (linear pieces)."""
+    if gs < 0.0:
+        return alpha * g0 / (g0 - gs)
+    return alpha + (1.0 - alpha) * gs / (gs - gn) if gn < 0.0 else 1.0
+
+
+def _march_step(step: _Step, q, p, h, g_q, held_prev, tol, finest: bool):
+    """One step from ``(q, p)``: ``(q̃, q_{k+1}, β, ν, μ, λ, λ̃, modes, gaps at q_{k+1}, friction ratios,
+    friction modes)`` (:func:`_result`), ``"split"`` if
+    it needs two impacts at different times (and is not the finest step), or ``(reason, detail)``.
+
+    The modes are searched greedily (one change per solve, at the most violated condition); if that
+    cycles or stalls, every combination of modes of the contacts involved (touching at ``q_k``, or seen
+    crossing) is tried, fewest changes first (:func:`_enumerate`)."""
+    c = step.c
+    pen = 1e-12 * step.ell
+    touch = g_q <= tol
+    v = np.linalg.solve(np.asarray(step.cm.system.mass_matrix(q)), p)
+    x0 = restage(step.cm, np.concatenate([q + 0.5 * h * v, q + h * v, np.zeros(step.cm.nx - 2 * step.n)]), q)
+    # a flight that landed on this node (to rounding) arrives with its impact here: Newton's law at the node
+    an = np.abs(np.asarray(step.cm.acc_normal(q, v, *step.uarg)).reshape(-1))
+    arriving = touch & ~held_prev & (-(np.asarray(step.cm.system.gap(q)[1]) @ v) > IMPACT_SPEED_STEPS * an * h)
+    modes0 = [N if arriving[j] else H if (touch[j] and held_prev[j]) else O for j in range(c)]
+    modes, tried, crossed = list(modes0), set(), set()
+    x, frac, why = x0, None, "rounds"
+    for _ in range(MODE_ROUNDS):
+        key = tuple(modes)
+        if key in tried:
+            why = "cycle"
+            break
+        tried.add(key)
+        got = _try(step, q, p, h, modes, x0, x, frac)
+        if got is None:
+            why = "newton"
+            break
+        x, gs, gn, nu, mu, b, used = got
+        crossed |= set(np.where((gs < -pen) | (gn < -pen))[0].tolist())
+        change = _next_modes(modes, touch, g_q, gs, gn, nu, mu, b, pen, tol, step, finest)
+        if change is None:
+            law = _cascade(step, q, p, h, x, used, tol)
+            if law != "rejected":
+                if not law:
+                    turned = _slip_turn(step, q, p, h, used, x, step.last_fmodes)
+                    if turned is not None:
+                        return _result(step, *turned)
+                return law or _result(step, x, used, gn, step.last_fmodes)
+            why = "the sequential law"
+            break
+        if change == "split":
+            return "split" if not finest else ("split at the finest step", key)
+        modes, frac = change
+    found = _enumerate(step, q, p, h, g_q, touch, modes0, crossed, x0, pen, tol, finest)
+    if found is not None:
+        return found
+    return "split" if not finest else (why, tuple(modes))
+
+
+def _try(step: _Step, q, p, h, modes, x0, x, frac):
+    """Solve the step in ``modes`` (from ``x``; a newly timed impact from its estimated crossing
+    fraction ``frac``): ``(x, gaps at q̃, gaps at q_{k+1}, ν, μ, β, modes used)``, or None if Newton fails
+    (the modes used differ where an impact with friction took its impulse from its law: T or P, FIX)."""
+    n, c = step.n, step.c
+    gapf = step.cm.system.gap
+    start = x.copy()
+    if frac is not None:
+        # a newly timed impact: the sub-node starts at the estimated crossing
+        start[2 * n] = min(max(frac - 0.5, ALPHA_MIN - 0.5), 0.5 - ALPHA_MIN)
+        start[:n] = q + frac * (x[n:2 * n] - q)
+        start = restage(step.cm, start, q)
+    xn, ok = step.solve(start, q, p, h, modes)
+    timed = [j for j, m in enumerate(modes) if m in (I, C)]
+    if timed and not (ok and ALPHA_MIN - 0.5 <= xn[2 * n] <= 0.5 - ALPHA_MIN):
+        # Newton on the timing row left the step (its rows go like 1/α near α = 0): the time
+        # of the impact by a bracketed search on the gap instead
+        xn, ok = _timed_by_bracket(step, x, q, p, h, modes, timed[0])
+    if not ok:
+        xn, ok = step.solve(x0.copy(), q, p, h, modes)
+        if not ok:
+            return None
+    xn = _friction(step, q, p, h, modes, xn)
+    if xn is None:
+        return None
+    used = list(modes)
+    if step.nf:
+        # an impact with friction: its impulse by the frictional impact law, the step solved again with it
+        law = _impact_law(step, q, p, h, xn, modes, cascade=False)
+        if law == "failed":
+            return None
+        if law is not None:
+            xn, used = law
+    o = 2 * n + 1
+    step.last_mul = xn[step.cm.layout["mul"]] * releases(used)
+    return (xn, np.asarray(gapf(xn[:n])[0]).reshape(-1), np.asarray(gapf(xn[n:2 * n])[0]).reshape(-1),
+            xn[o:o + c], xn[o + c:o + 2 * c], float(xn[2 * n]), used)
+
+
+#: Friction-mode changes tried per solve of a step's normal modes.
+FRICTION_ROUNDS = 8
+
+
+def _friction(step: _Step, q, p, h, modes, x, mufix=None, rfix=None, mufixl=None, rfixl=None):
+    """The step's friction modes (Coulomb, maximal dissipation) for its normal modes, by the same greedy
+    search: a contact held on the surface (H or R) with a positive coefficient starts as it ended the
+    previous step (sticking if it was free); sticking fails where the ratio |ρ| exceeds μ_f (it then slides
+    against ρ), sliding fails where the slip velocity has the wrong sign (it then sticks).  The slip velocity
+    grows with ρ, so one of the three holds: stick ``s = 0, |ρ| ≤ μ_f``, slide ``ρ = −μ_f, s ≥ 0`` or
+    ``ρ = μ_f, s ≤ 0``.  Slots with a ratio in ``rfix`` (not NaN: an impact's, :func:`_impact_law`) keep it
+    (mode FIX), and ``mufix`` goes with the normal modes F, T and P.  The modes found are
+    ``step.last_fmodes``; the point, or None."""
+    c = step.c
+    step.last_fmodes = [FREE] * (2 * c)
+    if not step.nf:
+        return x
+    cm = step.cm
+    n = step.n
+    # slots: the node's force of each contact (held or released: ν free), then its sub-node impulse (held)
+    # (a caught arrival, C, holds its contact from the sub-node on: its impulse has friction like a held one's,
+    # against the slip after the sub-node)
+    # (an arrival too slow to be an impact, I below IMPACT_SPEED_STEPS |a_n| h, is the discrete form of persistent
+    # contact: its impulse has a held one's friction too, and no impact law, _impact_law)
+    # (a contact released at the step's impact: its share of the first part's force slides or sticks as its node slot,
+    # ContactMechanics.left_velocity; a K arrival's friction after its sub-node is a held one's, like C's)
+    slow = _slow_arrivals(step, q, p, h) if any(mj == I for mj in modes) else np.zeros(c, bool)
+    active = [mj in (H, R, W) and cm.mu_f[j] > 0 for j, mj in enumerate(modes)] + \
+        [(mj in (H, C, K, W) or (mj == I and slow[j])) and cm.mu_f[j] > 0 for j, mj in enumerate(modes)]
+    muf = np.concatenate([cm.mu_f, cm.mu_f])
+    d = step.fd
+    # (a slot starts as it ended the previous step; free, or fixed there by an impact's law, it starts sticking)
+    fm = [(step.fprev[i] if step.fprev[i] not in (FREE, FIX) else STICK) if active[i] else FREE for i in range(2 * c)]
+    if rfix is not None:
+        fixed = np.isfinite(np.asarray(rfix, float).reshape(2 * c, d)[:, 0])
+        fm = [FIX if fixed[i] else f for i, f in enumerate(fm)]
+        rfix = np.where(np.isfinite(rfix), rfix, 0.0)
+    tol = 1e-12 * step.vref
+    slips = np.array([m in (I, C, T, F, K, W) for m in modes], float)
+    choices = (STICK, UP, DOWN) if d == 1 else (STICK, SLIDE)
+
+    def judge(fm, x0):
+        """Solve in the friction modes ``fm``: ``(x, the most violated slot and its new mode)``; ``None`` if
+        Newton fails; the pick is None where every slot holds."""
+        xf, ok = step.solve(x0, q, p, h, modes, mufix=mufix, fmodes=fm, rfix=rfix, mufixl=mufixl, rfixl=rfixl)
+        if not ok:
+            return None
+        rho = xf[cm.layout["fratio"]]
+        slip = np.asarray(cm.slip_row(q, xf[:n], xf[n:2 * n], xf[2 * n], h, slips)).reshape(-1)
+        worst, pick = 0.0, None
+        if d == 2:
+            # the circular cone: sticking fails outside it (it then slides), sliding where the slip has vanished
+            rn = np.linalg.norm(rho.reshape(2 * c, d), axis=1)
+            sn = np.linalg.norm(slip.reshape(2 * c, d), axis=1)
+            for j, f in enumerate(fm):
+                if f == STICK and rn[j] > muf[j] * (1 + 1e-10):
+                    viol, new = rn[j] - muf[j], SLIDE
+                elif f == SLIDE and sn[j] <= 1e-10 * step.vref:     # the slip has (all but) vanished: sticks
+                    viol, new = muf[j], STICK
+                else:
+                    continue
+                if viol > worst:
+                    worst, pick = viol, (j, new)
+            return xf, pick
+        for j, f in enumerate(fm):
+            if f == STICK and abs(rho[j]) > muf[j] * (1 + 1e-10):
+                viol, new = abs(rho[j]) - muf[j], (DOWN if rho[j] > 0 else UP)
+            elif f == UP and slip[j] < -tol:
+                viol, new = -slip[j] / step.vref, STICK
+            elif f == DOWN and slip[j] > tol:
+                viol, new = slip[j] / step.vref, STICK
+            else:
+                continue
+            if viol > worst:
+                worst, pick = viol, (j, new)
+        return xf, pick
+
+    seen = set()
+    start = x
+    for _ in range(FRICTION_ROUNDS):
+        key = tuple(fm)
+        if key in seen:
+            break
+        seen.add(key)
+        got = judge(fm, x)
+        if got is None:
+            break
+        xf, pick = got
+        if pick is None:
+            step.last_fmodes = fm
+            return xf
+        fm = list(fm)
+        fm[pick[0]] = pick[1]
+        x = xf
+    # the greedy search cycled or stalled (a slip that stops or turns within the step, where the slots of the
+    # node and the sub-node interact): every combination of the free slots' modes, fewest changes first
+    slots = [i for i in range(2 * c) if active[i] and fm[i] != FIX]
+    base = [f for f in fm]
+    combos = sorted(product(choices, repeat=len(slots)),
+                    key=lambda ch: sum(a != base[i] for a, i in zip(ch, slots)))
+    for ch in combos[:MAX_COMBINATIONS]:
+        trial = list(base)
+        for i, f in zip(slots, ch):
+            trial[i] = f
+        if tuple(trial) in seen:
+            continue
+        got = judge(trial, start)
+        if got is not None and got[1] is None:
+            step.last_fmodes = trial
+            return got[0]
+    return None
+
+
+def _slip_turn(step: _Step, q, p, h, modes, x, fmodes):
+    """A held contact whose slip stops or turns inside the step (planar friction, no impact in the step): the step
+    again with its sub-node timed there (mode W: the slip velocity at the sub-node, after the contact's share of
+    the first part's force, vanishes), the first part sliding as its node slot did and the second sticking or
+    sliding the other way.  ``(x, modes, gaps at q_{k+1}, friction modes)``, or None where no slip turns, or the
+    timed step does not solve with valid modes (the step as it was then stands: the turn inside it, first order)."""
+    cm, n, c = step.cm, step.n, step.c
+    if not step.nf or step.fd != 1 or any(m not in (O, H) for m in modes):
+        return None
+    fm = list(fmodes)
+    qn = x[n:2 * n]
+    pn = np.asarray(cm.p_node_minus(x[:n], float(x[2 * n]), qn, h, *cm.stage_parts(x[cm.layout["zs"]])[1],
+                                    *step.uarg)).reshape(-1)
+    v0 = cm.dm.velocities(q[None, :], p[None, :])[0]
+    v1 = cm.dm.velocities(qn[None, :], pn[None, :])[0]
+    s0 = np.asarray(cm.system.tangent(q)).reshape(-1, n) @ v0
+    s1 = np.asarray(cm.system.tangent(qn)).reshape(-1, n) @ v1
+    for j in range(c):
+        if modes[j] != H or cm.mu_f[j] <= 0 or fm[j] not in (UP, DOWN):
+            continue
+        sg = 1.0 if fm[j] == UP else -1.0
+        frac = turn_fraction(sg * s0[j], sg * s1[j])
+        if frac is None:
+            continue
+        frac = min(max(frac, ALPHA_MIN), 1.0 - ALPHA_MIN)
+        new = list(modes)
+        new[j] = W
+        start = restage(cm, np.concatenate([q + frac * (qn - q), x[n:2 * n], [frac - 0.5], x[2 * n + 1:]]), q)
+        for after in (STICK, DOWN if sg > 0 else UP):
+            trial = list(fm)
+            trial[c + j] = after
+            xw, ok = step.solve(start, q, p, h, new, fmodes=trial)
+            if not ok or not (ALPHA_MIN - 0.5 <= xw[2 * n] <= 0.5 - ALPHA_MIN):
+                continue
+            o = 2 * n + 1
+            nu, mu, mul = xw[o:o + c], xw[o + c:o + 2 * c], xw[cm.layout["mul"]]
+            rho = xw[cm.layout["fratio"]]
+            slip = np.asarray(cm.slip_row(q, xw[:n], xw[n:2 * n], xw[2 * n], h,
+                                          np.array([float(m == W) for m in new]))).reshape(-1)
+            held = [i for i, m in enumerate(new) if m in (H, W)]
+            valid = all(nu[i] >= 0.0 and mu[i] >= 0.0 for i in held) and mul[j] >= 0.0
+            # every slot's friction mode holds (sticking inside the cone, sliding with its slip's sign)
+            muf = np.concatenate([cm.mu_f, cm.mu_f])
+            tol = 1e-12 * step.vref
+            for i, f in enumerate(trial):
+                if f == STICK:
+                    valid &= abs(rho[i]) <= muf[i] * (1 + 1e-10)
+                elif f == UP:
+                    valid &= slip[i] >= -tol
+                elif f == DOWN:
+                    valid &= slip[i] <= tol
+            gn = np.asarray(cm.system.gap(xw[n:2 * n])[0]).reshape(-1)
+            if valid:
+                return xw, new, gn, trial
+    return None
+
+
+def _slow_arrivals(step: _Step, q, p, h):
+    """Per contact: approaching the surface slower than ``IMPACT_SPEED_STEPS`` steps' worth of its normal
+    acceleration at the step's node (the arrivals an answer does not list as impacts, :mod:`.solution`)."""
+    cm = step.cm
+    v = np.linalg.solve(np.asarray(cm.system.mass_matrix(q)), p)
+    an = np.abs(np.asarray(cm.acc_normal(q, v, *step.uarg)).reshape(-1))
+    return -(np.asarray(cm.system.gap(q)[1]) @ v) <= IMPACT_SPEED_STEPS * an * h
+
+
+def _result(step: _Step, x, modes, gn, fmodes=None):
+    """The step's values by the transcription's names (:attr:`ContactMechanics.layout`), its modes, the gaps at
+    its end node and its friction modes."""
+    out = {name: x[sl] for name, sl in step.cm.layout.items()}
+    out["beta"] = float(x[2 * step.n])
+    if not step.nf:
+        out["fratio"] = np.zeros(2 * step.c * step.fd)
+    out.update(modes=list(modes), gn=gn, fmodes=list(fmodes) if fmodes is not None else [FREE] * (2 * step.c))
+    return out
+
+
+#: Combinations of modes tried at most when the greedy search fails.
+MAX_COMBINATIONS = 256
+
+
+def _enumerate(step: _Step, q, p, h, g_q, touch, modes0, crossed, x0, pen, tol, finest):
+    """Every combination of modes of the contacts involved -- touching at ``q_k`` (H, R or O) or seen
+    crossing (O, I or C; at most one timed) -- fewest changes from ``modes0`` first; the first whose
+    solve meets every condition, or None."""
+    cand = sorted(set(np.where(touch)[0].tolist()) | set(crossed))
+    opts = [((N, H, R, O) if modes0[j] == N else (H, R, O)) if touch[j] else (O, I, C) for j in cand]
+    combos = []
+    for choice in product(*opts):
+        if sum(1 for j, mj in zip(cand, choice) if not touch[j] and mj in (I, C)) > 1:
+            continue
+        modes = list(modes0)
+        for j, mj in zip(cand, choice):
+            modes[j] = mj
+        combos.append((sum(a != b for a, b in zip(modes, modes0)), modes))
+    combos.sort(key=lambda t: t[0])
+    free = _try(step, q, p, h, modes0, x0, x0, None)
+    for _, modes in combos[:MAX_COMBINATIONS]:
+        timed = [j for j, mj in enumerate(modes) if mj in (I, C)]
+        frac = None
+        if timed and free is not None:
+            j = timed[0]
+            frac = _crossing_fraction(g_q[j], free[1][j], free[2][j], 0.5) if g_q[j] > 0 else ALPHA_MIN
+        got = _try(step, q, p, h, modes, x0, x0, frac)
+        if got is None:
+            continue
+        x, gs, gn, nu, mu, b, used = got
+        if _next_modes(modes, touch, g_q, gs, gn, nu, mu, b, pen, tol, step, finest) is None:
+            law = _cascade(step, q, p, h, x, used, tol)
+            if law != "rejected":
+                return law or _result(step, x, used, gn, step.last_fmodes)
+    return None
+
+
+def _cascade(step: _Step, q, p, h, x, modes, tol):
+    """The sequential law's cascade on a solved step (:func:`_impact_law`), if it changes the step: its
+    result; None where it does not apply; ``"rejected"`` where it applies but its step does not solve or ends
+    below a surface by more than the touching tolerance ``tol`` (the step is then not solved in these modes:
+    the simultaneous law's answer is not this law's, and is never reported as one).  (Contacts the cascade leaves at rest
+    against each other stay touching: a higher-order scheme's step then ends them within 1e-9 of the
+    surface rather than on it, 2.3e-10 below for galerkin4's cradle, which the stricter 1e-12 refused.)"""
+    got = _impact_law(step, q, p, h, x, modes, cascade=True)
+    if got is None:
+        return None
+    if got == "failed":
+        return "rejected"
+    xs, new = got
+    gn = np.asarray(step.cm.system.gap(xs[step.n:2 * step.n])[0]).reshape(-1)
+    if np.any(gn < -tol):
+        return "rejected"
+    return _result(step, xs, new, gn, step.last_fmodes)
+
+
+def _impact_law(step: _Step, q, p, h, x, modes, cascade: bool):
+    """The impact law where it is not the step's own (Newton's law on each contact's normal velocity, in
+    the rows): the sequential law's cascade of an impact that several contacts take, and Coulomb friction
+    at an impact (:func:`castrajectory.models.impact.frictional_impact`, Stronge's energetic restitution).
+    The impulses come from the sub-node's state, which does not depend on them (its time and place, and
+    the momentum before it), so the step is solved again with them fixed and only its end moves: the
+    contacts in modes T (the one timing the sub-node) and F, at a node's impact P, and each frictional
+    impact's friction ratio in mode FIX.  ``cascade``: the sequential law at an impact that several contacts
+    take (with friction, each firing the frictional law); else one contact's impact with friction.
+    Returns ``(x, modes)``, ``None`` where the law does not change the step (the simultaneous law without
+    friction, one frictionless contact, a caught arrival, no impact), or ``"failed"`` where the step with
+    the law's impulses does not solve.
+
+    Under the simultaneous law an impact at several contacts is frictionless (no classical law holds
+    there); the answer says so (:func:`.solution._simultaneous_warnings`)."""
+    cm = step.cm
+    seq = cm.system.contact.law == "sequential"
+    if not (seq or step.nf):
+        return None
+    n, c = step.n, step.c
+    o = 2 * n + 1
+    nu, mu = x[o:o + c], x[o + c:o + 2 * c]
+    at_node = any(m == N for m in modes)
+    if at_node:
+        # an impact at the node q_k: its impulses h ν, the momentum before it the incoming p
+        involved = [j for j, m in enumerate(modes) if (m == N or m in (H, R)) and nu[j] > 0.0]
+        qs, pm = q, p
+    else:
+        involved = [j for j, m in enumerate(modes) if m in (I, C, H, R) and mu[j] > 0.0]
+        if not any(modes[j] in (I, C) for j in involved):
+            return None                  # no impact
+        qs, b = x[:n], float(x[2 * n])
+        # the momentum before the impact: p̃⁻ and the released contacts' shares (ContactMechanics.release_row)
+        pm = np.asarray(cm.p_minus(q, qs, b, h, *cm.stage_parts(x[cm.layout["zs"]])[0], *step.uarg)).reshape(-1)
+        sh = x[cm.layout["mul"]] * releases(modes)
+        if np.any(sh):
+            pm = pm + np.asarray(cm.system.gap(qs)[1]).T @ sh
+            if step.nf:
+                pm = pm + np.asarray(cm.system.tangent(qs)).T @ (x[cm.layout["fleft"]] * np.repeat(sh, step.fd))
+    # (an arrival too slow to be an impact is persistent contact: no law; a caught one with friction and e = 0 takes
+    # Stronge's law as the first part's closing impulse, mode K, and stays closed after it; with e > 0 a caught
+    # arrival is the end of an accumulation, whose law is waived)
+    slow = _slow_arrivals(step, q, p, h) if not at_node else np.zeros(c, bool)
+    caught = (not cascade and not at_node and step.nf and cm.e == 0.0 and len(involved) == 1
+              and modes[involved[0]] == C and cm.mu_f[involved[0]] > 0 and not slow[involved[0]])
+    fric = step.nf and any(cm.mu_f[j] > 0 for j in involved) and \
+        (at_node or any(modes[j] == I for j in involved) or caught) and \
+        not (not cascade and not at_node and not caught and np.all(slow[[j for j in involved if modes[j] == I]]))
+    if not involved or (len(involved) >= 2) != cascade or (cascade and not seq) or (not cascade and not fric):
+        return None
+    # the law in the contacts' velocities: Π = M⁻¹ on the constraints' tangent space (velocities)
+    Jx = np.asarray(cm.system.gap(qs)[1])[involved]
+    v = cm.dm.velocities(qs[None, :], pm[None, :])[0]
+    d = step.fd
+    if fric:
+        Dall = np.asarray(cm.system.tangent(qs)).reshape(c, d, -1)
+        Wr = np.vstack([Jx] + [Dall[involved, a] for a in range(d)])     # normals, then each tangent component
+        G = Wr @ cm.dm.velocities(np.repeat(qs[None, :], Wr.shape[0], axis=0), Wr).T
+        if len(involved) == 1:
+            law = frictional_impact if d == 1 else frictional_impact_plane
+            imp = law(G, Wr @ v, cm.mu_f[involved[0]], cm.e)
+            Pn, Pt = imp.P[:1], imp.P[1:].reshape(1, d)
+        elif d == 1:
+            Pn, Pt = sequential_frictional_impact(G, Wr @ v, cm.mu_f[involved], cm.e)
+            Pt = Pt.reshape(-1, 1)
+        else:
+            return "failed"          # a cascade on tangent planes: not modelled (the step fails, and says so)
+    else:
+        PiJt = cm.dm.velocities(np.repeat(qs[None, :], len(involved), axis=0), Jx)
+        Pn, _ = sequential_impact(Jx @ PiJt.T, Jx @ v, cm.e)
+        Pt = np.zeros((Pn.size, d))
+    if caught:
+        j = involved[0]
+        mufixl, rfixl = np.zeros(c), np.zeros((c, d))
+        mufixl[j] = Pn[0]
+        rfixl[j] = Pt[0] / Pn[0] if Pn[0] > 0 else 0.0
+        new = [K if i == j else m for i, m in enumerate(modes)]
+        xs = _friction(step, q, p, h, new, x, mufixl=mufixl, rfixl=rfixl.reshape(-1))
+        return "failed" if xs is None else (xs, new)
+    mufix, rfix = np.zeros(c), np.full((2 * c, d), np.nan)
+    slot = 0 if at_node else c
+    for j, pn, pt in zip(involved, Pn, Pt):
+        if fric and cm.mu_f[j] > 0:
+            rfix[slot + j] = pt / pn if pn > 0 else 0.0
+    rfix = rfix.reshape(-1)
+    if at_node:
+        mufix[involved] = Pn / h                  # the node's force: impulse per step
+        new = [P if j in involved else m for j, m in enumerate(modes)]
+    else:
+        mufix[involved] = Pn
+        timing = next(j for j, m in enumerate(modes) if m in (I, C))
+        new = [T if j == timing else F if j in involved else m for j, m in enumerate(modes)]
+    if step.nf:
+        xs = _friction(step, q, p, h, new, x, mufix=mufix, rfix=rfix)
+        if xs is None:
+            return "failed"
+    else:
+        xs, ok = step.solve(x, q, p, h, new, mufix=mufix)
+        if not ok:
+            return "failed"
+    return xs, new
+
+
+def _next_modes(modes, touch, g0, gs, gn, nu, mu, b, pen, tol, step, finest):
+    """The modes after one change (the most violated condition), ``None`` if the step is solved, or
+    ``"split"`` if it needs two impacts at different times."""
+    alpha = 0.5 + b
+    worst, pick = 0.0, None
+    # multipliers of free contacts (scaled)
+    for j, m in enumerate(modes):
+        if m in (H, R, N) and nu[j] < 0.0:
+            viol = -nu[j] / step.snu
+            if viol > worst:
+                worst, pick = viol, (j, O)
+        if m in (H, I, C) and mu[j] < 0.0:
+            viol = -mu[j] / step.smu
+            if viol > worst:
+                worst, pick = viol, (j, {H: R, I: O, C: I}[m])
+        if m == R and step.last_mul[j] < 0.0:
+            # (a released contact's share that pulls at the impact: it leaves at the step's node instead)
+            viol = -step.last_mul[j] / step.smu
+            if viol > worst:
+                worst, pick = viol, (j, O)
+    if worst > 1e-12:
+        j, m = pick
+        out = list(modes)
+        out[j] = m
+        return out, None
+    if b < ALPHA_MIN - 0.5 - 1e-12 or b > 0.5 - ALPHA_MIN + 1e-12:
+        return "split"
+    # gaps
+    worst, pick = pen, None
+    crossing = []
+    for j, m in enumerate(modes):
+        if m == N and (gs[j] < -pen or gn[j] < -pen):
+            # the node's impact does not send it off (e = 0, or a slow arrival): held from the node on
+            viol = -min(gs[j], gn[j])
+            if viol > worst:
+                worst, pick = viol, (j, H)
+        elif m == O and (gs[j] < -pen or gn[j] < -pen):
+            if touch[j]:
+                cand = R if gs[j] < -pen and gn[j] >= -pen else H
+                viol = -min(gs[j], gn[j])
+                if viol > worst:
+                    worst, pick = viol, (j, cand)
+            else:
+                crossing.append(j)
+        elif m == R and gn[j] < -pen:
+            viol = -gn[j]
+            if viol > worst:
+                worst, pick = viol, (j, H)
+        elif m == I and gn[j] < tol:
+            # the bounce does not clear the next node (its flight is shorter than the rest of the step:
+            # the end of a Zeno accumulation) or lands exactly on it: caught there
+            viol = tol - gn[j]
+            if viol > worst:
+                worst, pick = viol, (j, C)
+        elif m in (I, C, H, R) and gs[j] < -pen:
+            return "split"
+    if pick is not None:
+        j, m = pick
+        out = list(modes)
+        out[j] = m
+        return out, None
+    if crossing:
+        timed = [j for j, m in enumerate(modes) if m in (I, C)]
+        fr = {j: _crossing_fraction(g0[j], gs[j], gn[j], alpha) for j in crossing}
+        # a crossing closer to the next node than a sub-node may sit (1 − ALPHA_MIN of the step): the flight
+        # lands on the node, whose impact the next step takes (mode N)
+        crossing = [j for j in crossing if fr[j] < 1.0 - ALPHA_MIN]
+    if crossing:
+        first = min(crossing, key=lambda j: fr[j])
+        if timed:
+            # a crossing after the sub-node's impact: simultaneous with it, or a second impact
+            out = list(modes)
+            if abs(gs[first]) <= SIMULTANEOUS_GAP * step.ell:
+                out[first] = I
+                return out, None
+            t = timed[0]
+            if not finest:
+                return "split"
+            if modes[t] == I:
+                # the bounce does not let the step end before another contact closes: caught (the
+                # accumulation of rocking, which the grid does not resolve)
+                out[t] = C
+                return out, None
+            return "split"
+        out = list(modes)
+        out[first] = I
+        return out, fr[first]
+    return None
