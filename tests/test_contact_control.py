@@ -72,6 +72,33 @@ def test_block_push_hits_the_exact_discrete_optimum_and_is_certified():
     assert np.max(np.abs(sol.u[:, 0] - exact.control(sol.t_u))) < 0.04
 
 
+def test_the_b_stationarity_proxy_reads_the_sign_of_a_biactive_pairs_multipliers(monkeypatch):
+    """The sliding block has no biactive pair (its gaps are zero under positive forces, its slips positive at the
+    cone's edge), so its KKT point is B-stationary.  With one sub-node impulse set to zero by hand, that pair is
+    biactive; a multiplier of the lower-bound sign there is no descent, one of the other sign (the cost falls as the
+    impulse grows) is a descent by flipping the pair's branch, its size relative to max(1, |cost|)."""
+    import dataclasses
+
+    from castrajectory.solve.contact import control as cc
+    seen = {}
+    real = cc.b_stationarity
+
+    def spy(prog, res, scale):
+        seen.update(prog=prog, res=res, scale=scale)
+        return real(prog, res, scale)
+    monkeypatch.setattr(cc, "b_stationarity", spy)
+    sol = push(20)
+    assert sol.success and sol.b_stationary and sol.biactive == 0 and sol.b_violation == 0.0
+    prog, res, scale = seen["prog"], seen["res"], seen["scale"]
+    values = {k: np.array(v, float) for k, v in res.values.items()}
+    values["mu"][3] = 0.0
+    for sign, expected in ((1.0, 0.0), (-1.0, 2.0 / max(1.0, scale))):
+        bm = {k: np.array(v, float) for k, v in res.bound_multipliers.items()}
+        bm["mu"][3] = 2.0 * sign          # (the result's bound multipliers are minus CasADi's)
+        count, worst = real(prog, dataclasses.replace(res, values=values, bound_multipliers=bm), scale)
+        assert count == 1 and worst == pytest.approx(expected, rel=1e-12)
+
+
 def test_a_running_cost_in_time_is_integrated_over_both_parts_of_every_step():
     """∫(u² + t) dt = J + T²/2: the time term moves no optimum and its quadrature (each part's, from t_k and
     t_k + αh) is exact for a linear integrand (measured 5e-11 on the block push, N = 20, T = 1)."""

@@ -245,6 +245,10 @@ def control_outcome(title: str, system, sol, extra: Optional[dict] = None, extra
     lines = [f"{title}: DMOC, scheme {sol.scheme}, N = {len(sol.t) - 1}, T = {sol.T:.10g} s",
              f"cost J = {sol.cost:.12g}; certificate (the controls marched, against the optimum) {cert}",
              *(extra_lines or []), status_line(sol.status, sol)]
+    if hasattr(sol, "b_stationary") and np.isfinite(sol.b_violation):
+        # (contact-implicit: the B-stationarity proxy, the multipliers of the pairs whose both factors vanish)
+        lines.insert(2, f"B-stationarity proxy: {sol.biactive} biactive pair(s), largest multiplier of a descent "
+                        f"{sol.b_violation:.1e} ({'none found' if sol.b_stationary else 'a descent by a flip'})")
     unames = [f"{c.name}[{i}]" if c.size > 1 else c.name for c in system.controls for i in range(c.size)]
 
     def plot(path):

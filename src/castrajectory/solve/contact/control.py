@@ -16,10 +16,13 @@ The program is :class:`castrajectory.discretise.contact.control.ContactControlTr
 4. **Certificate**: every step of the answer is marched by the contact march from the answer's own node and
    incoming momentum under its control, and must land on the answer's next node (relative distance at most
    :data:`CERTIFICATE_TOL`): every step is then a step of the system under its own controls, impacts and friction
-   included (the one-step certificate, as DMOC's).  Where a step does not, the optimal controls are marched from the
-   initial state and the program solved again on that march's branch (step 5).  An answer not certified is a failure,
+   included (the one-step certificate, as DMOC's).  Where a step does not, the program is solved again on a branch
+   of the march (step 5): first the answer's own steps' (each step's modes those of its one-step march), then that
+   of the optimal controls marched from the initial state.  An answer not certified is a failure,
    with the distance in its message.  The whole march from the initial state is reported beside it
    (``march_distance``): it adds the motion's own amplification of rounding (and a sliding block's neutral drift).
+5. **B-stationarity**, a measured proxy (:func:`b_stationarity`): at every pair whose both factors vanish, no
+   multiplier says the cost would fall by flipping that pair's branch.
 """
 from __future__ import annotations
 
@@ -65,6 +68,9 @@ POLISH_ROUNDS = 3
 LADDER_MAX = 32
 #: The march of the optimal controls must reproduce the optimal nodes to this, relative to their scale.
 CERTIFICATE_TOL = 1e-7
+#: A biactive pair's multiplier of the descent sign above this (relative to max(1, |cost|)) is a descent found by
+#: flipping the pair's branch (b_stationarity); Ipopt's multipliers hold to its dual tolerance
+B_TOL = 1e-6
 
 
 class _Program(ContactControlTranscription, ContactNLP):
@@ -106,11 +112,18 @@ class ContactControlResult(ControlResult):
     #: (NaN without a previous grid); the cost's order is the scheme's at most, and 2 where a contact switches inside
     #: a step's part
     cost_estimate: float = math.nan
+    #: the B-stationarity proxy (:func:`b_stationarity`): the pairs whose both factors vanish, the largest multiplier
+    #: there that signals a descent by flipping the pair's branch (relative to max(1, |cost|)), and whether it is at
+    #: most B_TOL (no descent found)
+    biactive: int = 0
+    b_violation: float = math.nan
+    b_stationary: bool = False
 
     def as_dict(self) -> dict:
         return {**super().as_dict(), "qs": self.qs, "t_sub": self.t_sub, "mu": self.mu, "nu": self.nu,
                 "fratio": self.fratio, "impact_times": self.impact_times, "complementarity": self.complementarity,
-                "cost_estimate": self.cost_estimate,
+                "cost_estimate": self.cost_estimate, "biactive": self.biactive, "b_violation": self.b_violation,
+                "b_stationary": self.b_stationary,
                 "timing_rounds": self.timing_rounds,
                 "homotopy": [vars(h) for h in self.homotopy]}
 
@@ -287,24 +300,30 @@ def _start_of(prog, V, q0):
 
 def _polish(cm, prog, res, q0, N, scales, bounds, opts, verbose, steps):
     """Step 5: certify the answer, each of its steps marched from its own node (:func:`_local`); where a step does not
-    reproduce it, march the answer's controls from the start and solve again on that march's branch (its modes fixed,
-    :meth:`ContactNLP.mode_bounds`; the controls free), and certify again.  ``(result, certificate, march distance,
-    solves)``: the certificate is the last one-step distance, the march distance that of the whole march from the
-    initial state (``inf`` where a march stopped)."""
+    reproduce it, solve the program again on a branch of the march (its modes fixed, :meth:`ContactNLP.mode_bounds`;
+    the controls free) and certify again.  The first branch is the answer's own steps' (:func:`_local_point`: each
+    step's modes those of its one-step march from the answer's node, the answer's nodes kept), the next ones that of
+    the march of the answer's controls from the start.  ``(result, certificate, march distance, solves)``: the
+    certificate is the last one-step distance, the march distance that of the whole march from the initial state
+    (``inf`` where a march stopped)."""
     rho = float(np.asarray(prog.nlp.parameter_value("rho")).reshape(-1)[0])
     solves = 0
     while True:
         h, p0, U = _start_of(prog, res.values, q0)
-        cert = _local(cm, prog, res.values, q0, N, scales)
+        cert, local = _local(cm, prog, res.values, q0, N, scales)
         if (cert <= CERTIFICATE_TOL and res.success) or solves >= POLISH_ROUNDS:
             break
-        point = discrete_march(cm, q0, p0, N, h, scales, controls=U if cm.nu else None)
-        if point is None or point["steps"].size != N:
-            break
+        point = _local_point(cm, res.values, local, N) if solves == 0 else None
+        if point is None:
+            point = discrete_march(cm, q0, p0, N, h, scales, controls=U if cm.nu else None)
+            if point is None or point["steps"].size != N:
+                break
         solves += 1
         got = _branch(cm, prog, q0, point, res.values, bounds, opts, rho, verbose, scales)
         steps.extend(got.homotopy)
         if not got.success and got.solver_status != "Solved_To_Acceptable_Level":
+            if solves == 1:
+                continue          # (the whole march's branch next)
             break
         # (a branch solved only to Ipopt's acceptable level is certified again and solved from there: measured on a
         # sticking block push, where the first branch stopped so)
@@ -315,26 +334,49 @@ def _polish(cm, prog, res, q0, N, scales, bounds, opts, verbose, steps):
     return res, cert, marched, solves
 
 
-def _local(cm, prog, V, q0, N, scales) -> float:
+def _local(cm, prog, V, q0, N, scales):
     """The one-step certificate: every step of the answer marched by the contact march from the answer's own node
     ``q_k`` and incoming momentum ``p_k⁻`` under its control, its end against the answer's ``q_{k+1}``; the largest
-    distance relative to ``max(1, max |q|)`` (``inf`` where a step's march fails).  As DMOC's: every step is a step of
-    the system under its control, which an unstable motion does not amplify (the whole march from the start, the
-    march distance, drifts by 2e-6 over 320 steps on the push to a target, where every step lands within 1e-10)."""
+    distance relative to ``max(1, max |q|)`` (``inf`` where a step's march fails), and the steps' marches (``None``
+    where one failed).  As DMOC's: every step is a step of the system under its control, which an unstable motion
+    does not amplify (the whole march from the start, the march distance, drifts by 2e-6 over 320 steps on the push
+    to a target, where every step lands within 1e-10)."""
     n = cm.n
     h, p0, U = _start_of(prog, V, q0)
     Q, S, B = V["q"].reshape(N + 1, n), V["qs"].reshape(N, n), V["beta"].reshape(N)
     zp = _zparts(cm, V, N, 1)
     pin = np.asarray(cm.p_node_minus.map(N)(S.T, B, Q[1:].T, h, *zp, *([U.T] if cm.nu else []))).T
-    worst = 0.0
+    worst, marches = 0.0, []
     for k in range(N):
         p = p0 if k == 0 else pin[k - 1]
         pt = discrete_march(cm, Q[k], p, 1, h, scales, controls=U[k:k + 1] if cm.nu else None)
+        marches.append(pt)
         if pt is None:
-            return math.inf
+            worst = math.inf
+            continue
         qn = np.asarray(pt["q"], float).reshape(-1, n)[-1]
         worst = max(worst, float(np.max(np.abs(qn - Q[k + 1]))))
-    return worst / max(1.0, float(np.max(np.abs(Q))))
+    return worst / max(1.0, float(np.max(np.abs(Q)))), marches
+
+
+def _local_point(cm, V, marches, N):
+    """The branch point of the answer's own steps: each step's values, modes and friction modes its one-step march's
+    (from the answer's node and incoming momentum), the nodes the answer's; ``None`` where a step's march failed or
+    halved the step.  Where the march times a slip's turn (mode W) or resolves an arrival at a step's end otherwise
+    than the answer (the hopper: the answer's landing at the last sub-node a step allows, the march's at the next
+    node), the branch holds the march's modes and its solve moves the answer onto them; the march from the start
+    instead drifts from the answer where its motion is unstable (0.13 on the hopper at N = 40, a landing a step
+    later)."""
+    if any(pt is None or np.asarray(pt["steps"]).size != 1 for pt in marches):
+        return None
+    out = {"q": np.asarray(V["q"], float).reshape(-1).copy(), "steps": np.concatenate([pt["steps"] for pt in marches])}
+    for key in ("qs", "beta", "nu", "mu", "mul", "fleft", "fratio", "zs", "lam", "lam_sub", "lam_stage", "bounced",
+                "modes", "fmodes"):
+        if key in marches[0]:
+            out[key] = np.concatenate([np.asarray(pt[key]).reshape(1, -1) for pt in marches]).reshape(
+                (N,) + np.asarray(marches[0][key]).shape[1:]) if key in ("modes", "fmodes") else \
+                np.concatenate([np.asarray(pt[key]).reshape(-1) for pt in marches])
+    return out
 
 
 def _continued(cm, prog, q0, point, init, bounds, opts, verbose, scales, qN, vN, steps):
@@ -419,6 +461,52 @@ def _branch(cm, prog, q0, point, values, bounds, opts, rho, verbose, scales, war
     return again
 
 
+def b_stationarity(prog, res: NLPResult, scale: float):
+    """A measured proxy of B-stationarity: ``(biactive pairs, the largest multiplier that signals descent)``.
+
+    At a pair ``a ⟂ b`` (``a, b ≥ 0``) where both vanish, the point is B-stationary (MPCC-LICQ assumed) where the
+    multipliers of ``a ≥ 0`` and ``b ≥ 0`` both have the sign of a lower bound: a multiplier of the other sign says the
+    cost falls as that factor grows, a descent on the branch where the pair's other factor is zero -- flipping that
+    pair's branch.  The factors: each node's and sub-node's gap against its force or impulse, and each friction
+    slot's ``μ_f ± ρ`` against its slip's part ``s±``; the multipliers Ipopt's at the answer (CasADi's sign: positive
+    where an upper bound holds).  A KKT point of the penalty program meets this by construction (the penalty's
+    gradient vanishes at a biactive pair, and the factors have lower bounds only); a branch solve, which fixes a
+    factor at zero by both bounds, may not.  ``scale``: the cost's scale; ``(0, 0.0)`` without multipliers."""
+    if res.lam_x is None or res.lam_g is None:
+        return 0, 0.0
+    cm, L, c = prog.cm, prog.L, prog.cm.c
+    V = res.values
+    raw_x = {k: -np.asarray(v, float).reshape(-1) for k, v in res.bound_multipliers.items()}
+    raw_g = {k: -np.asarray(v, float).reshape(-1) for k, v in res.multipliers.items()}
+    tol_f = 1e-8 * max(float(np.max(np.abs(V["nu"]), initial=0.0)), float(np.max(np.abs(V["mu"]), initial=0.0)), 1.0)
+    tol_g = TOUCH_TOL * prog.scales_ell
+    g = lambda A: np.asarray(cm.gap_row.map(A.shape[0])(A.T)).reshape(c, -1).T  # noqa: E731
+    Q, S = V["q"].reshape(L + 1, cm.n), V["qs"].reshape(L, cm.n)
+    NU, MU = V["nu"].reshape(L, c), V["mu"].reshape(L, c)
+    count, worst = 0, 0.0
+    # (gap of node k + 1, its force ν_{k+1}) for k < L − 1; (gap of sub-node k, its impulse μ_k)
+    pairs = [(g(Q[1:L]), NU[1:], raw_g["node_gap"].reshape(L, c)[:L - 1], raw_x["nu"].reshape(L, c)[1:]),
+             (g(S), MU, raw_g["sub_gap"].reshape(L, c), raw_x["mu"].reshape(L, c))]
+    for ga, lam, mg, ml in pairs:
+        both = (ga <= tol_g) & (lam <= tol_f)
+        count += int(np.sum(both))
+        if np.any(both):
+            worst = max(worst, float(np.max(np.maximum(mg[both], 0.0))), float(np.max(np.maximum(ml[both], 0.0))))
+    if cm.friction and "slip_plus" in V:
+        r = V["fratio"].reshape(-1)
+        muf = np.tile(np.concatenate([cm.mu_f, cm.mu_f]), L)
+        for sgn, sl in ((1.0, "slip_plus"), (-1.0, "slip_minus")):
+            a = muf + sgn * r
+            b = V[sl].reshape(-1)
+            both = (a <= 1e-8 * np.maximum(muf, 1e-300)) & (b <= 1e-8) & (muf > 0)
+            count += int(np.sum(both))
+            if np.any(both):
+                # a = μ_f ± ρ grows as ρ moves away from its bound: its multiplier's descent sign is ±'s
+                worst = max(worst, float(np.max(np.maximum(sgn * raw_x["fratio"][both], 0.0))),
+                            float(np.max(np.maximum(raw_x[sl][both], 0.0))))
+    return count, worst / max(1.0, scale)
+
+
 def _straight(cm: ContactMechanics, q0, qN, N: int) -> dict:
     """The fallback guess: the straight line from ``q0`` to ``q_N`` (its given entries), every force zero."""
     b = np.where(np.isnan(qN), q0, qN)
@@ -487,6 +575,8 @@ def _answer(system, cm, prog, res: NLPResult, steps, rounds, q0, N, controls, ce
         scheme=cm.dm.scheme.name, qs=S, t_sub=t_sub, mu=MU, nu=NU,
         fratio=V["fratio"].reshape(N, -1) if cm.friction else None, impact_times=impact_times,
         complementarity=float(prog.residual(V)), homotopy=steps, timing_rounds=rounds)
+    out.biactive, out.b_violation = b_stationarity(prog, res, abs(cost))
+    out.b_stationary = bool(out.b_violation <= B_TOL)
     if res.success and not (cert <= CERTIFICATE_TOL):
         out.fail("Certificate_Failed", f"a step of the optimal controls, marched by the contact march from the answer's "
                                        f"own node, departs from the answer by {cert:.3g} (relative): not a motion of "
