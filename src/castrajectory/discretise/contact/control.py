@@ -208,7 +208,7 @@ class ContactControlTranscription(ContactTranscription):
         scaled as in its penalty)."""
         cm, L, c = self.cm, self.L, self.cm.c
         out = [super().residual(values)]
-        g = lambda A: np.asarray(cm.gap_row.map(A.shape[0])(A.T)).reshape(c, -1).T  # noqa: E731
+        g = cm.gaps
         n = cm.n
         Q, S = values["q"].reshape(L + 1, n), values["qs"].reshape(L, n)
         NU, MU = values["nu"].reshape(L, c), values["mu"].reshape(L, c)

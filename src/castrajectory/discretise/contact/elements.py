@@ -250,6 +250,11 @@ class ContactMechanics:
 
 
     # ------------------------------------------------------------------ the rows, built once
+    def gaps(self, Q) -> np.ndarray:
+        """The gaps at the configurations ``Q`` (rows), one row each: ``(len(Q), c)``."""
+        Q = np.asarray(Q, float)
+        return np.asarray(self.gap_row.map(Q.shape[0])(Q.T)).reshape(self.c, -1).T
+
     def slip(self, qk, qs, qn, b, h, arrive):
         """The slip velocities per contact that the step's friction opposes (maximal dissipation: the friction
         force opposes its slip, or the slip vanishes): for the node's force, the first part of the step,

@@ -301,11 +301,11 @@ class ContactTranscription:
             return out
         Q = np.asarray(guess["q"], float).reshape(L + 1, n)
         MU = np.asarray(guess["mu"], float).reshape(L, c)
-        gnext = np.asarray(self.cm.gap_row.map(L)(Q[1:].T)).reshape(c, L).T
+        gnext = self.cm.gaps(Q[1:])
         if "bounced" in guess:       # the event-located guess says which impulses are bounces
             bounce = np.asarray(guess["bounced"], bool).reshape(L, c) & (gnext > TOUCH_TOL * self.scales_ell)
         else:                        # an assembled solution: an impulse arriving from flight, leaving
-            gnow = np.asarray(self.cm.gap_row.map(L)(Q[:-1].T)).reshape(c, L).T
+            gnow = self.cm.gaps(Q[:-1])
             tol = TOUCH_TOL * self.scales_ell
             bounce = (MU > 0.0) & (gnext > tol) & (gnow > tol)
         out[bounce] = np.clip(gnext[bounce], self.open_gap, self.delta)
@@ -385,8 +385,8 @@ class ContactTranscription:
         MU = values["mu"].reshape(L, c)
         NU = values["nu"].reshape(L, c)
         B = values["beta"].reshape(L)
-        gq = np.asarray(cm.gap_row.map(L)(Q[:-1].T)).reshape(c, L).T
-        gs = np.asarray(cm.gap_row.map(L)(S.T)).reshape(c, L).T
+        gq = cm.gaps(Q[:-1])
+        gs = cm.gaps(S)
         zm, zp = self._stages(values)
         law = np.asarray(cm.impact_law.map(L)(Q[:-1].T, S.T, Q[1:].T, B, MU.T, H,
                                               self._law_length.T, *self._law_extras(values),

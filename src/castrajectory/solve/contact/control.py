@@ -142,7 +142,7 @@ def _scales(system, cm: ContactMechanics, q0, v0, length: float, u):
 def arrivals(cm: ContactMechanics, Q, S, tol: float) -> np.ndarray:
     """Per step and contact: the contact arrives in the step (open at ``q_k``, closed at ``q̃_k`` or ``q_{k+1}``)."""
     L = S.shape[0]
-    g = lambda A: np.asarray(cm.gap_row.map(A.shape[0])(A.T)).reshape(cm.c, -1).T  # noqa: E731
+    g = cm.gaps
     gq, gs = g(Q), g(S)
     return (gq[:-1] > tol) & (np.minimum(gs, gq[1:]) <= tol) if L else np.zeros((0, cm.c), bool)
 
@@ -150,8 +150,7 @@ def arrivals(cm: ContactMechanics, Q, S, tol: float) -> np.ndarray:
 def bounces(prog, Q, timed: np.ndarray) -> np.ndarray:
     """Per step and contact: an arrival (``timed``) after which the contact is open again at one of the next two nodes
     by more than a resting body's hop (the march's mode I: Newton's law holds), not caught (mode C)."""
-    cm, L = prog.cm, prog.L
-    g = np.asarray(cm.gap_row.map(L + 1)(Q.T)).reshape(cm.c, -1).T
+    g = prog.cm.gaps(Q)
     nxt, nxt2 = g[1:], np.vstack([g[2:], g[-1:]])
     return timed & ((nxt > prog.open_gap) | (nxt2 > prog.open_gap))
 
@@ -373,9 +372,8 @@ def _local_point(cm, V, marches, N):
     for key in ("qs", "beta", "nu", "mu", "mul", "fleft", "fratio", "zs", "lam", "lam_sub", "lam_stage", "bounced",
                 "modes", "fmodes"):
         if key in marches[0]:
-            out[key] = np.concatenate([np.asarray(pt[key]).reshape(1, -1) for pt in marches]).reshape(
-                (N,) + np.asarray(marches[0][key]).shape[1:]) if key in ("modes", "fmodes") else \
-                np.concatenate([np.asarray(pt[key]).reshape(-1) for pt in marches])
+            rows = np.concatenate([np.asarray(pt[key]).reshape(1, -1) for pt in marches])
+            out[key] = rows if key in ("modes", "fmodes") else rows.reshape(-1)
     return out
 
 
@@ -480,7 +478,7 @@ def b_stationarity(prog, res: NLPResult, scale: float):
     raw_g = {k: -np.asarray(v, float).reshape(-1) for k, v in res.multipliers.items()}
     tol_f = 1e-8 * max(float(np.max(np.abs(V["nu"]), initial=0.0)), float(np.max(np.abs(V["mu"]), initial=0.0)), 1.0)
     tol_g = TOUCH_TOL * prog.scales_ell
-    g = lambda A: np.asarray(cm.gap_row.map(A.shape[0])(A.T)).reshape(c, -1).T  # noqa: E731
+    g = cm.gaps
     Q, S = V["q"].reshape(L + 1, cm.n), V["qs"].reshape(L, cm.n)
     NU, MU = V["nu"].reshape(L, c), V["mu"].reshape(L, c)
     count, worst = 0, 0.0
