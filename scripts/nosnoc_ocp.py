@@ -232,6 +232,18 @@ def _solve(ns, build, budget):
                            nlp_iterations=guard.iters, homotopy_steps=len(guard.iters), last_sigma=guard.sigma)
 
 
+def _solved(ns, build, budget, formulation):
+    """:func:`_solve`, with a build or solve error, or a budget spent before any NLP finished, this setting's failure:
+    ``(results, out)``, the results ``None`` for a failure (``out`` its dict, :func:`_failure`)."""
+    try:
+        _, r, out = _solve(ns, build, budget)
+    except Exception as exc:  # a build or solve error is this setting's failure
+        return None, _failure(f"error: {exc}", formulation)
+    if r is None:
+        return None, _failure(out["status"], formulation, out["time_s"], out["build_s"])
+    return r, out
+
+
 def _failure(msg, formulation, time_s=math.nan, build_s=math.nan):
     nan = math.nan
     return {"status": msg, "cost": nan, "time_s": time_s, "build_s": build_s, "complementarity": nan,
@@ -274,12 +286,9 @@ def push_to_target(N_stages: int = 20, setting: str = "default", time_budget_s: 
                            g_terminal=ca.vertcat(q - np.array([goal, 0.0]), v))
         return ns.NosnocSolver(_options(ns, s, N_stages, n_fe, T, (0.99, 10.0), time_budget_s), model, ocp)
 
-    try:
-        solver, r, out = _solve(ns, build, time_budget_s)
-    except Exception as exc:  # a build or solve error is this setting's failure
-        return _failure(f"error: {exc}", PUSH_FORMULATION)
+    r, out = _solved(ns, build, time_budget_s, PUSH_FORMULATION)
     if r is None:
-        return _failure(out["status"], PUSH_FORMULATION, out["time_s"], out["build_s"])
+        return out
     X = np.array(r["x_traj"], dtype=float)  # (N_stages * n_fe + 1) x 6 at the finite-element boundaries
     U = np.array(r["u_list"], dtype=float).reshape(N_stages, 1)
     t = X[:, 5]
@@ -364,12 +373,9 @@ def hopper(setting: str = "default", time_budget_s: float = TIME_BUDGET_S) -> di
         sym["slip"] = ca.Function("slip", [xs], [v_t])
         return ns.NosnocSolver(_options(ns, s, N, n_fe, T, (1.0, 25.0), time_budget_s), model, ocp)
 
-    try:
-        solver, r, out = _solve(ns, build, time_budget_s)
-    except Exception as exc:  # a build or solve error is this setting's failure
-        return _failure(f"error: {exc}", HOPPER_FORMULATION)
+    r, out = _solved(ns, build, time_budget_s, HOPPER_FORMULATION)
     if r is None:
-        return _failure(out["status"], HOPPER_FORMULATION, out["time_s"], out["build_s"])
+        return out
     X = np.array(r["x_traj"], dtype=float)  # (N * n_fe + 1) x 10: q, v, L, t
     U = np.array(r["u_list"], dtype=float).reshape(N, 3)
     t = X[:, 9]
