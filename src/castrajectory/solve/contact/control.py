@@ -45,6 +45,7 @@ from ...validation import InputError
 from .march import discrete_march
 from .nlp import CONTACT_IPOPT, ContactNLP
 from .strategy import _length_scale
+from .strategy import _scales as strategy_scales
 
 #: Ipopt options of the contact-implicit solve, on top of CONTACT_IPOPT.  The initial-value program starts its barrier
 #: at 1e-8 (its guess is the answer); here the guess is a motion far from the optimum, and from there a small
@@ -128,15 +129,12 @@ class ContactControlResult(ControlResult):
                 "homotopy": [vars(h) for h in self.homotopy]}
 
 
-def _scales(system, cm: ContactMechanics, q0, v0, length: float, u):
-    """(length, momentum, velocity, acceleration) scales for the penalties: as the initial-value program's, the
-    acceleration under the controls' guess."""
+def _scales(system, q0, v0, length: float, u):
+    """The initial-value program's scales (:func:`.strategy._scales`), the acceleration under the controls' guess
+    ``u`` (``system.acceleration`` has no controls)."""
     qdd = ca.substitute(system._index1_exprs()[0], system.control_vector, ca.DM(u))
-    acc_fn = ca.Function("acc", [system.q, system.qd], [qdd])
-    acc = float(np.max(np.abs(np.asarray(acc_fn(q0, v0)))))
-    vref = max(float(np.max(np.abs(v0))), math.sqrt(acc * length), 1e-8)
-    mref = float(np.max(np.diag(np.asarray(system.mass_matrix(q0)))))
-    return length, mref * vref, vref, acc
+    acc = float(np.max(np.abs(np.asarray(ca.Function("acc", [system.q, system.qd], [qdd])(q0, v0)))))
+    return strategy_scales(system, q0, v0, length, acc)
 
 
 def arrivals(cm: ContactMechanics, Q, S, tol: float) -> np.ndarray:
@@ -196,7 +194,7 @@ def solve_contact_control(system, T, N: int, scheme: str, start, end, running, f
     if nu and "u" in guess:
         U0 = np.clip(np.asarray(guess["u"], float).reshape(N, nu), lo, hi)
     length = _length_scale(system, q0)
-    scales = _scales(system, cm, q0, v0g, length, U0[0] if nu else np.zeros(0))
+    scales = _scales(system, q0, v0g, length, U0[0] if nu else np.zeros(0))
     tol = TOUCH_TOL * length
     p0 = np.asarray(system.momentum(q0, v0g)).reshape(-1)
     t_guess = _time.perf_counter()

@@ -27,9 +27,11 @@ def _length_scale(system: LagrangianSystem, q0) -> float:
     return max(1.0, float(np.max(np.abs(q0))) if np.size(q0) else 1.0)
 
 
-def _scales(system: LagrangianSystem, q0, qd0, length: float):
-    """(length, momentum, velocity, acceleration) scales of the scene for the penalty terms."""
-    acc = float(np.max(np.abs(np.asarray(system.acceleration(q0, qd0))))) if system.nq else 0.0
+def _scales(system: LagrangianSystem, q0, qd0, length: float, acc: Optional[float] = None):
+    """(length, momentum, velocity, acceleration) scales of the scene for the penalty terms; ``acc`` the largest
+    acceleration at the start (default: the system's own, with no controls)."""
+    if acc is None:
+        acc = float(np.max(np.abs(np.asarray(system.acceleration(q0, qd0))))) if system.nq else 0.0
     vref = max(float(np.max(np.abs(qd0))), math.sqrt(acc * length), 1e-8)
     mref = float(np.max(np.diag(np.asarray(system.mass_matrix(q0)))))
     return length, mref * vref, vref, acc
