@@ -26,8 +26,8 @@ def block(mu=0.3, u_max=20.0, m=1.0, g=9.81):
     return system, u
 
 
-def push(N, T=1.0, d=1.0, mu=0.3):
-    system, u = block(mu)
+def push(N, T=1.0, d=1.0, mu=0.3, g=9.81):
+    system, u = block(mu, g=g)
     ocp = ct.OptimalControl(system, T=T, N=N)
     ocp.initial(q=[0.0, 0.0], qd=[0.0, 0.0])
     ocp.final(q=[d, 0.0], qd=[0.0, 0.0])
@@ -70,6 +70,16 @@ def test_block_push_hits_the_exact_discrete_optimum_and_is_certified():
     # the friction slides against the motion at the cone's edge, and the force is the closed form's to O(h²)
     assert np.allclose(sol.fratio, -0.3, atol=1e-8)
     assert np.max(np.abs(sol.u[:, 0] - exact.control(sol.t_u))) < 0.04
+
+
+def test_a_weightless_block_push_hits_the_free_particles_discrete_optimum():
+    """g = 0, μ = 0: a free particle on its floor, whose midpoint optimum is (12d²/T³)N²/(N²−1) (measured 4e-15 at
+    N = 20).  Its zero control guess has no acceleration: the penalties' velocity scale comes from the horizon, d/T
+    (it was 1e-8, and Ipopt stopped at its iteration limit)."""
+    sol = push(20, mu=0.0, g=0.0)
+    assert sol.success, sol.message
+    assert abs(sol.cost - 12.0 * 400 / 399) < 1e-11
+    assert sol.certificate < 1e-10
 
 
 def test_the_b_stationarity_proxy_reads_the_sign_of_a_biactive_pairs_multipliers(monkeypatch):

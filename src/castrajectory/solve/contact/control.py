@@ -129,12 +129,14 @@ class ContactControlResult(ControlResult):
                 "homotopy": [vars(h) for h in self.homotopy]}
 
 
-def _scales(system, q0, v0, length: float, u):
+def _scales(system, q0, v0, length: float, u, T: float):
     """The initial-value program's scales (:func:`.strategy._scales`), the acceleration under the controls' guess
-    ``u`` (``system.acceleration`` has no controls)."""
+    ``u`` (``system.acceleration`` has no controls), at least ``length/T²``: a motion over the scene's length in the
+    horizon ``T`` (a weightless block pushed from rest by a zero guess has no acceleration of its own, and its
+    velocity scale was then 1e-8: Ipopt stopped at its iteration limit, cost 6e5 against 12.03)."""
     qdd = ca.substitute(system._index1_exprs()[0], system.control_vector, ca.DM(u))
     acc = float(np.max(np.abs(np.asarray(ca.Function("acc", [system.q, system.qd], [qdd])(q0, v0)))))
-    return strategy_scales(system, q0, v0, length, acc)
+    return strategy_scales(system, q0, v0, length, max(acc, length / T ** 2))
 
 
 def arrivals(cm: ContactMechanics, Q, S, tol: float) -> np.ndarray:
@@ -194,7 +196,7 @@ def solve_contact_control(system, T, N: int, scheme: str, start, end, running, f
     if nu and "u" in guess:
         U0 = np.clip(np.asarray(guess["u"], float).reshape(N, nu), lo, hi)
     length = _length_scale(system, q0)
-    scales = _scales(system, q0, v0g, length, U0[0] if nu else np.zeros(0))
+    scales = _scales(system, q0, v0g, length, U0[0] if nu else np.zeros(0), Tg)
     tol = TOUCH_TOL * length
     p0 = np.asarray(system.momentum(q0, v0g)).reshape(-1)
     t_guess = _time.perf_counter()
@@ -252,7 +254,10 @@ def solve_contact_control(system, T, N: int, scheme: str, start, end, running, f
         init["beta"] = np.where(free, init["beta"], 0.0)
         res = prog._ladder(init, opts, bounds, OCP_PENALTY, verbose, "rho", "Ipopt")
         steps.extend(res.homotopy)
-        if not res.success:
+        # (a round Ipopt solved only to its acceptable level is read as the others are: the next round starts from
+        # it with its arrivals.  Measured on the hopper at N = 40: its third round stopped so with its landing untimed,
+        # and the fourth and fifth settled it, cost 10.346 where the answer of the third was 10.478)
+        if not (res.success or res.solver_status == "Solved_To_Acceptable_Level"):
             break
         Qc = res.values["q"].reshape(N + 1, n)
         now = arrivals(cm, Qc, res.values["qs"].reshape(N, n), tol)
