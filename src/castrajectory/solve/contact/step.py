@@ -14,6 +14,8 @@ from .modes import DOWN, FIX, FREE, SLIDE, STICK, UP, C, F, H, I, K, N, P, R, T,
 #: its largest derivative, relative to the size of the unknowns).
 NEWTON_ITER = 30
 STEP_TOL = 1e-12
+#: ... and the largest growth of the unknowns from Newton's start that is still the step's root
+RUNAWAY = 1e6
 #: Newton steps of each step of a chunk (:meth:`_Step.chunk`).
 CHUNK_NEWTON = 3
 
@@ -154,6 +156,7 @@ class _Step:
                            np.array([m in (I, C, T, F, K, W) for m in modes], float),
                            np.zeros(c * self.fd) if rfixl is None else rfixl)
         small = 0
+        size0 = 1.0 + float(np.max(np.abs(x)))
         for _ in range(NEWTON_ITER):
             r, Jr = self.fn(x, *args, *self.uarg)
             r = np.asarray(r).reshape(-1)
@@ -185,7 +188,10 @@ class _Step:
         # each row in units of the unknowns (divided by its largest derivative): rows that go like
         # 1/α near α = 0 are then held to the rounding of the point, not of their size
         r = np.asarray(r).reshape(-1) / np.maximum(np.max(np.abs(np.asarray(Jr)), axis=1), 1e-300)
-        return x, bool(np.max(np.abs(r)) <= STEP_TOL * (1.0 + float(np.max(np.abs(x)))))
+        size = 1.0 + float(np.max(np.abs(x)))
+        # (a root RUNAWAY times the start's size is not the step's: Newton from the hopper's node ran to a root
+        # 2.5e11 away, whose rows held relative to that size, and the march took it as the step)
+        return x, bool(np.max(np.abs(r)) <= STEP_TOL * size and size <= RUNAWAY * size0)
 
 
 def _stage_line(cm: ContactMechanics, q, qs, qn):
