@@ -221,19 +221,20 @@ class ContactNLP(ContactTranscription):
         ladder = penalties if (np.any(node_free) or np.any(sub_free)) else penalties[:1]
         return self._ladder(init, opts, bounds, ladder, verbose, "branch", "the branch")
 
-    def _ladder(self, init, opts, bounds, penalties, verbose, parameter: str, who: str) -> NLPResult:
+    def _ladder(self, init, opts, bounds, penalties, verbose, parameter: str, who: str, warm=None) -> NLPResult:
         """Solve at each penalty ρ of ``penalties`` in turn, warm-started, until complementarity holds
         (or a solve fails); every step recorded (``HomotopyStep``, ``parameter``).  The result sums the
         steps' iterations and times; ``build_time_s`` is 0 unless this call (re)built the solver, and
-        ``last_good`` holds (ρ, result) of the last step Ipopt solved."""
+        ``last_good`` holds (ρ, result) of the last step Ipopt solved.  ``warm``: a result whose primal and dual
+        values start the first step (``init`` over its primal ones)."""
         before = self.nlp._solver
         steps: List[HomotopyStep] = []
         res, build = None, 0.0
         self.last_good = None
         for rho in penalties:
             self.nlp.set_parameter("rho", rho)
-            res = self.nlp.solve(init=init if res is None else None, warm=res, options=opts, verbose=verbose,
-                                 bounds=bounds)
+            res = self.nlp.solve(init=init if res is None else None, warm=warm if res is None else res, options=opts,
+                                 verbose=verbose, bounds=bounds)
             if self.nlp._solver is not before and build == 0.0:
                 build = res.build_time_s
             resid = self.residual(res.values)
