@@ -268,23 +268,22 @@ def solve_contact_control(system, T, N: int, scheme: str, start, end, running, f
         if res is not None:
             init = {k: v.copy() for k, v in res.values.items()}
         init["beta"] = np.where(free, init["beta"], 0.0)
-        if res is not None:
-            # (a later round starts from the last one's primal-dual point with a small barrier; where that fails,
-            # cold.  Measured on the hopper at N = 40: goal 0.5's second round, cold, stopped at 3000 iterations, and
-            # warm it solved in 835 (certified, 12 s; capped at 500 it did not); goal 0.7 certified in 5.2 s where
-            # it took 7.0)
-            last = res
-            res = prog._ladder(init, {**opts, **WARM_IPOPT}, bounds, OCP_PENALTY, verbose, "rho", "Ipopt", warm=last)
-            if not (res.success or res.solver_status == "Solved_To_Acceptable_Level"):
-                steps.extend(res.homotopy)
-                res = prog._ladder(init, opts, bounds, OCP_PENALTY, verbose, "rho", "Ipopt")
+        # (a later round starts from the last one's primal-dual point with a small barrier; where that fails,
+        # cold.  Measured on the hopper at N = 40: goal 0.5's second round, cold, stopped at 3000 iterations, and
+        # warm it solved in 835 (certified, 12 s; capped at 500 it did not); goal 0.7 certified in 5.2 s where
+        # it took 7.0)
+        warm = None if res is None else prog._ladder(init, {**opts, **WARM_IPOPT}, bounds, OCP_PENALTY, verbose,
+                                                     "rho", "Ipopt", warm=res)
+        if warm is not None and _converged(warm):
+            res = warm
         else:
+            steps.extend(warm.homotopy if warm is not None else [])
             res = prog._ladder(init, opts, bounds, OCP_PENALTY, verbose, "rho", "Ipopt")
         steps.extend(res.homotopy)
         # (a round Ipopt solved only to its acceptable level is read as the others are: the next round starts from
         # it with its arrivals.  Measured on the hopper at N = 40: its third round stopped so with its landing untimed,
         # and the fourth and fifth settled it, cost 10.346 where the answer of the third was 10.478)
-        if not (res.success or res.solver_status == "Solved_To_Acceptable_Level"):
+        if not _converged(res):
             break
         Qc = res.values["q"].reshape(N + 1, n)
         now = arrivals(cm, Qc, res.values["qs"].reshape(N, n), tol)
@@ -300,7 +299,7 @@ def solve_contact_control(system, T, N: int, scheme: str, start, end, running, f
         if not keep_modes:
             res.fail("Timing_Not_Settled", f"the steps that hold an impact still changed after {TIMING_ROUNDS} solves")
     cert = marched = math.nan
-    if res.success or res.solver_status in SUCCESS_STATUSES or res.solver_status == "Solved_To_Acceptable_Level":
+    if _converged(res) or res.solver_status in SUCCESS_STATUSES:
         # (also where the homotopy converged short of complementarity, a local minimum of the penalties: its
         # controls, marched, are a motion, and the program on that motion's branch is solved from it; measured on
         # the battery, 2 of 30 pushes to a target stopped so, at residuals 5.8e-3 and 0.45)
@@ -313,6 +312,12 @@ def solve_contact_control(system, T, N: int, scheme: str, start, end, running, f
     if prior is not None and prior.success and out.success:
         out.cost_estimate = abs(out.cost - prior.cost) / 3.0
     return out
+
+
+def _converged(res: NLPResult) -> bool:
+    """Ipopt solved it, to its tolerance or only to its acceptable level (whose answer the next solve or the
+    certificate takes up)."""
+    return res.success or res.solver_status == "Solved_To_Acceptable_Level"
 
 
 def _start_of(prog, V, q0):
@@ -350,7 +355,7 @@ def _polish(cm, prog, res, q0, N, scales, bounds, opts, verbose, steps):
         solves += 1
         got = _branch(cm, prog, q0, point, res.values, bounds, opts, rho, verbose, scales)
         steps.extend(got.homotopy)
-        if not got.success and got.solver_status != "Solved_To_Acceptable_Level":
+        if not _converged(got):
             if solves == 1:
                 continue          # (the whole march's branch next)
             break
@@ -485,7 +490,7 @@ def _branch(cm, prog, q0, point, values, bounds, opts, rho, verbose, scales, war
     # (one solved only to Ipopt's acceptable level is the polish's to certify and solve again from: the homotopy's
     # barrier from the march's point instead spent 3000 iterations on the hopper's first branch at N = 40, where
     # the small one reached its acceptable level in 456 and the next branch solved in 106)
-    if got.success or got.solver_status == "Solved_To_Acceptable_Level":
+    if _converged(got):
         return got
     again = prog._ladder(init, opts, branch, [rho], verbose, "branch", "the march's branch")
     again.homotopy = list(got.homotopy) + list(again.homotopy)
