@@ -8,9 +8,12 @@ The program is :class:`castrajectory.discretise.contact.control.ContactControlTr
 2. **Timing**: the sub-node of a step is where an impact is timed; it is free (``β`` an unknown) only in the
    steps where a contact arrives (open at ``q_k``, closed at ``q̃_k`` or ``q_{k+1}``), and centred (``β = 0``)
    elsewhere, as in the march.  (A free ``β`` in every step would be a control of its own: two midpoint parts
-   of lengths ``αh`` and ``(1 − α)h`` are a different step map, and the cost moved ``β`` to its bounds.)  Which
-   steps arrive is read from the solution and the program solved again, warm, until it no longer changes
-   (:data:`TIMING_ROUNDS`).
+   of lengths ``αh`` and ``(1 − α)h`` are a different step map, and the cost moved ``β`` to its bounds.)  A timed
+   step's sub-node is its arrival's, on the surface.  The steps where a held contact's slip stops or turns are timed
+   too, as the march times them (its mode W, :func:`slip_turns`): the sub-node at the turn, where the slip velocity
+   vanishes.  A timed sub-node stays :data:`EDGE` of its step from the nodes, inside the window where the march
+   times an event.  Which steps arrive or turn is read from the solution and the program solved again, warm, until
+   it no longer changes (:data:`TIMING_ROUNDS`).
 3. **Penalty ladder**: the exact ℓ1 penalties of the complementarity pairs rise (``PENALTY``), each solve warm
    started from the last, until the scaled complementarity residual is at most ``COMPLEMENTARITY_TOL``.
 4. **Certificate**: every step of the answer is marched by the contact march from the answer's own node and
@@ -36,7 +39,7 @@ import numpy as np
 
 from ...discretise.contact.control import ContactControlTranscription
 from ...discretise.contact.elements import ContactMechanics
-from ...discretise.contact.transcription import ALPHA_MIN, TOUCH_TOL
+from ...discretise.contact.transcription import TOUCH_TOL
 from ...discretise.optimal_control import split_controls
 from ...result import NLPResult
 from ..nlp import NLP
@@ -78,6 +81,15 @@ POLISH_ROUNDS = 3
 LADDER_MAX = 32
 #: The march of the optimal controls must reproduce the optimal nodes to this, relative to their scale.
 CERTIFICATE_TOL = 1e-7
+#: The program's timed sub-nodes stay this fraction of their step from its nodes (β in [EDGE − ½, ½ − EDGE]), inside
+#: the window where the march times an event (ALPHA_MIN): an event the optimiser pushes onto a node is then a
+#: step the march times as the answer does, not one that it takes at the node (mode N, a different step map)
+EDGE = 1e-3
+#: The contact-implicit ladder's complementarity target (ContactNLP.complementarity_target; it fails above
+#: COMPLEMENTARITY_TOL only)
+COMPLEMENTARITY_TARGET = 1e-11
+#: A node force above this fraction of the largest closes its node (arrivals)
+NODE_FORCE = 1e-6
 #: A biactive pair's multiplier of the descent sign above this (relative to max(1, |cost|)) is a descent found by
 #: flipping the pair's branch (b_stationarity); Ipopt's multipliers hold to its dual tolerance
 B_TOL = 1e-6
@@ -85,6 +97,10 @@ B_TOL = 1e-6
 
 class _Program(ContactControlTranscription, ContactNLP):
     program = NLP
+    #: (the certificate's march takes a contact as touching within TOUCH_TOL ℓ: a held contact's gap, at
+    #: a scaled product of 1e-8 with its force, was 2e-9 on the hopper, and the march flew from it.  At 1e-11 the
+    #: products leave gaps below the march's tolerance)
+    complementarity_target = COMPLEMENTARITY_TARGET
 
 
 _CACHE: Dict[tuple, ContactMechanics] = {}
@@ -155,12 +171,21 @@ def _scales(system, q0, v0, length: float, u, T: float):
     return strategy_scales(system, q0, v0, length, max(acc, length / T ** 2))
 
 
-def arrivals(cm: ContactMechanics, Q, S, tol: float) -> np.ndarray:
-    """Per step and contact: the contact arrives in the step (open at ``q_k``, closed at ``q̃_k`` or ``q_{k+1}``)."""
+def arrivals(cm: ContactMechanics, Q, S, tol: float, NU=None) -> np.ndarray:
+    """Per step and contact: the contact arrives in the step (open at ``q_k``, closed at ``q̃_k`` or ``q_{k+1}``).
+    With the node forces ``NU`` (``(L, c)``), a node whose force is above ``NODE_FORCE`` of the largest is closed
+    whatever its gap: an interior point leaves a held contact's gap at ``1e-9`` (its product with the force at
+    Ipopt's tolerance), and read as open, the hopper's stance was an arrival at every such node."""
     L = S.shape[0]
+    if not L:
+        return np.zeros((0, cm.c), bool)
     g = cm.gaps
     gq, gs = g(Q), g(S)
-    return (gq[:-1] > tol) & (np.minimum(gs, gq[1:]) <= tol) if L else np.zeros((0, cm.c), bool)
+    opened = gq[:-1] > tol
+    if NU is not None:
+        NU = np.asarray(NU, float).reshape(L, cm.c)
+        opened &= NU <= NODE_FORCE * max(float(np.max(NU, initial=0.0)), 1e-300)
+    return opened & (np.minimum(gs, gq[1:]) <= tol)
 
 
 def bounces(prog, Q, timed: np.ndarray) -> np.ndarray:
@@ -246,7 +271,7 @@ def solve_contact_control(system, T, N: int, scheme: str, start, end, running, f
         bounds["fratio_end"] = _end_ratio_bounds(cm, qN, vN, scales[2])
     opts = {**CONTACT_IPOPT, **OCP_CONTACT_IPOPT, **(options or {})}
     Q, S = init["q"].reshape(N + 1, n), init["qs"].reshape(N, n)
-    timed = arrivals(cm, Q, S, tol)
+    timed = arrivals(cm, Q, S, tol, init.get("nu"))
     steps, res, rounds, seen = [], None, 0, set()
     if keep_modes:
         res = _continued(cm, prog, q0, marched, init, bounds, opts, verbose, scales, qN, vN, steps)
@@ -256,29 +281,29 @@ def solve_contact_control(system, T, N: int, scheme: str, start, end, running, f
     # iterations where 42 did on the push to a target at N = 40, and is not needed where the impacts' steps are kept)
     Qc = init["q"].reshape(N + 1, n)
     bounce = bounces(prog, Qc, timed)
+    turn, fturn = slip_turns(cm, prog, init, q0, timed, scales)
     while rounds < TIMING_ROUNDS and not keep_modes:
         rounds += 1
-        seen.add((timed.tobytes(), bounce.tobytes()))
+        seen.add((timed.tobytes(), bounce.tobytes(), turn.tobytes()))
         prog.nlp.set_parameter("timed", timed.astype(float).reshape(-1))
         prog.nlp.set_parameter("bounce", bounce.astype(float).reshape(-1))
-        if cm.friction:
-            prog.nlp.set_parameter("arrive", timed.astype(float).reshape(-1))
-        free = np.any(timed, axis=1)
-        bounds["beta"] = (np.where(free, ALPHA_MIN - 0.5, 0.0), np.where(free, 0.5 - ALPHA_MIN, 0.0))
+        free = np.any(timed | turn, axis=1)
+        bounds["beta"] = (np.where(free, EDGE - 0.5, 0.0), np.where(free, 0.5 - EDGE, 0.0))
         if res is not None:
             init = {k: v.copy() for k, v in res.values.items()}
-        init["beta"] = np.where(free, init["beta"], 0.0)
+        init["beta"] = np.where(free, np.clip(init["beta"], EDGE - 0.5, 0.5 - EDGE), 0.0)
+        round_bounds = {**bounds, **_event_bounds(cm, prog, turn, fturn, timed, init)}
         # (a later round starts from the last one's primal-dual point with a small barrier; where that fails,
         # cold.  Measured on the hopper at N = 40: goal 0.5's second round, cold, stopped at 3000 iterations, and
         # warm it solved in 835 (certified, 12 s; capped at 500 it did not); goal 0.7 certified in 5.2 s where
         # it took 7.0)
-        warm = None if res is None else prog._ladder(init, {**opts, **WARM_IPOPT}, bounds, OCP_PENALTY, verbose,
+        warm = None if res is None else prog._ladder(init, {**opts, **WARM_IPOPT}, round_bounds, OCP_PENALTY, verbose,
                                                      "rho", "Ipopt", warm=res)
         if warm is not None and _converged(warm):
             res = warm
         else:
             steps.extend(warm.homotopy if warm is not None else [])
-            res = prog._ladder(init, opts, bounds, OCP_PENALTY, verbose, "rho", "Ipopt")
+            res = prog._ladder(init, opts, round_bounds, OCP_PENALTY, verbose, "rho", "Ipopt")
         steps.extend(res.homotopy)
         # (a round Ipopt solved only to its acceptable level is read as the others are: the next round starts from
         # it with its arrivals.  Measured on the hopper at N = 40: its third round stopped so with its landing untimed,
@@ -286,15 +311,16 @@ def solve_contact_control(system, T, N: int, scheme: str, start, end, running, f
         if not _converged(res):
             break
         Qc = res.values["q"].reshape(N + 1, n)
-        now = arrivals(cm, Qc, res.values["qs"].reshape(N, n), tol)
+        now = arrivals(cm, Qc, res.values["qs"].reshape(N, n), tol, res.values["nu"])
         bnow = bounces(prog, Qc, now)
-        if np.array_equal(now, timed) and np.array_equal(bnow, bounce):
+        tnow, fnow = slip_turns(cm, prog, res.values, q0, now, scales)
+        if np.array_equal(now, timed) and np.array_equal(bnow, bounce) and np.array_equal(tnow, turn):
             break
-        if (now.tobytes(), bnow.tobytes()) in seen:
-            res.fail("Timing_Cycles", "the steps that hold an impact changed back to an earlier set: the impacts' "
-                     "steps did not settle")
+        if (now.tobytes(), bnow.tobytes(), tnow.tobytes()) in seen:
+            res.fail("Timing_Cycles", "the steps that hold an impact or a slip's turn changed back to an earlier set: "
+                     "the events' steps did not settle")
             break
-        timed, bounce = now, bnow
+        timed, bounce, turn, fturn = now, bnow, tnow, fnow
     else:
         if not keep_modes:
             res.fail("Timing_Not_Settled", f"the steps that hold an impact still changed after {TIMING_ROUNDS} solves")
@@ -311,6 +337,59 @@ def solve_contact_control(system, T, N: int, scheme: str, start, end, running, f
     out.grids = rungs + [N]
     if prior is not None and prior.success and out.success:
         out.cost_estimate = abs(out.cost - prior.cost) / 3.0
+    return out
+
+
+def slip_turns(cm: ContactMechanics, prog, V, q0, timed, scales):
+    """Per step and contact: a held contact whose slip stops or turns inside the step, where the march times it
+    (mode W): each step of ``V`` marched from its own node (:func:`_local`), in the steps without an arrival
+    (``timed``).  ``(turns, the sliding node slots' ratios)``: the program's round times such a step's sub-node at
+    the turn too (:func:`_event_bounds`).  (Read from the slip velocities at the step's ends instead, as the march
+    first does, the sliding block's stop was a turn where the march's timed step has no valid modes and it keeps
+    the untimed one: the round then held a timed stop, and the block push that sticks cost 16.83 against the
+    untimed answer's 16.49, at N = 40)"""
+    N, c = prog.L, cm.c
+    out, ratio = np.zeros((N, c), bool), np.zeros((N, c))
+    if not cm.friction or cm.fd != 1:
+        return out, ratio
+    _, marches = _local(cm, prog, V, q0, N, scales)
+    for k, pt in enumerate(marches):
+        if pt is None or np.asarray(pt["steps"]).size != 1 or np.any(timed[k]):
+            continue
+        modes = np.asarray(pt["modes"]).reshape(-1)
+        fm = np.asarray(pt["fmodes"]).reshape(-1)
+        for j in np.where(modes == "W")[0]:
+            out[k, j], ratio[k, j] = True, (-cm.mu_f[j] if fm[j] == "U" else cm.mu_f[j])
+    return out, ratio
+
+
+def _event_bounds(cm: ContactMechanics, prog, turn, ratio, timed, init) -> dict:
+    """A round's rows of the slips that turn (:func:`slip_turns`) as the march's mode W
+    (:meth:`ContactNLP.mode_bounds`): the step's sub-node at the turn, where the slip velocity after the contact's
+    share ``μ⁻`` of the first part's force vanishes (``left_slip``), its normal velocity too (``release``), the
+    share's ratio the node slot's, and the sub-node slot's slip the second part's (``arrive``).  Sets the round's
+    ``release`` and ``arrive`` parameters; ``init`` is moved into the bounds."""
+    L, c = prog.L, cm.c
+    t = turn.reshape(-1)
+    prog.nlp.set_parameter("release", turn.astype(float).reshape(-1))
+    out = {"mul": (np.zeros(L * c), np.where(t, np.inf, 0.0)),
+           "release": (np.where(t, 0.0, -np.inf), np.where(t, 0.0, np.inf))}
+    if cm.friction:
+        prog.nlp.set_parameter("arrive", (timed | turn).astype(float).reshape(-1))
+        fl = np.where(t, ratio.reshape(-1), 0.0)
+        out["fleft"] = (fl, fl)
+        out["left_slip"] = (np.where(t, 0.0, -np.inf), np.where(t, 0.0, np.inf))
+        init["fleft"] = fl.copy()
+    init["mul"] = np.where(t, np.asarray(init.get("mul", np.zeros(L * c)), float).reshape(-1), 0.0)
+    # a timed step's sub-node is its arrival's, on the surface, as in the march (its timing row φ(q̃) = 0): the arriving
+    # contact closest to the surface at q̃ in the round's start.  (With the sub-node free to stay open, a flight that
+    # lands on the next node kept β free, a control of its own: the hopper's answer at N = 40 landed exactly on a
+    # node by it, which the march, its flight a plain step, missed by 3e-9)
+    gs = np.where(timed, cm.gaps(np.asarray(init["qs"], float).reshape(L, cm.n)), np.inf)
+    first = timed & (np.arange(c)[None, :] == np.argmin(gs, axis=1)[:, None])
+    # (and a turn's contact is held through its step, closed at q̃_k and q_{k+1}, as the march's W)
+    out["sub_gap"] = (np.zeros(L * c), np.where((first | turn).reshape(-1), 0.0, np.inf))
+    out["node_gap"] = (np.zeros(L * c), np.where(t, 0.0, np.inf))
     return out
 
 
@@ -456,7 +535,10 @@ def _branch(cm, prog, q0, point, values, bounds, opts, rho, verbose, scales, war
     controls, a free final time and a free start free), from ``point`` (the rest from ``values``)."""
     N = prog.L
     branch = prog.mode_bounds(q0, point)
-    branch.update({k: v for k, v in bounds.items() if k != "beta"})
+    lo_b, hi_b = branch["beta"]
+    branch["beta"] = (np.maximum(lo_b, np.minimum(EDGE - 0.5, hi_b)), np.minimum(hi_b, np.maximum(0.5 - EDGE, lo_b)))
+    branch.update({k: v for k, v in bounds.items() if k not in ("beta", "mul", "release", "fleft", "left_slip",
+                                                                        "sub_gap", "node_gap")})
     if cm.friction:
         # a slot without friction force (an open contact: no force, so its ratio is free; the march fixes it at 0)
         # keeps its ratio in the cone, where the slip pair sets it against the slip

@@ -31,7 +31,9 @@ class ContactNLP(ContactTranscription):
     """The contact transcription written into an Ipopt :class:`~castrajectory.solve.nlp.NLP`, and its solve."""
 
     program = NLP
-
+    #: the penalty ladder rises until the scaled complementarity residual is at most this (and fails above
+    #: COMPLEMENTARITY_TOL after its last rung)
+    complementarity_target = COMPLEMENTARITY_TOL
 
     def solve(self, q0, p0, guess: Dict[str, np.ndarray], penalties=None, options=None, verbose=False):
         """Solve from ``guess``, raising the penalty until complementarity holds.
@@ -242,7 +244,7 @@ class ContactNLP(ContactTranscription):
                                       parameter=parameter))
             if res.success:
                 self.last_good = (rho, res)
-            if not res.success or resid <= COMPLEMENTARITY_TOL:
+            if not res.success or resid <= self.complementarity_target:
                 break
         res.build_time_s = build
         res.iterations = sum(st.iterations for st in steps)
