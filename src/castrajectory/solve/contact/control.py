@@ -67,6 +67,11 @@ OCP_CONTACT_IPOPT = {"tol": 1e-8, "max_iter": 3000, "mumps_pivtol": 1e-8, "mu_in
 WARM_IPOPT = {"warm_start_init_point": "yes", "mu_init": 1e-6, "warm_start_bound_push": 1e-9,
               "warm_start_mult_bound_push": 1e-9, "warm_start_bound_frac": 1e-9, "warm_start_slack_bound_push": 1e-9,
               "warm_start_slack_bound_frac": 1e-9}
+#: Ipopt's start of the ladder of grids' first round, from a motion near the optimum: a small barrier (adaptive, as
+#: the homotopy's), nothing pushed off its bounds.  (Monotone from 1e-8, as a branch's first try, it stopped with
+#: the block pushes' costs 2.5e-7 off their exact discrete optima, at the barrier's own perturbation)
+NEAR_IPOPT = {"mu_init": 1e-6, "bound_push": 1e-8, "bound_frac": 1e-8, "slack_bound_push": 1e-8,
+              "slack_bound_frac": 1e-8}
 #: The penalty ladder of the contact-implicit solve.
 OCP_PENALTY = (1e3, 1e4, 1e5, 1e6)
 #: Solves with the arrivals read from the last answer, at most (step 2 of the module docstring).
@@ -297,8 +302,18 @@ def solve_contact_control(system, T, N: int, scheme: str, start, end, running, f
         # cold.  Measured on the hopper at N = 40: goal 0.5's second round, cold, stopped at 3000 iterations, and
         # warm it solved in 835 (certified, 12 s; capped at 500 it did not); goal 0.7 certified in 5.2 s where
         # it took 7.0)
-        warm = None if res is None else prog._ladder(init, {**opts, **WARM_IPOPT}, round_bounds, OCP_PENALTY, verbose,
-                                                     "rho", "Ipopt", warm=res)
+        if res is not None:
+            warm = prog._ladder(init, {**opts, **WARM_IPOPT}, round_bounds, OCP_PENALTY, verbose, "rho", "Ipopt",
+                                warm=res)
+        elif rungs:
+            # (the ladder of grids' first round starts from the march of the coarser answer's controls, near the
+            # optimum: with a small barrier, nothing pushed off its bounds, which keeps its complementarity; where
+            # that fails, as any first round.  Measured on the battery's pushes to a target at N = 80: the default
+            # start, its barrier at 0.1, lost the march's contacts and stopped at penalty minima with residuals
+            # of 0.3 to 1.5)
+            warm = prog._ladder(init, {**opts, **NEAR_IPOPT}, round_bounds, OCP_PENALTY, verbose, "rho", "Ipopt")
+        else:
+            warm = None
         if warm is not None and _converged(warm):
             res = warm
         else:
@@ -309,6 +324,12 @@ def solve_contact_control(system, T, N: int, scheme: str, start, end, running, f
         # it with its arrivals.  Measured on the hopper at N = 40: its third round stopped so with its landing untimed,
         # and the fourth and fifth settled it, cost 10.346 where the answer of the third was 10.478)
         if not _converged(res):
+            # (a later rung of the ladder failed -- restoration, or its iteration limit -- after an earlier one
+            # converged short of complementarity: that one's controls are the polish's to march and solve on their
+            # branch, as for any answer short of complementarity.  Measured on the battery's seed 1 with the hopper:
+            # a push whose second rung failed in restoration, at a residual of 1.5)
+            if prog.last_good is not None and res.solver_status not in SUCCESS_STATUSES:
+                res = prog.last_good[1]
             break
         Qc = res.values["q"].reshape(N + 1, n)
         now = arrivals(cm, Qc, res.values["qs"].reshape(N, n), tol, res.values["nu"])
@@ -570,10 +591,7 @@ def _branch(cm, prog, q0, point, values, bounds, opts, rho, verbose, scales, war
     # initial-value branch's small start (1e-8, pushes 1e-8) keeps that point and solved the branch of a slip that
     # stops inside a step at N = 320, where the homotopy's (0.1 adaptive, pushes 1e-2) spent 3000 iterations; at
     # N = 80 the other way round.  The small one first, capped, then the homotopy's)
-    small = {**opts, **{k: CONTACT_IPOPT[k] for k in ("mu_init", "bound_push", "bound_frac", "slack_bound_push",
-                                                      "slack_bound_frac")}, "mu_strategy": "monotone",
-             "max_iter": min(int(opts.get("max_iter", 3000)), BRANCH_SMALL_ITER)}
-    got = prog._ladder(init, small, branch, [rho], verbose, "branch", "the march's branch")
+    got = prog._ladder(init, _small(opts), branch, [rho], verbose, "branch", "the march's branch")
     # (one solved only to Ipopt's acceptable level is the polish's to certify and solve again from: the homotopy's
     # barrier from the march's point instead spent 3000 iterations on the hopper's first branch at N = 40, where
     # the small one reached its acceptable level in 456 and the next branch solved in 106)
@@ -582,6 +600,14 @@ def _branch(cm, prog, q0, point, values, bounds, opts, rho, verbose, scales, war
     again = prog._ladder(init, opts, branch, [rho], verbose, "branch", "the march's branch")
     again.homotopy = list(got.homotopy) + list(again.homotopy)
     return again
+
+
+def _small(opts) -> dict:
+    """``opts`` with the initial-value program's small barrier start (nothing pushed off its bounds), monotone,
+    capped at BRANCH_SMALL_ITER iterations: a solve from a motion that satisfies its rows."""
+    return {**opts, **{k: CONTACT_IPOPT[k] for k in ("mu_init", "bound_push", "bound_frac", "slack_bound_push",
+                                                     "slack_bound_frac")}, "mu_strategy": "monotone",
+            "max_iter": min(int(opts.get("max_iter", 3000)), BRANCH_SMALL_ITER)}
 
 
 def b_stationarity(prog, res: NLPResult, scale: float):
