@@ -296,8 +296,6 @@ def _solve_contact_control(system, T, N: int, scheme: str, start, end, running, 
     if vN is not None and cm.friction:
         bounds["fratio_end"] = _end_ratio_bounds(cm, qN, vN, scales[2])
     opts = {**CONTACT_IPOPT, **OCP_CONTACT_IPOPT, **(options or {})}
-    Q, S = init["q"].reshape(N + 1, n), init["qs"].reshape(N, n)
-    timed = arrivals(cm, Q, S, tol, init.get("nu"))
     steps, res, rounds, seen = [], None, 0, set()
     if keep_modes:
         res = _continued(cm, prog, q0, marched, init, bounds, opts, verbose, scales, qN, vN, steps)
@@ -305,20 +303,19 @@ def _solve_contact_control(system, T, N: int, scheme: str, start, end, running, 
     # each round's bounces (arrivals that leave again: Newton's law) are read from the point it starts from.  (Freeing
     # the split of the arrivals' neighbours too, so that an impact could move by a step within a round, took 188
     # iterations where 42 did on the push to a target at N = 40, and is not needed where the impacts' steps are kept)
-    Qc = init["q"].reshape(N + 1, n)
-    bounce = bounces(prog, Qc, timed)
-    turn, fturn = slip_turns(cm, prog, init, q0, timed, scales)
+    if not keep_modes:
+        timed, bounce, turn, fturn = _events(cm, prog, init, q0, tol, scales)
     while rounds < TIMING_ROUNDS and not keep_modes:
         rounds += 1
         seen.add((timed.tobytes(), bounce.tobytes(), turn.tobytes()))
         prog.nlp.set_parameter("timed", timed.astype(float).reshape(-1))
         prog.nlp.set_parameter("bounce", bounce.astype(float).reshape(-1))
         free = np.any(timed | turn, axis=1)
-        bounds["beta"] = (np.where(free, EDGE - 0.5, 0.0), np.where(free, 0.5 - EDGE, 0.0))
         if res is not None:
             init = {k: v.copy() for k, v in res.values.items()}
         init["beta"] = np.where(free, np.clip(init["beta"], EDGE - 0.5, 0.5 - EDGE), 0.0)
-        round_bounds = {**bounds, **_event_bounds(cm, prog, turn, fturn, timed, init)}
+        round_bounds = {**bounds, "beta": (np.where(free, EDGE - 0.5, 0.0), np.where(free, 0.5 - EDGE, 0.0)),
+                        **_event_bounds(cm, prog, turn, fturn, timed, init)}
         # (a later round starts from the last one's primal-dual point with a small barrier; where that fails,
         # cold.  Measured on the hopper at N = 40: goal 0.5's second round, cold, stopped at 3000 iterations, and
         # warm it solved in 835 (certified, 12 s; capped at 500 it did not); goal 0.7 certified in 5.2 s where
@@ -352,10 +349,7 @@ def _solve_contact_control(system, T, N: int, scheme: str, start, end, running, 
             if prog.last_good is not None and res.solver_status not in SUCCESS_STATUSES:
                 res = prog.last_good[1]
             break
-        Qc = res.values["q"].reshape(N + 1, n)
-        now = arrivals(cm, Qc, res.values["qs"].reshape(N, n), tol, res.values["nu"])
-        bnow = bounces(prog, Qc, now)
-        tnow, fnow = slip_turns(cm, prog, res.values, q0, now, scales)
+        now, bnow, tnow, fnow = _events(cm, prog, res.values, q0, tol, scales)
         if np.array_equal(now, timed) and np.array_equal(bnow, bounce) and np.array_equal(tnow, turn):
             break
         if (now.tobytes(), bnow.tobytes(), tnow.tobytes()) in seen:
@@ -380,6 +374,16 @@ def _solve_contact_control(system, T, N: int, scheme: str, start, end, running, 
     if prior is not None and prior.success and out.success:
         out.cost_estimate = abs(out.cost - prior.cost) / 3.0
     return out
+
+
+def _events(cm: ContactMechanics, prog, V, q0, tol: float, scales):
+    """The events a timing round holds, read from the values ``V``: ``(arrivals, bounces, slip turns, the turns'
+    node ratios)`` (:func:`arrivals`, :func:`bounces`, :func:`slip_turns`)."""
+    N, n = prog.L, cm.n
+    Q = np.asarray(V["q"], float).reshape(N + 1, n)
+    timed = arrivals(cm, Q, np.asarray(V["qs"], float).reshape(N, n), tol, V.get("nu"))
+    turn, ratio = slip_turns(cm, prog, V, q0, timed, scales)
+    return timed, bounces(prog, Q, timed), turn, ratio
 
 
 def slip_turns(cm: ContactMechanics, prog, V, q0, timed, scales):
@@ -411,7 +415,8 @@ def slip_turns(cm: ContactMechanics, prog, V, q0, timed, scales):
 
 
 def _event_bounds(cm: ContactMechanics, prog, turn, ratio, timed, init) -> dict:
-    """A round's rows of the slips that turn (:func:`slip_turns`) as the march's mode W
+    """A round's rows of its events: a timed step's arriving contact on the surface at its sub-node, and the slips
+    that turn (:func:`slip_turns`) as the march's mode W
     (:meth:`ContactNLP.mode_bounds`): the step's sub-node at the turn, where the slip velocity after the contact's
     share ``μ⁻`` of the first part's force vanishes (``left_slip``), its normal velocity too (``release``), the
     share's ratio the node slot's, and the sub-node slot's slip the second part's (``arrive``).  Sets the round's
@@ -593,10 +598,9 @@ def _branch(cm, prog, q0, point, values, bounds, opts, rho, verbose, scales, war
     controls, a free final time and a free start free), from ``point`` (the rest from ``values``)."""
     N = prog.L
     branch = prog.mode_bounds(q0, point)
-    lo_b, hi_b = branch["beta"]
-    branch["beta"] = (np.maximum(lo_b, np.minimum(EDGE - 0.5, hi_b)), np.minimum(hi_b, np.maximum(0.5 - EDGE, lo_b)))
-    branch.update({k: v for k, v in bounds.items() if k not in ("beta", "mul", "release", "fleft", "left_slip",
-                                                                        "sub_gap", "node_gap")})
+    # (its timed sub-nodes inside the march's window, as a round's: EDGE)
+    branch["beta"] = tuple(np.clip(b, EDGE - 0.5, 0.5 - EDGE) for b in branch["beta"])
+    branch.update(bounds)
     if cm.friction:
         # a slot without friction force (an open contact: no force, so its ratio is free; the march fixes it at 0)
         # keeps its ratio in the cone, where the slip pair sets it against the slip
