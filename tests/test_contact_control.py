@@ -58,6 +58,33 @@ def test_the_march_takes_a_control_history():
     assert np.max(np.abs(np.asarray(point["q"]).reshape(-1, 2)[:, 1])) < 1e-15     # on the floor throughout
 
 
+def test_the_march_given_modes_keeps_only_valid_ones():
+    """The certificate marches a branch's answer from the branch's own modes (search._started): given modes are
+    only the search's start, judged by its own tests.  The braked block of the test above has one motion (the stop
+    timed inside its step, then sticking): given its own modes and values, the march returns it to rounding; given
+    the block in flight at every step, or the stop's step untimed and the block still sliding, it refuses them and
+    finds the same motion (measured: 6e-17 m, 0 and 6e-17 m)."""
+    from castrajectory.solve.contact.control import _step_unknowns, mechanics
+    from castrajectory.solve.contact.march import discrete_march
+    system, _ = block()
+    cm = mechanics(system, "midpoint")
+    N, h, scales = 40, 0.025, (1.0, 3.13, 3.13, 9.81)
+    U = np.r_[np.full(20, 5.0), np.full(20, -2.0)][:, None]
+    own = discrete_march(cm, np.zeros(2), np.zeros(2), N, h, scales, controls=U)
+    modes, fmodes = np.asarray(own["modes"]).reshape(N, -1), np.asarray(own["fmodes"]).reshape(N, -1)
+    assert "W" in modes          # the stop, timed inside its step
+    X = _step_unknowns(cm, own, N)
+    stop = int(np.where(modes[:, 0] == "W")[0][0])
+    flight = [(["O"], ["-", "-"], X[k]) for k in range(N)]
+    sliding = [(list(modes[k]), list(fmodes[k]), X[k]) if k != stop else (["H"], ["U", "U"], X[k]) for k in range(N)]
+    given = [(list(modes[k]), list(fmodes[k]), X[k]) for k in range(N)]
+    Q = np.asarray(own["q"]).reshape(-1, 2)
+    for starts in (given, flight, sliding):
+        got = discrete_march(cm, np.zeros(2), np.zeros(2), N, h, scales, controls=U, starts=starts)
+        assert np.array_equal(np.asarray(got["modes"]), np.asarray(own["modes"]))
+        assert np.max(np.abs(np.asarray(got["q"]).reshape(-1, 2) - Q)) < 1e-13
+
+
 def test_block_push_hits_the_exact_discrete_optimum_and_is_certified():
     """Sliding the whole horizon (T = 1 < τ* = 1.43): the cost is the midpoint optimum on N steps, exactly
     (measured 6e-11 at N = 20); the march of its controls reproduces it (3e-12); the block never leaves the floor."""

@@ -468,14 +468,17 @@ def _polish(cm, prog, res, q0, N, scales, bounds, opts, verbose, steps):
     reproduce it, solve the program again on a branch of the march (its modes fixed, :meth:`ContactNLP.mode_bounds`;
     the controls free) and certify again.  The first branch is the answer's own steps' (:func:`_local_point`: each
     step's modes those of its one-step march from the answer's node, the answer's nodes kept), the next ones that of
-    the march of the answer's controls from the start.  ``(result, certificate, march distance, solves)``: the
+    the march of the answer's controls from the start.  A branch's answer is marched from the branch's modes
+    (:func:`.search._started`: each step's search starts there, and keeps them where they pass its tests), so that
+    a step with two solutions -- a slip that turns at its very start, a landing at its very end -- is checked on the
+    side the branch holds.  ``(result, certificate, march distance, solves)``: the
     certificate is the last one-step distance, the march distance that of the whole march from the initial state
     (``inf`` where a march stopped)."""
     rho = float(np.asarray(prog.nlp.parameter_value("rho")).reshape(-1)[0])
-    solves = 0
+    solves, hint = 0, None
     while True:
         h, p0, U = _start_of(prog, res.values, q0)
-        cert, local = _local(cm, prog, res.values, q0, N, scales)
+        cert, local = _local(cm, prog, res.values, q0, N, scales, hint)
         if (cert <= CERTIFICATE_TOL and res.success) or solves >= POLISH_ROUNDS:
             break
         point = _local_point(cm, res.values, local, N) if solves == 0 else None
@@ -493,13 +496,28 @@ def _polish(cm, prog, res, q0, N, scales, bounds, opts, verbose, steps):
         # (a branch solved only to Ipopt's acceptable level is certified again and solved from there: measured on a
         # sticking block push, where the first branch stopped so)
         res = got
+        # its steps are marched from the branch's modes first (:func:`.search._started`): where a step has two
+        # solutions, the march checks the one the branch holds
+        hint = (point["modes"], point["fmodes"] if "fmodes" in point else
+                np.full((N, 2 * cm.c), "-"))
     h, p0, U = _start_of(prog, res.values, q0)
-    marched = _distance(discrete_march(cm, q0, p0, N, h, scales, controls=U if cm.nu else None),
+    marched = _distance(discrete_march(cm, q0, p0, N, h, scales, controls=U if cm.nu else None,
+                                       starts=_starts(cm, res.values, N, hint)),
                         res.values["q"].reshape(N + 1, cm.n), N, h)
     return res, cert, marched, solves
 
 
-def _local(cm, prog, V, q0, N, scales):
+def _starts(cm, V, N, hint):
+    """Each step's ``(modes, friction modes, unknowns)`` of the values ``V`` solved on the branch of the modes
+    ``hint`` (:func:`.search._started`), or None without a branch."""
+    if hint is None:
+        return None
+    X = _step_unknowns(cm, V, N)
+    M, F = np.asarray(hint[0]).reshape(N, -1), np.asarray(hint[1]).reshape(N, -1)
+    return [(list(M[k]), list(F[k]), X[k]) for k in range(N)]
+
+
+def _local(cm, prog, V, q0, N, scales, hint=None):
     """The one-step certificate: every step of the answer marched by the contact march from the answer's own node
     ``q_k`` and incoming momentum ``p_k⁻`` under its control, its end against the answer's ``q_{k+1}``; the largest
     distance relative to ``max(1, max |q|)`` (``inf`` where a step's march fails), and the steps' marches (``None``
@@ -507,25 +525,28 @@ def _local(cm, prog, V, q0, N, scales):
     does not amplify (the whole march from the start, the march distance, drifts by 2e-6 over 320 steps on the push
     to a target, where every step lands within 1e-10)."""
     # (the same values are marched twice where the rounds settle: their turns read, then the polish's certificate)
-    key = b"".join(np.ascontiguousarray(V[k], float).tobytes() for k in sorted(V))
+    key = b"".join(np.ascontiguousarray(V[k], float).tobytes() for k in sorted(V)) + \
+        (b"" if hint is None else np.asarray(hint[0]).tobytes() + np.asarray(hint[1]).tobytes())
     memo = getattr(prog, "_local_memo", None)
     if memo is not None and memo[0] == key:
         return memo[1]
-    out = _local_marches(cm, prog, V, q0, N, scales)
+    out = _local_marches(cm, prog, V, q0, N, scales, hint)
     prog._local_memo = (key, out)
     return out
 
 
-def _local_marches(cm, prog, V, q0, N, scales):
+def _local_marches(cm, prog, V, q0, N, scales, hint=None):
     n = cm.n
     h, p0, U = _start_of(prog, V, q0)
     Q, S, B = V["q"].reshape(N + 1, n), V["qs"].reshape(N, n), V["beta"].reshape(N)
     zp = _zparts(cm, V, N, 1)
     pin = np.asarray(cm.p_node_minus.map(N)(S.T, B, Q[1:].T, h, *zp, *([U.T] if cm.nu else []))).T
+    starts = _starts(cm, V, N, hint)
     worst, marches = 0.0, []
     for k in range(N):
         p = p0 if k == 0 else pin[k - 1]
-        pt = discrete_march(cm, Q[k], p, 1, h, scales, controls=U[k:k + 1] if cm.nu else None)
+        pt = discrete_march(cm, Q[k], p, 1, h, scales, controls=U[k:k + 1] if cm.nu else None,
+                            starts=None if starts is None else starts[k:k + 1])
         marches.append(pt)
         if pt is None:
             worst = math.inf
@@ -533,6 +554,17 @@ def _local_marches(cm, prog, V, q0, N, scales):
         qn = np.asarray(pt["q"], float).reshape(-1, n)[-1]
         worst = max(worst, float(np.max(np.abs(qn - Q[k + 1]))))
     return worst / max(1.0, float(np.max(np.abs(Q)))), marches
+
+
+def _step_unknowns(cm, V, N) -> np.ndarray:
+    """Each step's unknowns of the march (:attr:`ContactMechanics.layout`) from the program's values ``V``, ``(N, nx)``
+    (the end node ``q_{k+1}`` for the step's ``q``)."""
+    X = np.zeros((N, cm.nx))
+    for name, sl in cm.layout.items():
+        if sl.stop > sl.start and name in V:
+            vals = np.asarray(V[name], float).reshape(-1)
+            X[:, sl] = vals[-N * (sl.stop - sl.start):].reshape(N, -1) if name == "q" else vals.reshape(N, -1)
+    return X
 
 
 def _local_point(cm, V, marches, N):

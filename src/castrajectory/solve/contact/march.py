@@ -53,12 +53,13 @@ MAX_SPLITS = 20
 
 
 def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_splits: int = MAX_SPLITS,
-                   trace: Optional[list] = None, controls=None) -> Optional[Dict[str, np.ndarray]]:
+                   trace: Optional[list] = None, controls=None, starts=None) -> Optional[Dict[str, np.ndarray]]:
     """The contact program's point for ``L`` steps of ``h`` from ``(q0, p0)``, solved step by step (module
     docstring), on a grid refined where a step would hold two impacts: the point's arrays, ``steps``
     (the step lengths) and ``base`` (the index of each step's base step); ``None`` where a step's mode
     search fails.  ``controls``: the control of every step, ``(L, nu)``, for a system with controls (a
-    halved step keeps its base step's)."""
+    halved step keeps its base step's).  ``starts``: each step's ``(modes, friction modes, unknowns)``, tried
+    before its search (:func:`.search._started`; a halved step searches its own), the steps marched one by one."""
     step = _Step(cm, scales)
     if cm.nu:
         U = np.asarray(controls, float).reshape(L, cm.nu)
@@ -87,7 +88,7 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
         Qn = None
         if cm.nu:
             step.uarg = [U[k]]
-        if L - k >= 2 and np.all(~touch | held_prev):
+        if L - k >= 2 and np.all(~touch | held_prev) and starts is None:
             # steps that keep their modes (open contacts stay open, held ones held: free flight, a body
             # resting or sliding), many in one call: the march's step with those modes (the same rows,
             # Newton to rounding), accepted up to the first step that touches or crosses with an open
@@ -107,7 +108,7 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
             except RuntimeError:
                 # a singular Newton system (friction rows at zero force: no step before the chunk yet)
                 Qn = None
-        if L - k >= 2 and np.all(~touch | held_prev) and Qn is not None:
+        if Qn is not None:
             held = touch & held_prev
             K = min(span, L - k)
             c = cm.c
@@ -139,7 +140,8 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
         pending = [h]
         while pending:
             hk = pending.pop(0)
-            out = _march_step(step, q, p, hk, g_q, held_prev, tol, finest=hk < h / 2 ** max_splits * 1.5)
+            out = _march_step(step, q, p, hk, g_q, held_prev, tol, finest=hk < h / 2 ** max_splits * 1.5,
+                              start=starts[k] if starts is not None and hk == h else None)
             if out == "split":
                 pending[:0] = [0.5 * hk, 0.5 * hk]
                 continue

@@ -75,19 +75,24 @@ def _crossing_fraction(g0, gs, gn, alpha):
     return alpha + (1.0 - alpha) * gs / (gs - gn) if gn < 0.0 else 1.0
 
 
-def _march_step(step: _Step, q, p, h, g_q, held_prev, tol, finest: bool):
+def _march_step(step: _Step, q, p, h, g_q, held_prev, tol, finest: bool, start=None):
     """One step from ``(q, p)``: ``(q̃, q_{k+1}, β, ν, μ, λ, λ̃, modes, gaps at q_{k+1}, friction ratios,
     friction modes)`` (:func:`_result`), ``"split"`` if
     it needs two impacts at different times (and is not the finest step), or ``(reason, detail)``.
 
     The modes are searched greedily (one change per solve, at the most violated condition); if that
     cycles or stalls, every combination of modes of the contacts involved (touching at ``q_k``, or seen
-    crossing) is tried, fewest changes first (:func:`_enumerate`)."""
+    crossing) is tried, fewest changes first (:func:`_enumerate`).  ``start``: ``(modes, friction modes, x)``
+    tried first, from ``x`` (:func:`_started`)."""
     c = step.c
     pen = 1e-12 * step.ell
     touch = g_q <= tol
     v = np.linalg.solve(np.asarray(step.cm.system.mass_matrix(q)), p)
     x0 = restage(step.cm, np.concatenate([q + 0.5 * h * v, q + h * v, np.zeros(step.cm.nx - 2 * step.n)]), q)
+    if start is not None:
+        got = _started(step, q, p, h, g_q, tol, finest, x0, start)
+        if got is not None:
+            return got
     # a flight that landed on this node (to rounding) arrives with its impact here: Newton's law at the node
     an = np.abs(np.asarray(step.cm.acc_normal(q, v, *step.uarg)).reshape(-1))
     arriving = touch & ~held_prev & (-(np.asarray(step.cm.system.gap(q)[1]) @ v) > IMPACT_SPEED_STEPS * an * h)
@@ -108,13 +113,9 @@ def _march_step(step: _Step, q, p, h, g_q, held_prev, tol, finest: bool):
         crossed |= set(np.where((gs < -pen) | (gn < -pen))[0].tolist())
         change = _next_modes(modes, touch, g_q, gs, gn, nu, mu, b, pen, tol, step, finest)
         if change is None:
-            law = _cascade(step, q, p, h, x, used, tol)
-            if law != "rejected":
-                if not law:
-                    turned = _slip_turn(step, q, p, h, used, x, step.last_fmodes)
-                    if turned is not None:
-                        return _result(step, *turned)
-                return law or _result(step, x, used, gn, step.last_fmodes)
+            out = _solved(step, q, p, h, x, used, gn, tol)
+            if out is not None:
+                return out
             why = "the sequential law"
             break
         if change == "split":
@@ -124,6 +125,64 @@ def _march_step(step: _Step, q, p, h, g_q, held_prev, tol, finest: bool):
     if found is not None:
         return found
     return "split" if not finest else (why, tuple(modes))
+
+
+def _base_mode(m: str, touching: bool):
+    """The mode a step's search starts from for the mode ``m`` found before, or None where it cannot hold: the modes
+    an impact law sets (T timing the sub-node, F taking part, P at the node, K caught) go back to the arrival's (the
+    law is the search's to apply again); a held, released, turning or node-impact contact touches at ``q_k``, an
+    arrival from flight does not."""
+    if m == F:
+        m = H if touching else I
+    m = {T: I, K: C, P: N}.get(m, m)
+    if m == O or (m in (H, R, W, N)) == touching:
+        return m
+    return None
+
+
+def _started(step: _Step, q, p, h, g_q, tol, finest, x0, start):
+    """The step in given modes (a solved program's own, :func:`.control._polish`): ``start = (modes, friction modes,
+    x)``, solved from ``x`` by the step's Newton and judged by the search's own tests -- every force and multiplier
+    of its sign, every gap open, every friction slot in its cone or sliding with its slip (:func:`_friction`, which
+    starts from the given friction modes), the impact laws applied again (:func:`_cascade`, :func:`_impact_law`),
+    a slip that turns inside an untimed step timed (:func:`_slip_turn`).  The step's result where they all hold,
+    else None (and the search runs as without ``start``).  Where a step has two solutions (a slip that turns at a
+    step's very start: timed there or sticking from the node), the given one is the one the search checks.  A given
+    impact whose bounce ends inside the touching band stays an impact where its gap is not negative (the search's
+    catch, :func:`_next_modes`, is its choice for a flight the grid does not resolve, not a condition of the step:
+    the hopper's landing at the last sub-node a step allows, its foot 9.5e-10 above the floor at the next node,
+    cycled there between the impact and the catch, whose hold pulls)."""
+    hint, fhint, xh = start
+    touch = g_q <= tol
+    modes = [_base_mode(m, bool(touch[j])) for j, m in enumerate(hint)]
+    if any(m is None for m in modes):
+        return None
+    saved = list(step.fprev)
+    step.fprev = list(fhint)
+    got = _try(step, q, p, h, modes, x0, np.asarray(xh, float).copy(), None)
+    if got is not None:
+        x, gs, gn, nu, mu, b, used = got
+        if _next_modes(modes, touch, g_q, gs, gn, nu, mu, b, 1e-12 * step.ell, tol, step, finest,
+                       catch=False) is None:
+            out = _solved(step, q, p, h, x, used, gn, tol)
+            if out is not None:
+                return out
+    step.fprev = saved
+    return None
+
+
+def _solved(step: _Step, q, p, h, x, used, gn, tol):
+    """A step whose modes ``used`` pass the search's tests, finished: the impact laws applied (:func:`_cascade`), a
+    slip that turns inside an untimed step timed (:func:`_slip_turn`); its result (:func:`_result`), or None where
+    the sequential law rejects it."""
+    law = _cascade(step, q, p, h, x, used, tol)
+    if law == "rejected":
+        return None
+    if not law:
+        turned = _slip_turn(step, q, p, h, used, x, step.last_fmodes)
+        if turned is not None:
+            return _result(step, *turned)
+    return law or _result(step, x, used, gn, step.last_fmodes)
 
 
 def _try(step: _Step, q, p, h, modes, x0, x, frac):
@@ -514,9 +573,11 @@ def _impact_law(step: _Step, q, p, h, x, modes, cascade: bool):
     return xs, new
 
 
-def _next_modes(modes, touch, g0, gs, gn, nu, mu, b, pen, tol, step, finest):
+def _next_modes(modes, touch, g0, gs, gn, nu, mu, b, pen, tol, step, finest, catch=True):
     """The modes after one change (the most violated condition), ``None`` if the step is solved, or
-    ``"split"`` if it needs two impacts at different times."""
+    ``"split"`` if it needs two impacts at different times.  ``catch``: an impact whose bounce ends within the
+    touching tolerance of the surface is caught there (mode C; the search's choice where the grid does not resolve
+    the flight); without it, such a step is solved as it is (its gap is not negative)."""
     alpha = 0.5 + b
     worst, pick = 0.0, None
     # multipliers of free contacts (scaled)
@@ -525,10 +586,16 @@ def _next_modes(modes, touch, g0, gs, gn, nu, mu, b, pen, tol, step, finest):
             viol = -nu[j] / step.snu
             if viol > worst:
                 worst, pick = viol, (j, O)
-        if m in (H, I, C) and mu[j] < 0.0:
+        if m in (H, I, C, W) and mu[j] < 0.0:
             viol = -mu[j] / step.smu
             if viol > worst:
-                worst, pick = viol, (j, {H: R, I: O, C: I}[m])
+                worst, pick = viol, (j, {H: R, I: O, C: I, W: R}[m])
+        if m == W and (nu[j] < 0.0 or step.last_mul[j] < 0.0):
+            # (a turn, given to the search (_started): its node force and its share of the first part's
+            # force push, as the march's own turn (_slip_turn) checks)
+            viol = -min(nu[j] / step.snu, step.last_mul[j] / step.smu)
+            if viol > worst:
+                worst, pick = viol, (j, H)
         if m == R and step.last_mul[j] < 0.0:
             # (a released contact's share that pulls at the impact: it leaves at the step's node instead)
             viol = -step.last_mul[j] / step.smu
@@ -562,13 +629,13 @@ def _next_modes(modes, touch, g0, gs, gn, nu, mu, b, pen, tol, step, finest):
             viol = -gn[j]
             if viol > worst:
                 worst, pick = viol, (j, H)
-        elif m == I and gn[j] < tol:
+        elif m == I and gn[j] < (tol if catch else -pen):
             # the bounce does not clear the next node (its flight is shorter than the rest of the step:
             # the end of a Zeno accumulation) or lands exactly on it: caught there
             viol = tol - gn[j]
             if viol > worst:
                 worst, pick = viol, (j, C)
-        elif m in (I, C, H, R) and gs[j] < -pen:
+        elif m in (I, C, H, R, W) and gs[j] < -pen:
             return "split"
     if pick is not None:
         j, m = pick
