@@ -331,6 +331,10 @@ class Program:
         return [b.name for b in self._vars]
 
     @property
+    def parameter_names(self) -> List[str]:
+        return [b.name for b in self._params]
+
+    @property
     def constraint_names(self) -> List[str]:
         return list(self._cons)
 
