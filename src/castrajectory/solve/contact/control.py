@@ -794,7 +794,7 @@ def _answer(system, cm, prog, res: NLPResult, steps, rounds, q0, N, controls, ce
     t_sub = times[:-1] + (0.5 + B) * h
     # the cost: the running and final terms at the answer (the objective also holds the penalties)
     cost = prog.cost(V)
-    arr = arrivals(cm, Q, S, TOUCH_TOL * max(1.0, float(np.max(np.abs(q0)))))
+    arr = arrivals(cm, Q, S, TOUCH_TOL * max(1.0, float(np.max(np.abs(q0)))), NU)
     # (and the impacts at a node: a flight that landed on it, its node force an impulse, the march's mode N)
     node = np.asarray(prog.nlp.parameter_value("node_impact"), float).reshape(N, c) > 0
     impact_times = [sorted([float(t_sub[k]) for k in range(N) if arr[k, j] and MU[k, j] > 0.0]
