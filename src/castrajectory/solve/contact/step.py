@@ -157,10 +157,13 @@ class _Step:
                            np.zeros(c * self.fd) if rfixl is None else rfixl)
         small = 0
         size0 = 1.0 + float(np.max(np.abs(x)))
+        # (the inputs other than x converted once: numpy arrays to CasADi's DM on every call took three quarters of
+        # the compiled step's call, 0.16 ms against 0.04 ms on the hopper)
+        args = [a if isinstance(a, float) else ca.DM(a) for a in (*args, *self.uarg)]
         for _ in range(NEWTON_ITER):
-            r, Jr = self.fn(x, *args, *self.uarg)
-            r = np.asarray(r).reshape(-1)
-            Jr = np.asarray(Jr)
+            r, Jr = self.fn(x, *args)
+            r = r.full().reshape(-1)
+            Jr = Jr.full()
             # rows and columns equilibrated (momentum rows ~ 1/h², gap rows ~ 1/ℓ): the step's
             # rounding then stays at the level of the unknowns, not of the Jacobian's condition
             # (a trial far from the step's solution may overflow: it is refused, quietly)
@@ -184,7 +187,7 @@ class _Step:
             small = small + 1 if np.max(np.abs(dx)) <= 1e-14 * (1.0 + float(np.max(np.abs(x)))) else 0
             if small == 2:
                 break
-        r, Jr = self.fn(x, *args, *self.uarg)
+        r, Jr = self.fn(x, *args)
         # each row in units of the unknowns (divided by its largest derivative): rows that go like
         # 1/α near α = 0 are then held to the rounding of the point, not of their size
         r = np.asarray(r).reshape(-1) / np.maximum(np.max(np.abs(np.asarray(Jr)), axis=1), 1e-300)
