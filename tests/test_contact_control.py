@@ -85,6 +85,23 @@ def test_the_march_given_modes_keeps_only_valid_ones():
         assert np.max(np.abs(np.asarray(got["q"]).reshape(-1, 2) - Q)) < 1e-13
 
 
+def test_a_stop_at_its_steps_edge_moves_to_the_next_step():
+    """Battery seed 2's block #38 (μ = 0.323, d = 0.841, T = 0.598 < τ*: it slides the whole horizon), N = 80 on the
+    ladder of grids.  Its rounds held the block's stop inside a step, at the step's last sub-node, and it stuck for
+    the rest of the horizon: 18 % above the exact discrete optimum.  The stop's event moves a step per round until it
+    reaches the last step, where the end node's force stops the slide: the cost is the midpoint optimum (measured
+    4e-11 relative), certified, with the friction at the cone's edge throughout."""
+    mu, d, T = 0.3229349397076069, 0.8412680984082492, 0.5980267791261842
+    exact = BlockPush(1.0, mu, d, T, 9.81)
+    assert not exact.sticks
+    _, ocp = _problem("block_push").problem(d, T, 1.0, mu, 9.81, 2 * exact.peak_force + 1.0, 80)
+    sol = ocp.solve()
+    assert sol.success, sol.message
+    assert abs(sol.cost - exact.discrete_cost(80)) / exact.cost < 1e-8
+    assert sol.certificate < 1e-7
+    assert np.allclose(sol.fratio[:, 0], -mu, atol=1e-7)
+
+
 def test_block_push_hits_the_exact_discrete_optimum_and_is_certified():
     """Sliding the whole horizon (T = 1 < τ* = 1.43): the cost is the midpoint optimum on N steps, exactly
     (measured 6e-11 at N = 20); the march of its controls reproduces it (3e-12); the block never leaves the floor."""

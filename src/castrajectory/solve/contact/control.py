@@ -409,7 +409,30 @@ def _events(cm: ContactMechanics, prog, V, q0, tol: float, scales):
     Q = np.asarray(V["q"], float).reshape(N + 1, n)
     timed = arrivals(cm, Q, np.asarray(V["qs"], float).reshape(N, n), tol, V.get("nu"))
     turn, ratio = slip_turns(cm, prog, V, q0, timed, scales)
+    _move_edge_turns(prog, V, timed, turn, ratio)
     return timed, bounces(prog, Q, timed), turn, ratio
+
+
+def _move_edge_turns(prog, V, timed, turn, ratio) -> None:
+    """A turn the round held (its step's sub-node timing it) whose sub-node sits at an edge of the step's window
+    (``β = ±(½ − EDGE)``): the optimum wants it beyond, in the next step (or the one before), which one round cannot
+    give, since a round holds each event in its step.  The next round holds it there instead (``turn`` and ``ratio``
+    moved in place), one step per round.  (Measured on the battery's seed 2: a block pushed over the whole horizon
+    stopped at the end of step 74 of 80 and stuck, its stop at the window's edge in two rounds, and cost 18 % above
+    the exact discrete optimum of sliding to the end)"""
+    if not np.any(turn):
+        return
+    N, c = turn.shape
+    held = np.asarray(prog.nlp.parameter_value("release"), float).reshape(N, c) > 0
+    B = np.asarray(V["beta"], float).reshape(N)
+    for k, j in zip(*np.where(turn & held)):
+        step = 1 if B[k] >= 0.5 - EDGE - 1e-6 else -1 if B[k] <= EDGE - 0.5 + 1e-6 else 0
+        to = k + step
+        if not step or not 0 <= to < N or np.any(timed[to]) or turn[to, j]:
+            continue
+        turn[k, j] = False
+        if not (to == N - 1 and prog.end_velocity):       # (there the end node's force stops the slip: not held)
+            turn[to, j], ratio[to, j] = True, ratio[k, j]
 
 
 def slip_turns(cm: ContactMechanics, prog, V, q0, timed, scales):
