@@ -12,10 +12,10 @@ round-robin):
 * block pushes with random friction, distance and horizon, against the closed form (castrajectory.models.block_push):
   J* = 12 m²d²/τ³ + (μmg)²τ with the slide τ = min(T, √(6d/(μg))), and, sliding the whole horizon, the exact
   midpoint optimum;
-* hopper goals (nosnoc's hopper, problems/hopper.py, N = 40, goals in [0.4, 1]); a hopper takes 3 to 40 s on its
-  own, the others at most 17 s (``--no-hopper`` leaves them out).  Measured (#27's note): seed 2 (60 problems)
-  certified 57, median 2.4 s, worst 39 s, run alone; seed 1 (30) 29, worst 56 s with seed 2 and another job on the
-  same two cores; the hopper goals 19 of 22.
+* hopper goals (nosnoc's hopper, problems/hopper.py, N = 40, goals in [0.4, 1]); a hopper takes 3 to 41 s, the
+  others at most 17 s (``--no-hopper`` leaves them out).  Measured (#27's note; seeds 1 and 2 side by side on two
+  cores): seed 1 (30 problems) certified 29, worst 41 s, largest error of an ok answer 1.0e-2; seed 2 (60) 57,
+  worst 41 s, 3.9e-2; the hopper goals 19 of 22.
 
 Each row: the status (ok only with a certificate), the error against the oracle, the cost, the iterations, the
 time, the certificate, and for a failure the homotopy's last penalty and its complementarity residual; the summary
