@@ -64,7 +64,8 @@ def test_the_march_given_modes_keeps_only_valid_ones():
     timed inside its step, then sticking): given its own modes and values, the march returns it to rounding; given
     the block in flight at every step, or the stop's step untimed and the block still sliding, it refuses them and
     finds the same motion (measured: 6e-17 m, 0 and 6e-17 m)."""
-    from castrajectory.solve.contact.control import _step_unknowns, mechanics
+    from castrajectory.solve.contact.certificate import _step_unknowns
+    from castrajectory.solve.contact.control import mechanics
     from castrajectory.solve.contact.march import discrete_march
     system, _ = block()
     cm = mechanics(system, "midpoint")
