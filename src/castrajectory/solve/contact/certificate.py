@@ -117,37 +117,39 @@ def _starts(cm, V, N, hint):
     return [(list(M[k]), list(F[k]), X[k]) for k in range(N)]
 
 
-def _local(cm, prog, V, q0, N, scales, hint=None):
+def _local(cm, prog, V, q0, N, scales, hint=None, steps=None):
     """The one-step certificate: every step of the answer marched by the contact march from the answer's own node
     ``q_k`` and incoming momentum ``p_k⁻`` under its control, its end against the answer's ``q_{k+1}``; the largest
     distance relative to ``max(1, max |q|)`` (``inf`` where a step's march fails), and the steps' marches (``None``
     where one failed).  As DMOC's: every step is a step of the system under its control, which an unstable motion
     does not amplify (the whole march from the start, the march distance, drifts by 2e-6 over 320 steps on the push
-    to a target, where every step lands within 1e-10)."""
-    # (the same values are marched twice where the rounds settle: their turns read, then the polish's certificate)
+    to a target, where every step lands within 1e-10).  ``steps``: only those steps marched (the others' marches
+    None, and the distance theirs alone)."""
+    # (the same values are marched twice where the rounds settle: their turns read, then the polish's certificate;
+    # each step's march is kept for the values' next call, which marches only the steps not marched yet)
     key = b"".join(np.ascontiguousarray(V[k], float).tobytes() for k in sorted(V)) + \
         (b"" if hint is None else np.asarray(hint[0]).tobytes() + np.asarray(hint[1]).tobytes())
     memo = getattr(prog, "_local_memo", None)
-    if memo is not None and memo[0] == key:
-        return memo[1]
-    out = _local_marches(cm, prog, V, q0, N, scales, hint)
-    prog._local_memo = (key, out)
-    return out
+    if memo is None or memo[0] != key:
+        memo = prog._local_memo = (key, {})
+    done = memo[1]
+    return _local_marches(cm, prog, V, q0, N, scales, hint, range(N) if steps is None else steps, done)
 
 
-def _local_marches(cm, prog, V, q0, N, scales, hint=None):
+def _local_marches(cm, prog, V, q0, N, scales, hint, steps, done):
     n = cm.n
     h, p0, U = _start_of(prog, V, q0)
     Q, S, B = V["q"].reshape(N + 1, n), V["qs"].reshape(N, n), V["beta"].reshape(N)
     zp = _zparts(cm, V, N, 1)
     pin = np.asarray(cm.p_node_minus.map(N)(S.T, B, Q[1:].T, h, *zp, *([U.T] if cm.nu else []))).T
     starts = _starts(cm, V, N, hint)
-    worst, marches = 0.0, []
-    for k in range(N):
-        p = p0 if k == 0 else pin[k - 1]
-        pt = discrete_march(cm, Q[k], p, 1, h, scales, controls=U[k:k + 1] if cm.nu else None,
-                            starts=None if starts is None else starts[k:k + 1])
-        marches.append(pt)
+    worst, marches = 0.0, [None] * N
+    for k in steps:
+        if k not in done:
+            p = p0 if k == 0 else pin[k - 1]
+            done[k] = discrete_march(cm, Q[k], p, 1, h, scales, controls=U[k:k + 1] if cm.nu else None,
+                                     starts=None if starts is None else starts[k:k + 1])
+        pt = marches[k] = done[k]
         if pt is None:
             worst = math.inf
             continue

@@ -297,7 +297,7 @@ def _solve_contact_control(system, T, N: int, scheme: str, start, end, running, 
     # the split of the arrivals' neighbours too, so that an impact could move by a step within a round, took 188
     # iterations where 42 did on the push to a target at N = 40, and is not needed where the impacts' steps are kept)
     if not keep_modes:
-        timed, bounce, turn, fturn, marches = _events(cm, prog, init, q0, tol, scales)
+        timed, bounce, turn, fturn = _events(cm, prog, init, q0, tol, scales)
     held = None
     while rounds < TIMING_ROUNDS and not keep_modes:
         rounds += 1
@@ -307,7 +307,7 @@ def _solve_contact_control(system, T, N: int, scheme: str, start, end, running, 
         free = np.any(timed | turn, axis=1)
         if res is not None:
             init = {k: v.copy() for k, v in res.values.items()}
-            _restart(cm, prog, init, q0, scales, marches, np.any((timed | turn) != held, axis=1))
+            _restart(cm, prog, init, q0, scales, np.any((timed | turn) != held, axis=1))
         held = timed | turn
         init["beta"] = np.where(free, np.clip(init["beta"], EDGE - 0.5, 0.5 - EDGE), 0.0)
         round_bounds = {**bounds, "beta": (np.where(free, EDGE - 0.5, 0.0), np.where(free, 0.5 - EDGE, 0.0)),
@@ -349,7 +349,7 @@ def _solve_contact_control(system, T, N: int, scheme: str, start, end, running, 
             if prog.last_good is not None and res.solver_status not in SUCCESS_STATUSES:
                 res = prog.last_good[1]
             break
-        now, bnow, tnow, fnow, marches = _events(cm, prog, res.values, q0, tol, scales)
+        now, bnow, tnow, fnow = _events(cm, prog, res.values, q0, tol, scales)
         if np.array_equal(now, timed) and np.array_equal(bnow, bounce) and np.array_equal(tnow, turn):
             break
         if (now.tobytes(), bnow.tobytes(), tnow.tobytes()) in seen:
@@ -398,31 +398,31 @@ def _solve_contact_control(system, T, N: int, scheme: str, start, end, running, 
 
 def _events(cm: ContactMechanics, prog, V, q0, tol: float, scales):
     """The events a timing round holds, read from the values ``V``: ``(arrivals, bounces, slip turns, the turns'
-    node ratios, the steps' one-step marches or None)`` (:func:`arrivals`, :func:`bounces`, :func:`slip_turns`)."""
+    node ratios)`` (:func:`arrivals`, :func:`bounces`, :func:`slip_turns`)."""
     N, n = prog.L, cm.n
     Q = np.asarray(V["q"], float).reshape(N + 1, n)
     timed = arrivals(cm, Q, np.asarray(V["qs"], float).reshape(N, n), tol, V.get("nu"))
-    turn, ratio, marches = slip_turns(cm, prog, V, q0, timed, scales)
+    turn, ratio = slip_turns(cm, prog, V, q0, timed, scales)
     _move_edge_turns(prog, V, timed, turn, ratio)
-    return timed, bounces(prog, Q, timed), turn, ratio, marches
+    return timed, bounces(prog, Q, timed), turn, ratio
 
 
 #: A step's unknowns of the program (its node ``q_{k+1}`` apart) that a round's start takes from the step's march
 _STEP_VALUES = ("qs", "beta", "nu", "mu", "mul", "fleft", "fratio")
 
 
-def _restart(cm: ContactMechanics, prog, init, q0, scales, marches, changed) -> None:
+def _restart(cm: ContactMechanics, prog, init, q0, scales, changed) -> None:
     """A later round's start, in place: the steps whose held events ``changed`` take their unknowns from their
-    one-step marches from the last answer's nodes (the marches that read its events, :func:`slip_turns`), which
-    time those events; the nodes stay the answer's.  (The last answer itself violates the new round's rows there:
+    one-step marches from the last answer's nodes (those :func:`slip_turns` ran to read its events are not run
+    again), which time those events; the nodes stay the answer's.  (The last answer itself violates the new round's rows there:
     a turn newly held at a sub-node that sat elsewhere, an event no longer held whose step keeps its timed
     ``β``.  Measured on the hopper at N = 20: from the answer the rounds started at a primal infeasibility of
     13.9 and took 54 to 135 iterations each)"""
     N = prog.L
     if not np.any(changed):
         return
-    if marches is None:        # (no slip turns read: the arrivals' steps marched here)
-        _, marches = _local(cm, prog, init, q0, N, scales)
+    # (the steps slip_turns did not march, the arrivals' among them, marched here)
+    _, marches = _local(cm, prog, init, q0, N, scales, steps=np.where(changed)[0])
     for k in np.where(changed)[0]:
         pt = marches[k]
         if pt is None or np.asarray(pt["steps"]).size != 1:
@@ -458,16 +458,19 @@ def _move_edge_turns(prog, V, timed, turn, ratio) -> None:
 def slip_turns(cm: ContactMechanics, prog, V, q0, timed, scales):
     """Per step and contact: a held contact whose slip stops or turns inside the step, where the march times it
     (mode W): each step of ``V`` marched from its own node (:func:`_local`), in the steps without an arrival
-    (``timed``).  ``(turns, the sliding node slots' ratios, the steps' marches)`` (the marches None without planar
-    friction): the program's round times such a step's sub-node at the turn too (:func:`_event_bounds`).  (Read from the slip velocities at the step's ends instead, as the march
+    (``timed``).  ``(turns, the sliding node slots' ratios)``: the program's round times such a step's sub-node at
+    the turn too (:func:`_event_bounds`).  (Read from the slip velocities at the step's ends instead, as the march
     first does, the sliding block's stop was a turn where the march's timed step has no valid modes and it keeps
     the untimed one: the round then held a timed stop, and the block push that sticks cost 16.83 against the
     untimed answer's 16.49, at N = 40)"""
     N, c = prog.L, cm.c
     out, ratio = np.zeros((N, c), bool), np.zeros((N, c))
     if not cm.friction or cm.fd != 1:
-        return out, ratio, None
-    _, marches = _local(cm, prog, V, q0, N, scales)
+        return out, ratio
+    # (a slip turns only at a contact that touches at the step's start, q_k: the other steps are not marched)
+    Q = np.asarray(V["q"], float).reshape(N + 1, cm.n)
+    touch = np.any(cm.gaps(Q[:-1]) <= TOUCH_TOL * scales[0], axis=1) & ~np.any(timed, axis=1)
+    _, marches = _local(cm, prog, V, q0, N, scales, steps=np.where(touch)[0])
     for k, pt in enumerate(marches):
         if pt is None or np.asarray(pt["steps"]).size != 1 or np.any(timed[k]):
             continue
@@ -480,7 +483,7 @@ def slip_turns(cm: ContactMechanics, prog, V, q0, timed, scales):
         fm = np.asarray(pt["fmodes"]).reshape(-1)
         for j in np.where(modes == "W")[0]:
             out[k, j], ratio[k, j] = True, (-cm.mu_f[j] if fm[j] == "U" else cm.mu_f[j])
-    return out, ratio, marches
+    return out, ratio
 
 
 def _event_bounds(cm: ContactMechanics, prog, turn, ratio, timed, init) -> dict:
