@@ -13,7 +13,8 @@ The program is :class:`castrajectory.discretise.contact.control.ContactControlTr
    too, as the march times them (its mode W, :func:`slip_turns`): the sub-node at the turn, where the slip velocity
    vanishes.  A timed sub-node stays :data:`EDGE` of its step from the nodes, inside the window where the march
    times an event.  Which steps arrive or turn is read from the solution and the program solved again, warm, until
-   it no longer changes (:data:`TIMING_ROUNDS`).
+   it no longer changes (:data:`TIMING_ROUNDS`); the steps whose events changed start the next round from their
+   one-step marches, which time those events (:func:`_restart`).
 3. **Penalty ladder**: the exact ℓ1 penalties of the complementarity pairs rise (``PENALTY``), each solve warm
    started from the last, until the scaled complementarity residual is at most ``COMPLEMENTARITY_TOL``.
 4. **Certificate** (:mod:`.certificate`): every step of the answer is marched by the contact march from the answer's own node and
@@ -84,6 +85,9 @@ OCP_PENALTY = (1e3, 1e4, 1e5, 1e6)
 ITERATION_BUDGET = 7000
 #: Solves with the arrivals read from the last answer, at most (step 2 of the module docstring).
 TIMING_ROUNDS = 6
+#: Ipopt iterations of a restarted round's warm solve (:func:`_restart`), after which it starts from the last answer
+#: (restarted rounds took at most 451 on the hopper's goals 0.53, 0.7, 0.85 and 0.98)
+RESTART_ITER = 500
 #: Ipopt iterations of one step of the end conditions' continuation (keep_modes).
 CONTINUATION_ITER = 150
 #: A grid of more steps than this starts from the controls of the answer on half as many (see solve_contact_control).
@@ -298,7 +302,7 @@ def _solve_contact_control(system, T, N: int, scheme: str, start, end, running, 
     # iterations where 42 did on the push to a target at N = 40, and is not needed where the impacts' steps are kept)
     if not keep_modes:
         timed, bounce, turn, fturn = _events(cm, prog, init, q0, tol, scales)
-    held = None
+    held, restarted = None, False
     while rounds < TIMING_ROUNDS and not keep_modes:
         rounds += 1
         seen.add((timed.tobytes(), bounce.tobytes(), turn.tobytes()))
@@ -307,20 +311,29 @@ def _solve_contact_control(system, T, N: int, scheme: str, start, end, running, 
         free = np.any(timed | turn, axis=1)
         if res is not None:
             init = {k: v.copy() for k, v in res.values.items()}
-            _restart(cm, prog, init, q0, scales, np.any((timed | turn) != held, axis=1))
+            last = {k: v.copy() for k, v in init.items()}
+            restarted = _restart(cm, prog, init, q0, scales, np.any((timed | turn) != held, axis=1))
         held = timed | turn
-        init["beta"] = np.where(free, np.clip(init["beta"], EDGE - 0.5, 0.5 - EDGE), 0.0)
-        round_bounds = {**bounds, "beta": (np.where(free, EDGE - 0.5, 0.0), np.where(free, 0.5 - EDGE, 0.0)),
-                        **_event_bounds(cm, prog, turn, fturn, timed, init)}
-        if res is not None and cm.friction:
+        for start in (init, last) if restarted else (init,):
+            start["beta"] = np.where(free, np.clip(start["beta"], EDGE - 0.5, 0.5 - EDGE), 0.0)
+            round_bounds = {**bounds, "beta": (np.where(free, EDGE - 0.5, 0.0), np.where(free, 0.5 - EDGE, 0.0)),
+                            **_event_bounds(cm, prog, turn, fturn, timed, start)}
+        if restarted and cm.friction:
             init.update(_slips(cm, prog, init, scales[2]))
         # (a later round starts from the last one's primal-dual point with a small barrier; where that fails,
         # cold.  Measured on the hopper at N = 40: goal 0.5's second round, cold, stopped at 3000 iterations, and
         # warm it solved in 835 (certified, 12 s; capped at 500 it did not); goal 0.7 certified in 5.2 s where
         # it took 7.0)
         if res is not None:
-            warm = prog._ladder(init, {**opts, **WARM_IPOPT}, round_bounds, OCP_PENALTY, verbose, "rho", "Ipopt",
-                                warm=res)
+            # (a restarted round that does not converge within RESTART_ITER starts again from the last answer
+            # itself.  Measured on the hopper to goal 0.9 at N = 40: its second round, restarted, ran to Ipopt's
+            # limit, and cold again, spending the budget; from the answer it solved)
+            warm = prog._ladder(init, {**opts, **WARM_IPOPT, **({"max_iter": RESTART_ITER} if restarted else {})},
+                                round_bounds, OCP_PENALTY, verbose, "rho", "Ipopt", warm=res)
+            if restarted and not _converged(warm):
+                steps.extend(warm.homotopy)
+                warm = prog._ladder(last, {**opts, **WARM_IPOPT}, round_bounds, OCP_PENALTY, verbose, "rho", "Ipopt",
+                                    warm=res)
         elif rungs:
             # (the ladder of grids' first round starts from the march of the coarser answer's controls, near the
             # optimum: with a small barrier, nothing pushed off its bounds, which keeps its complementarity; where
@@ -334,7 +347,7 @@ def _solve_contact_control(system, T, N: int, scheme: str, start, end, running, 
             res = warm
         else:
             steps.extend(warm.homotopy if warm is not None else [])
-            res = prog._ladder(init, opts, round_bounds, OCP_PENALTY, verbose, "rho", "Ipopt")
+            res = prog._ladder(last if restarted else init, opts, round_bounds, OCP_PENALTY, verbose, "rho", "Ipopt")
         steps.extend(res.homotopy)
         if _converged(res):
             answers.append((res, {name: prog.nlp.parameter_value(name) for name in prog.nlp.parameter_names}))
@@ -411,16 +424,16 @@ def _events(cm: ContactMechanics, prog, V, q0, tol: float, scales):
 _STEP_VALUES = ("qs", "beta", "nu", "mu", "mul", "fleft", "fratio")
 
 
-def _restart(cm: ContactMechanics, prog, init, q0, scales, changed) -> None:
+def _restart(cm: ContactMechanics, prog, init, q0, scales, changed) -> bool:
     """A later round's start, in place: the steps whose held events ``changed`` take their unknowns from their
     one-step marches from the last answer's nodes (those :func:`slip_turns` ran to read its events are not run
     again), which time those events; the nodes stay the answer's.  (The last answer itself violates the new round's rows there:
     a turn newly held at a sub-node that sat elsewhere, an event no longer held whose step keeps its timed
     ``β``.  Measured on the hopper at N = 20: from the answer the rounds started at a primal infeasibility of
-    13.9 and took 54 to 135 iterations each)"""
+    13.9 and took 54 to 135 iterations each).  Whether any step was restarted."""
     N = prog.L
     if not np.any(changed):
-        return
+        return False
     # (the steps slip_turns did not march, the arrivals' among them, marched here)
     _, marches = _local(cm, prog, init, q0, N, scales, steps=np.where(changed)[0])
     for k in np.where(changed)[0]:
@@ -431,6 +444,7 @@ def _restart(cm: ContactMechanics, prog, init, q0, scales, changed) -> None:
             if key in pt and key in init:
                 row = np.asarray(pt[key], float).reshape(-1)
                 init[key].reshape(N, -1)[k] = row
+    return True
 
 
 def _move_edge_turns(prog, V, timed, turn, ratio) -> None:
