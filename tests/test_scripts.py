@@ -155,8 +155,8 @@ def test_console_list_run_and_report(quick_report):
         assert f"({stem}_plot.png)" in cic and (out / f"{stem}.json").exists()
     assert "FAILED" not in cic and cic.count("status: ok") == 5 and (out / "hopper.gif").exists()
     # the hopper at its defaults (N = 40): a motion of the hopper under its own controls (the contact march of its
-    # controls reproduces it: certificate 9e-12, the whole march 2e-11), complementarity 3e-10, no flipped biactive
-    # pair descends, the foot never enters the floor and the leg keeps its bounds; its cost 11.49 within 5 % of
+    # controls reproduces it: certificate 2e-14, the whole march 6e-13), complementarity 3e-11, no flipped biactive
+    # pair descends, the foot never enters the floor and the leg keeps its bounds; its cost 11.22 within 5 % of
     # nosnoc's own local optimum on the same problem (11.38, scripts/bench_contact_ocp.py --hopper)
     d = json.loads((out / "hopper.json").read_text())
     assert d["status"] == "ok" and d["certificate"] < 1e-9 and d["march_distance"] < 1e-8

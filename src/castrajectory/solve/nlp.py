@@ -283,9 +283,9 @@ class NLP(Program):
         self._build_time = (self._t_described - self._t0) + (time.perf_counter() - t)
         return self._solver
 
-    def _build_assembled(self, options, verbose, key):
-        """Build the solver from element derivatives (see :mod:`castrajectory.solve.assembly`)."""
-        t = time.perf_counter()
+    def _assemble(self):
+        """The decision and parameter symbols, objective, rows and the derivative functions handed to Ipopt
+        (``grad_f``, ``jac_g``, ``hess_lag``), assembled from the element families' derivatives."""
         nx = sum(b.init.size for b in self._vars)
         npar = sum(b.init.size for b in self._params)
         Xm, Pm = ca.MX.sym("x", nx), ca.MX.sym("p", npar)
@@ -364,6 +364,22 @@ class NLP(Program):
             "hess_lag": ca.Function("hess_lag", [Xm, Pm, lam_f, lam_g], [Hl],
                                     ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"]),
         }
+        return Xm, Pm, f_total, G, funcs
+
+    def _build_assembled(self, options, verbose, key):
+        """Build the solver from element derivatives (see :mod:`castrajectory.solve.assembly`)."""
+        t = time.perf_counter()
+        # (the assembled functions depend on the program's structure only, not on Ipopt's options: a solve with
+        # other options reuses them.  Measured on the hopper at N = 20: its rounds' two option sets each assembled
+        # them, 0.09 s a build)
+        shape = (sum(b.init.size for b in self._vars), sum(b.init.size for b in self._params), self._ng,
+                 len(self._g), len(self._f_groups), id(self._f), self._hessian, self.compile_elements, jit.enabled())
+        cached = getattr(self, "_assembled", None)
+        if cached is not None and cached[0] == shape:
+            Xm, Pm, f_total, G, funcs = cached[1]
+        else:
+            Xm, Pm, f_total, G, funcs = self._assemble()
+            self._assembled = (shape, (Xm, Pm, f_total, G, funcs))
         self._functions = funcs
         # no_nlp_grad: CasADi would otherwise differentiate the whole graph once more (slow to build,
         # and impossible through compiled element functions); Ipopt's own f, g and multipliers are used.
