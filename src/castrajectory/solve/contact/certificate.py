@@ -71,7 +71,6 @@ def _polish(cm, prog, res, q0, N, scales, bounds, opts, verbose, steps):
     rho = float(np.asarray(prog.nlp.parameter_value("rho")).reshape(-1)[0])
     solves, hint, last = 0, None, math.inf
     while True:
-        h, p0, U = _start_of(prog, res.values, q0)
         cert, local = _local(cm, prog, res.values, q0, N, scales, hint)
         # (a frictional impact's law (modes T, K): the branch fixes its impulse at the march's value, and the answer's
         # motion moves the law's; each branch from the last answer's march shrinks that mismatch.  Measured on the
@@ -83,6 +82,7 @@ def _polish(cm, prog, res, q0, N, scales, bounds, opts, verbose, steps):
         last = cert
         point = _local_point(cm, res.values, local, N) if solves == 0 else None
         if point is None:
+            h, p0, U = _start_of(prog, res.values, q0)
             point = discrete_march(cm, q0, p0, N, h, scales, controls=U if cm.nu else None)
             if point is None or point["steps"].size != N:
                 break

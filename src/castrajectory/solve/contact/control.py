@@ -314,10 +314,11 @@ def _solve_contact_control(system, T, N: int, scheme: str, start, end, running, 
             last = {k: v.copy() for k, v in init.items()}
             restarted = _restart(cm, prog, init, q0, scales, np.any((timed | turn) != held, axis=1))
         held = timed | turn
+        round_bounds = {**bounds, "beta": (np.where(free, EDGE - 0.5, 0.0), np.where(free, 0.5 - EDGE, 0.0)),
+                        **_event_bounds(cm, prog, turn, fturn, timed, init)}
         for start in (init, last) if restarted else (init,):
             start["beta"] = np.where(free, np.clip(start["beta"], EDGE - 0.5, 0.5 - EDGE), 0.0)
-            round_bounds = {**bounds, "beta": (np.where(free, EDGE - 0.5, 0.0), np.where(free, 0.5 - EDGE, 0.0)),
-                            **_event_bounds(cm, prog, turn, fturn, timed, start)}
+            _event_start(cm, turn, fturn, start)
         if restarted and cm.friction:
             init.update(_slips(cm, prog, init, scales[2]))
         # (a later round starts from the last one's primal-dual point with a small barrier; where that fails,
@@ -431,12 +432,12 @@ def _restart(cm: ContactMechanics, prog, init, q0, scales, changed) -> bool:
     a turn newly held at a sub-node that sat elsewhere, an event no longer held whose step keeps its timed
     ``β``.  Measured on the hopper at N = 20: from the answer the rounds started at a primal infeasibility of
     13.9 and took 54 to 135 iterations each).  Whether any step was restarted."""
-    N = prog.L
-    if not np.any(changed):
+    N, ks = prog.L, np.where(changed)[0]
+    if not ks.size:
         return False
     # (the steps slip_turns did not march, the arrivals' among them, marched here)
-    _, marches = _local(cm, prog, init, q0, N, scales, steps=np.where(changed)[0])
-    for k in np.where(changed)[0]:
+    _, marches = _local(cm, prog, init, q0, N, scales, steps=ks)
+    for k in ks:
         pt = marches[k]
         if pt is None or np.asarray(pt["steps"]).size != 1:
             continue
@@ -486,7 +487,7 @@ def slip_turns(cm: ContactMechanics, prog, V, q0, timed, scales):
     touch = np.any(cm.gaps(Q[:-1]) <= TOUCH_TOL * scales[0], axis=1) & ~np.any(timed, axis=1)
     _, marches = _local(cm, prog, V, q0, N, scales, steps=np.where(touch)[0])
     for k, pt in enumerate(marches):
-        if pt is None or np.asarray(pt["steps"]).size != 1 or np.any(timed[k]):
+        if pt is None or np.asarray(pt["steps"]).size != 1:          # (not marched: no touch, or an arrival)
             continue
         if k == N - 1 and prog.end_velocity:
             # (a given final velocity: the end node's force stops the last step's slip, at the node.  Timed as a
@@ -506,7 +507,8 @@ def _event_bounds(cm: ContactMechanics, prog, turn, ratio, timed, init) -> dict:
     (:meth:`ContactNLP.mode_bounds`): the step's sub-node at the turn, where the slip velocity after the contact's
     share ``μ⁻`` of the first part's force vanishes (``left_slip``), its normal velocity too (``release``), the
     share's ratio the node slot's, and the sub-node slot's slip the second part's (``arrive``).  Sets the round's
-    ``release`` and ``arrive`` parameters; ``init`` is moved into the bounds."""
+    ``release`` and ``arrive`` parameters (``init``'s sub-nodes pick each timed step's arriving contact; a start is
+    moved into these bounds by :func:`_event_start`)."""
     L, c = prog.L, cm.c
     t = turn.reshape(-1)
     prog.nlp.set_parameter("release", turn.astype(float).reshape(-1))
@@ -517,8 +519,6 @@ def _event_bounds(cm: ContactMechanics, prog, turn, ratio, timed, init) -> dict:
         fl = np.where(t, ratio.reshape(-1), 0.0)
         out["fleft"] = (fl, fl)
         out["left_slip"] = (np.where(t, 0.0, -np.inf), np.where(t, 0.0, np.inf))
-        init["fleft"] = fl.copy()
-    init["mul"] = np.where(t, np.asarray(init.get("mul", np.zeros(L * c)), float).reshape(-1), 0.0)
     # a timed step's sub-node is its arrival's, on the surface, as in the march (its timing row φ(q̃) = 0): the arriving
     # contact closest to the surface at q̃ in the round's start.  (With the sub-node free to stay open, a flight that
     # lands on the next node kept β free, a control of its own: the hopper's answer at N = 40 landed exactly on a
@@ -529,6 +529,15 @@ def _event_bounds(cm: ContactMechanics, prog, turn, ratio, timed, init) -> dict:
     out["sub_gap"] = (np.zeros(L * c), np.where((first | turn).reshape(-1), 0.0, np.inf))
     out["node_gap"] = (np.zeros(L * c), np.where(t, 0.0, np.inf))
     return out
+
+
+def _event_start(cm: ContactMechanics, turn, ratio, start) -> None:
+    """A round's start moved into its events' bounds (:func:`_event_bounds`), in place: the turns' shares ``μ⁻`` kept
+    and their ratios the node slots', every other share zero."""
+    t = turn.reshape(-1)
+    if cm.friction:
+        start["fleft"] = np.where(t, ratio.reshape(-1), 0.0)
+    start["mul"] = np.where(t, np.asarray(start.get("mul", np.zeros(t.size)), float).reshape(-1), 0.0)
 
 
 def _continued(cm, prog, q0, point, init, bounds, opts, verbose, scales, qN, vN, steps):
