@@ -47,8 +47,8 @@ from .. import budget
 from ..nlp import NLP
 from ...result import SUCCESS_STATUSES, ControlResult
 from ...validation import InputError
-from .certificate import (CERTIFICATE_TOL, EDGE, _branch, _converged, _local, _polish, _slips, _start_of,
-                          _zparts)
+from .certificate import (CERTIFICATE_TOL, EDGE, STEP_VALUES, _branch, _converged, _local, _polish, _slips,
+                          _start_of, _zparts)
 from .march import discrete_march
 from .nlp import CONTACT_IPOPT, ContactNLP
 from .strategy import _length_scale
@@ -421,17 +421,14 @@ def _events(cm: ContactMechanics, prog, V, q0, tol: float, scales):
     return timed, bounces(prog, Q, timed), turn, ratio
 
 
-#: A step's unknowns of the program (its node ``q_{k+1}`` apart) that a round's start takes from the step's march
-_STEP_VALUES = ("qs", "beta", "nu", "mu", "mul", "fleft", "fratio")
-
-
 def _restart(cm: ContactMechanics, prog, init, q0, scales, changed) -> bool:
-    """A later round's start, in place: the steps whose held events ``changed`` take their unknowns from their
-    one-step marches from the last answer's nodes (those :func:`slip_turns` ran to read its events are not run
-    again), which time those events; the nodes stay the answer's.  (The last answer itself violates the new round's rows there:
-    a turn newly held at a sub-node that sat elsewhere, an event no longer held whose step keeps its timed
-    ``β``.  Measured on the hopper at N = 20: from the answer the rounds started at a primal infeasibility of
-    13.9 and took 54 to 135 iterations each).  Whether any step was restarted."""
+    """A later round's start, in place: the steps whose held events ``changed`` take their unknowns
+    (:data:`.certificate.STEP_VALUES`: sub-node, split, forces, impulses, ratios) from their one-step marches
+    from the last answer's nodes (those :func:`slip_turns` ran to read its events are not run again), which time those
+    events; the nodes stay the answer's.  (The last answer itself violates the new round's rows there: a turn newly
+    held at a sub-node that sat elsewhere, an event no longer held whose step keeps its timed ``β``.  Measured on the
+    hopper at N = 20: from the answer the rounds started at a primal infeasibility of 13.9 and took 54 to 135
+    iterations each.)  Whether any step was restarted."""
     N, ks = prog.L, np.where(changed)[0]
     if not ks.size:
         return False
@@ -441,7 +438,7 @@ def _restart(cm: ContactMechanics, prog, init, q0, scales, changed) -> bool:
         pt = marches[k]
         if pt is None or np.asarray(pt["steps"]).size != 1:
             continue
-        for key in _STEP_VALUES:
+        for key in STEP_VALUES:
             if key in pt and key in init:
                 row = np.asarray(pt[key], float).reshape(-1)
                 init[key].reshape(N, -1)[k] = row
