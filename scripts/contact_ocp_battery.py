@@ -19,8 +19,11 @@ round-robin):
 
 Each row: the status (ok only with a certificate), the error against the oracle, the cost, the iterations, the
 time, the certificate, and for a failure the homotopy's last penalty and its complementarity residual; the summary
-counts the ok answers the B-stationarity proxy passes.  Goals: at
-least 90 % solved with a certificate, every unsolved one reported as a failure, no case over 60 s.
+counts the ok answers the B-stationarity proxy passes.  Goal: at least 90 % solved with a certificate, every
+unsolved one reported as a failure.  The wall times are measured and printed with a separate time goal (no case
+over ``--goal-seconds``, 60 s), a benchmark of this machine at this load: ``castrajectory report`` runs this
+battery (:func:`battery`) and judges it by the certified share alone, never by the time goal (issue 41: a report
+states what it measured; a loaded 2-core machine once took 102 s on a hopper).
 
     python scripts/contact_ocp_battery.py
     python scripts/contact_ocp_battery.py --count 60 --seed 3
@@ -39,7 +42,9 @@ import numpy as np
 from castrajectory.models.block_push import BlockPush
 from castrajectory.models.bounce import bounce_to_target
 
+#: the battery's goal: this share of the problems solved with a certificate (the report's verdict on the battery)
 GOAL_SOLVED = 0.90
+#: the time goal: no problem over this many seconds (this machine at this load: printed, never a verdict)
 GOAL_SECONDS = 60.0
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
@@ -110,22 +115,20 @@ def hopper(rng):
 FAMILIES = [bounce, push, block, hopper]
 
 
-def main(argv=None):
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--count", type=int, default=30, help="problems in all (>= 3)")
-    p.add_argument("--seed", type=int, default=1, help="the random generator's seed")
-    p.add_argument("--no-hopper", action="store_true", help="leave the hopper's goals out (the slowest family)")
-    args = p.parse_args(argv)
-    families = [f for f in FAMILIES if not (args.no_hopper and f is hopper)]
-    if args.count < 3:
-        p.error("--count must be at least 3")
-    rng = np.random.default_rng(args.seed)
+def battery(count: int, seed: int = 1, families=None, goal_seconds=None) -> dict:
+    """Solve ``count`` problems drawn from ``seed`` (``families``: their round-robin, default FAMILIES), print the
+    table and the summary, and return what was measured: ``solved`` (certified), ``count``, ``solved_goal_met``
+    (the certified share at least GOAL_SOLVED), ``worst_s`` and ``time_goal_met`` (none over ``goal_seconds``:
+    a benchmark of this machine, not a verdict on the answers)."""
+    families = list(FAMILIES if families is None else families)
+    goal_seconds = GOAL_SECONDS if goal_seconds is None else float(goal_seconds)
+    rng = np.random.default_rng(seed)
     rows = []
-    print(f"contact-implicit OCP battery: {args.count} problems, seed {args.seed}; families: "
+    print(f"contact-implicit OCP battery: {count} problems, seed {seed}; families: "
           + ", ".join(f.__name__ for f in families))
     print(f"  {'#':>3s} {'problem':50s} {'status':26s} {'error':>8s} {'cost':>11s} {'iter':>5s} {'time s':>7s} "
           f"{'cert':>8s}  last penalty, residual")
-    for i in range(args.count):
+    for i in range(count):
         name, solve, check = families[i % len(families)](rng)
         t0 = time.perf_counter()
         sol = solve()
@@ -141,17 +144,46 @@ def main(argv=None):
               f"{cert:>8s}{tail}", flush=True)
     good = [r for r in rows if r["success"]]
     share = len(good) / len(rows)
-    slow = [r for r in rows if r["time"] > GOAL_SECONDS]
+    worst = max(r["time"] for r in rows)
+    slow = [r for r in rows if r["time"] > goal_seconds]
     print(f"\nsolved with a certificate: {len(good)} of {len(rows)} ({share:.0%}); unsolved, each reported as a "
-          f"failure: {len(rows) - len(good)}; over {GOAL_SECONDS:g} s: {len(slow)}")
-    print(f"time: median {np.median([r['time'] for r in rows]):.2f} s, worst {max(r['time'] for r in rows):.2f} s; "
+          f"failure: {len(rows) - len(good)}")
+    print(f"time: median {np.median([r['time'] for r in rows]):.2f} s, worst {worst:.2f} s; "
           f"largest error against an oracle of an ok answer: "
           f"{max((r['error'] for r in good), default=float('nan')):.1e}")
     print(f"B-stationarity proxy (no descent by flipping one biactive pair): {sum(r['b_stationary'] for r in good)} "
           f"of {len(good)} ok answers; biactive pairs in them: {sum(r['biactive'] for r in good)}")
-    ok = share >= GOAL_SOLVED and not slow
-    print(f"goal: {'PASS' if ok else 'MISS'}  at least {GOAL_SOLVED:.0%} solved with a certificate, none over "
-          f"{GOAL_SECONDS:g} s")
+    print(f"goal: {'PASS' if share >= GOAL_SOLVED else 'MISS'}  at least {GOAL_SOLVED:.0%} solved with a certificate")
+    print(f"time goal (this machine at this load; a benchmark, not a verdict on the answers): "
+          f"{'PASS' if not slow else 'MISS'}  none over {goal_seconds:g} s ({len(slow)} over, worst {worst:.2f} s)")
+    return {"solved": len(good), "count": len(rows), "solved_goal_met": share >= GOAL_SOLVED, "worst_s": worst,
+            "time_goal_met": not slow}
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--count", type=int, default=30, help="problems in all (>= 3)")
+    p.add_argument("--seed", type=int, default=1, help="the random generator's seed")
+    p.add_argument("--no-hopper", action="store_true", help="leave the hopper's goals out (the slowest family)")
+    p.add_argument("--families", default=None,
+                   help="the families to draw from, comma-separated (default: " + ",".join(f.__name__ for f in FAMILIES)
+                   + ")")
+    p.add_argument("--goal-seconds", type=float, default=GOAL_SECONDS,
+                   help="the time goal: no problem over this many seconds (printed as PASS/MISS; never the exit status)")
+    args = p.parse_args(argv)
+    byname = {f.__name__: f for f in FAMILIES}
+    names = args.families.split(",") if args.families else list(byname)
+    unknown = [n for n in names if n not in byname]
+    if unknown:
+        p.error(f"--families: unknown {', '.join(unknown)} (choose from {', '.join(byname)})")
+    families = [byname[n] for n in names if not (args.no_hopper and n == "hopper")]
+    if not families:
+        p.error("no family left to draw from")
+    if args.count < 3:
+        p.error("--count must be at least 3")
+    if not (args.goal_seconds > 0):
+        p.error("--goal-seconds must be positive")
+    battery(args.count, args.seed, families, args.goal_seconds)
     return 0
 
 

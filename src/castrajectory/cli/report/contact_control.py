@@ -1,11 +1,14 @@
 """The report's contact-implicit optimal-control section: the registry's scenes (each against its oracle, each
-answer certified by the contact march of its controls) and, in the default and full sizes, the battery's summary."""
+answer certified by the contact march of its controls) and, in the default and full sizes, the battery's summary.
+
+The battery (``scripts/contact_ocp_battery.py``) is judged by its certified share alone.  Its wall times are
+printed with its time goal, a benchmark of the machine at its load, which never decides the report's exit code
+(issue 41: a loaded 2-core machine took 102 s on one hopper, over the goal of 60 s, and the report exited 1)."""
 from __future__ import annotations
 
 import contextlib
+import importlib.util
 import io
-import runpy
-import sys
 from pathlib import Path
 
 from ..registry import entries
@@ -14,8 +17,11 @@ from .common import Context, script_scenes
 TITLE = 'contact-implicit optimal control'
 TIMED = False
 
-#: the battery's problems per report size (none in the quick report)
-BATTERY = {"quick": 0, "default": 12, "full": 30}
+#: the battery's run per report size: ``battery()``'s keywords (count, seed, families by name); none in the quick
+#: report
+BATTERY = {"quick": None, "default": {"count": 12}, "full": {"count": 30}}
+#: the battery's script, beside the package in a source checkout (absent from an installed wheel: then no battery)
+SCRIPT = Path(__file__).resolve().parents[4] / "scripts" / "contact_ocp_battery.py"
 
 
 def run(ctx: Context):
@@ -27,22 +33,34 @@ def run(ctx: Context):
         "certified: its controls, marched by the contact march from its initial state, reproduce it (the "
         "certificate, relative).  Each summary gives the answer against its closed form.",
         entries(TITLE), plot_name='plot')
-    count = BATTERY.get(ctx.size, 0)
-    if count:
-        script = Path(__file__).resolve().parents[4] / "scripts" / "contact_ocp_battery.py"
-        if script.exists():
-            buf = io.StringIO()
-            argv = sys.argv
-            try:
-                sys.argv = [str(script), "--count", str(count)]
-                with contextlib.redirect_stdout(buf):
-                    runpy.run_path(str(script), run_name="__main__")
-            except SystemExit:
-                pass
-            finally:
-                sys.argv = argv
-            text = buf.getvalue().rstrip().splitlines()
-            lines += [f"### Battery ({count} seeded random problems, scripts/contact_ocp_battery.py)", "", "```"] \
-                + text + ["```", ""]
-            ok &= any(line.startswith("goal: PASS") for line in text)
-    return ok, lines + [""]
+    good, more = battery(ctx)
+    return ok and good, lines + more + [""]
+
+
+def _script():
+    """The battery script as a module (loaded by path: ``scripts/`` is no package)."""
+    spec = importlib.util.spec_from_file_location("contact_ocp_battery", SCRIPT)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def battery(ctx: Context):
+    """The battery's subsection at ``ctx.size``: ``(ok, lines)``, ok when at least the script's GOAL_SOLVED share
+    of its problems is certified.  The times and the time goal are printed, not judged."""
+    run_args = BATTERY.get(ctx.size)
+    if not run_args or not SCRIPT.exists():
+        return True, []
+    mod = _script()
+    kwargs = dict(run_args)
+    if "families" in kwargs:
+        byname = {f.__name__: f for f in mod.FAMILIES}
+        kwargs["families"] = [byname[name] for name in kwargs["families"]]
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        measured = mod.battery(**kwargs)
+    text = buf.getvalue().rstrip().splitlines()
+    lines = [f"### Battery ({measured['count']} seeded random problems, scripts/contact_ocp_battery.py)", "",
+             "Judged by the share certified; the wall times and the time goal describe this machine at its load and "
+             "do not decide the report's verdict.", "", "```", *text, "```", ""]
+    return bool(measured["solved_goal_met"]), lines

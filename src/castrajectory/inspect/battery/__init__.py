@@ -190,14 +190,16 @@ _CHILD = "from castrajectory.inspect.battery import _child_main; _child_main()"
 
 def battery_task(task) -> dict:
     """``(scene, timeout)`` -> the scene's row: the scene's fields, :func:`run_scene`'s results and its
-    ``command``.  The scene runs in a child Python process stopped after ``timeout`` seconds; a crash,
-    an exception or a timeout gives a row with ``solved = False`` and the reason as ``status``."""
+    ``command``.  The scene runs in a child Python process stopped after ``timeout`` seconds (``None``: no
+    limit, as the report runs it: a wall-clock limit judges the machine's load, not the scene, and every solve
+    stops at its iteration limit); a crash, an exception or a timeout gives a row with ``solved = False`` and the
+    reason as ``status``."""
     sc, timeout = task
-    res = _run_in_child(sc, float(timeout))
+    res = _run_in_child(sc, None if timeout is None else float(timeout))
     return {**sc, **res, "command": command(sc)}
 
 
-def _run_in_child(sc, timeout: float) -> dict:
+def _run_in_child(sc, timeout) -> dict:
     try:
         p = subprocess.run([sys.executable, "-c", _CHILD], input=json.dumps(sc), capture_output=True,
                            text=True, timeout=timeout)
