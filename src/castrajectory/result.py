@@ -19,9 +19,12 @@ Every method and every scene returns a subclass of :class:`Result`:
 * ``raise_for_status()``: ``self`` on success, :class:`SolveError` otherwise.
 
 A solve that did not converge does **not** raise: it returns a result with
-``success = False``.  Only Ipopt's ``Solve_Succeeded`` counts as success;
+``success = False``.  For one NLP only Ipopt's ``Solve_Succeeded`` counts as success;
 ``Solved_To_Acceptable_Level`` is reported as a failure, because the requested
-tolerance was not reached.
+tolerance was not reached.  A method that can measure its answer decides from the
+measurements instead: an optimal control stopped at Ipopt's acceptable level is ok
+when a warm re-solve meets a looser tolerance and its certificate holds
+(:func:`castrajectory.solve.optimal_control._judge_acceptable`).
 
 Sign convention for multipliers (stated once, used everywhere)
 --------------------------------------------------------------
