@@ -63,7 +63,12 @@ SUCCESS_STATUSES = frozenset({"Solve_Succeeded", "Rows_Verified"})
 _ADVICE = {
     "Maximum_Iterations_Exceeded": "raise max_iter or supply a better initial guess",
     "Solved_To_Acceptable_Level": "the requested tolerance was not reached; loosen tol or rescale the problem",
-    "Infeasible_Problem_Detected": "the constraints appear inconsistent; check the inputs",
+    # Ipopt's restoration phase converged to a local minimiser of the constraint violation: no proof that no
+    # feasible point exists (the acrobot at N = 40 and a paddle to an apex of 1.0 both solved when seeded).  The
+    # word "inconsistent" is kept for what the input checks prove before a solve (crossed bounds).
+    "Infeasible_Problem_Detected": ("no feasible point found from this start (Ipopt's local infeasibility, not a "
+                                    "proof); try a better guess, a seeded start (the answer of an easier or "
+                                    "coarser problem), or a coarser grid first"),
     "Restoration_Failed": "Ipopt lost feasibility; supply a better initial guess",
     "Error_In_Step_Computation": "the linear systems became singular; check for redundant constraints",
     "Maximum_CpuTime_Exceeded": "raise max_cpu_time or reduce the problem size",

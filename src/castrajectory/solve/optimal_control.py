@@ -242,6 +242,9 @@ class OptimalControl:
         optima at N = 100 and N = 200 without it), and the fine grid needs a few iterations (7-9 instead of
         39-289 on the cart-pole).  A rung that fails is dropped: the grid then starts from the boundary
         conditions.  ``grids`` lists the grids solved."""
+        why = self._inconsistency()
+        if why:
+            raise InputError(f"the problem is inconsistent: {why}; nothing was solved")
         if self.system.contact is not None:
             return self._solve_contact(guess, options, verbose, keep_modes)
         if keep_modes:
@@ -287,6 +290,68 @@ class OptimalControl:
         path = [(ca.Function(f"g{j}", [q, u, s.t], [g]), lb, ub) for j, (g, lb, ub) in enumerate(self._path)]
         return solve_contact_control(s, self.T, self.N, self.scheme, (q0, v0), (qN, vN), running, final, (lo, hi),
                                      self._controls, guess, options, verbose, keep_modes, path)
+
+    def _inconsistency(self) -> Optional[str]:
+        """What the inputs prove inconsistent before any solve (``None``: nothing proved; Ipopt's
+        ``Infeasible_Problem_Detected`` is local, and proves nothing).  Two proofs:
+
+        * bounds that cross: the path constraints affine in one coordinate or control entry (``a v + c`` within
+          its bounds) and the controls' own bounds leave that entry no value;
+        * a given boundary configuration outside a path constraint in ``q`` (and ``t``), which holds at every
+          node, the first and the last included (not checked with contact, whose transcription places its rows
+          itself)."""
+        s = self.system
+        entries = [(s.q[i], f"{s.names[i]}") for i in range(s.nq)]
+        entries += [(self._u[j], f"control entry {self._u[j]}") for j in range(self._u.numel())]
+        interval = {}   # entry's hash -> [lo, why lo, hi, why hi, label]
+        for v, label in entries:
+            interval[v.element_hash()] = [-np.inf, "", np.inf, "", label]
+        k = 0
+        for c in self._controls:
+            for j in range(c.size):
+                iv = interval[self._u[k].element_hash()]
+                iv[0], iv[1] = float(c.lower[j]), f"the lower bound of control {c.name}"
+                iv[2], iv[3] = float(c.upper[j]), f"the upper bound of control {c.name}"
+                k += 1
+        for g, lb, ub in self._path:
+            vs = ca.symvar(g)
+            if len(vs) != 1 or vs[0].element_hash() not in interval:
+                continue
+            v = vs[0]
+            a_expr = ca.jacobian(g, v)
+            if ca.depends_on(a_expr, v):
+                continue
+            a, c = float(ca.evalf(a_expr)), float(ca.evalf(ca.substitute(g, v, ca.SX(0))))
+            if a == 0.0:
+                continue
+            with np.errstate(invalid="ignore"):
+                lo, hi = sorted(((lb - c) / a, (ub - c) / a))
+            iv = interval[v.element_hash()]
+            text = f"the path constraint {g} {'==' if lb == ub else '<='} 0"
+            if lo > iv[0]:
+                iv[0], iv[1] = lo, text
+            if hi < iv[2]:
+                iv[2], iv[3] = hi, text
+        for lo, why_lo, hi, why_hi, label in interval.values():
+            if lo > hi + 1e-12 * max(1.0, abs(lo), abs(hi)):
+                return f"{label} must be at least {lo:g} ({why_lo}) and at most {hi:g} ({why_hi})"
+        if s.contact is not None:
+            return None
+        ends = [("initial", self._start[0], 0.0), ("final", self._end[0], None if self._is_free_time() else self.T)]
+        for g, lb, ub in self._path:
+            if self._u.numel() and ca.depends_on(g, self._u):
+                continue
+            gf = ca.Function("g", [s.q, s.t], [g])
+            for which, qv, tv in ends:
+                if tv is None and ca.depends_on(g, s.t):
+                    continue
+                with np.errstate(invalid="ignore"):
+                    val = float(gf(qv, 0.0 if tv is None else tv))
+                tol = 1e-9 * max(1.0, abs(val))
+                if np.isfinite(val) and (val < lb - tol or val > ub + tol):
+                    return (f"the {which} configuration {np.asarray(qv).tolist()} violates the path constraint "
+                            f"{g} {'==' if lb == ub else '<='} 0 (its value {val:.6g}), which holds at every node")
+        return None
 
     def _interpolated(self, prior: "ControlResult") -> Dict[str, np.ndarray]:
         """A coarser answer on this grid: nodes and controls interpolated linearly in ``t/T``."""
