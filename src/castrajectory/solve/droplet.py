@@ -488,27 +488,33 @@ PATTERN_OPTIONS = {"mu_init": 0.1, "bound_relax_factor": 0.0}
 
 def _estimate(drop: Droplet, n: int, formulation: str, opts: dict, verbose: bool, fine: dict,
               sol: DropletSolution):
-    """Richardson estimate from the same drop on ``n/2`` segments, started from the answer resampled
-    (a few Newton iterations); its cost is added to ``sol``'s.  Errors of the contact angle (scale π/2),
-    span, pressure and energy (each against its own size)."""
-    from .estimate import ErrorEstimate, richardson
+    """The estimate from the same drop on ``n/2`` and ``n/4`` segments, each started from the answer
+    resampled (a few Newton iterations; :func:`castrajectory.solve.estimate.grid_estimate`: the order the
+    three grids show); their cost is added to ``sol``'s.  Errors of the contact angle (scale π/2), span,
+    pressure and energy (each against its own size); the order is judged on the one whose difference is
+    the largest against its scale.  Two grids (the nominal order) where ``n/4`` is below
+    :data:`MIN_N`."""
+    from .estimate import ErrorEstimate, grid_estimate
     if formulation == "spectral":
         return _spectral_estimate(drop, n, opts, verbose, fine, sol)
-    nc = n // 2
-    if nc < MIN_N:
+    grids = [m for m in (n // 4, n // 2) if m >= MIN_N]
+    if not grids or grids[-1] != n // 2:
         return ErrorEstimate.none(f"N = {n} has no coarser grid (at least {MIN_N} segments)")
-    guess = resample_polyline(fine["xs"], fine["ys"], nc) if formulation == "curve" else None
-    nlp, geo, _ = make_nlp(drop, nc, formulation, guess)
-    res = nlp.solve(options=opts, verbose=verbose)
-    _add_costs(sol, [res])  # the estimate's solve is part of the answer's cost
-    if not res.success:
-        return ErrorEstimate.none(f"the drop on N = {nc} segments for the estimate did not converge ({res.solver_status})")
-    coarse = readings(drop, res, geo)
-    errors = richardson({k: coarse[k] for k in ESTIMATED}, {k: fine[k] for k in ESTIMATED}, n / nc, ORDER)
-    scales = _estimate_scales(drop, fine)
-    rel = max(errors[k] / scales[k] for k in errors if scales[k] > 0)
-    return ErrorEstimate(available=True, note=f"Richardson extrapolation from N = {nc} and N = {n}, order {ORDER}",
-                         levels=(nc, n), order=float(ORDER), errors=errors, scales=scales, relative=float(rel))
+    read = []
+    for nc in grids:
+        guess = resample_polyline(fine["xs"], fine["ys"], nc) if formulation == "curve" else None
+        nlp, geo, _ = make_nlp(drop, nc, formulation, guess)
+        res = nlp.solve(options=opts, verbose=verbose)
+        _add_costs(sol, [res])  # the estimate's solves are part of the answer's cost
+        if not res.success:
+            return ErrorEstimate.none(f"the drop on N = {nc} segments for the estimate did not converge "
+                                      f"({res.solver_status})")
+        read.append(readings(drop, res, geo))
+    read.append(fine)
+    diffs = [{k: abs(float(a[k]) - float(b[k])) for k in ESTIMATED} for a, b in zip(read[:-1], read[1:])]
+    levels = tuple(grids) + (n,)
+    ratios = [levels[i + 1] / levels[i] for i in range(len(levels) - 1)]
+    return grid_estimate(diffs, ratios, _estimate_scales(drop, fine), ORDER, levels)
 
 
 def _estimate_scales(drop: Droplet, fine: dict) -> Dict[str, float]:

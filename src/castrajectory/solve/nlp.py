@@ -686,6 +686,39 @@ class NLP(Program):
         p = np.concatenate([b.init for b in self._params]) if self._params else np.zeros(0)
         return self._split(self._newton_step(funcs, a, x, p, free, eq, tol), self._vars)
 
+    def floor(self, init: Dict[str, object], bounds: Optional[Dict[str, tuple]] = None
+              ) -> Optional[Dict[str, np.ndarray]]:
+        """How far ``init`` is from the exact solution of the square system's rows, per variable: the
+        size of the Newton step ``|J_EF⁻¹ g_E|`` at it (one sparse factorisation; ``None`` where the
+        problem is not square).  At a converged point the computed residual ``g_E`` is the solver's
+        tolerance and the rows' evaluation rounding, and ``J⁻¹`` amplifies both by the conditioning
+        (a chaotic horizon's growth included): no difference of grids can be trusted below it.  (A
+        synthetic rounding residual ``u |J| |x|`` overstates the rows' rounding by ``|q| / |Δq|`` on
+        short steps, where ``q_{k+1} − q_k`` is computed exactly: 16x the true error on the chaotic
+        double pendulum at N = 16000.)  Fixed variables get 0."""
+        funcs = self.functions()
+        if not funcs:
+            return None
+        a = self._arguments(init, None, bounds)
+        x = a["x0"]
+        free = np.where(a["lbx"] < a["ubx"])[0]
+        eq = np.where(a["lbg"] == a["ubg"])[0]
+        if eq.size != free.size or not free.size:
+            return None
+        p = np.concatenate([b.init for b in self._params]) if self._params else np.zeros(0)
+        gv, Jg = funcs["jac_g"](x, p)
+        r = np.asarray(gv).reshape(-1)[eq] - a["lbg"][eq]
+        try:
+            d = np.asarray(ca.solve(Jg[eq.tolist(), free.tolist()], ca.DM(r), "qr")).reshape(-1)
+        except RuntimeError as exc:
+            interrupt.reraise(exc)
+            return None
+        out = np.zeros_like(x)
+        out[free] = np.abs(d)
+        if not np.all(np.isfinite(out)):
+            return None
+        return self._split(out, self._vars)
+
     def _variable_name(self, i: int) -> str:
         """``name[j]`` of entry ``i`` of the variable vector."""
         for b in self._vars:

@@ -120,20 +120,19 @@ def _baseline(system, q0, qd0, T, N, scheme, method, rtol, n_max) -> Run:
     if not fine.success:
         fine.error_estimate = estimate.ErrorEstimate.none("the run did not succeed")
         return fine
-    runs = [fine]
-    coarse = step(N // 2 if N % 2 == 0 else (N + 1) // 2) if N >= 4 else None
-    if coarse is not None:
-        runs.append(coarse)
+    grids = [step(m) for m in estimate.coarser(N)]
+    runs = [fine] + grids
 
-    def est_of(c, f):
-        if c is None:
+    def est_of(cs, f):
+        if not cs:
             return estimate.ErrorEstimate.none(f"N = {len(f.t) - 1} has no coarser grid")
-        if not c.success:
-            return estimate.ErrorEstimate.none(f"the run on N = {len(c.t) - 1} for the estimate failed")
-        return estimate.trajectory_estimate(c, f, order, energy_scale=estimate.kinetic_scale(system, f.q, f.v),
+        bad = [c for c in cs if not c.success]
+        if bad:
+            return estimate.ErrorEstimate.none(f"the run on N = {len(bad[-1].t) - 1} for the estimate failed")
+        return estimate.trajectory_estimate(list(cs), f, order, energy_scale=estimate.kinetic_scale(system, f.q, f.v),
                                             system=system)
 
-    fine, est, n, short = estimate.refine_runs(rtol, fine, est_of(coarse, fine), N, order, limit, step, est_of, runs)
+    fine, est, n, short = estimate.refine_runs(rtol, grids, fine, N, order, limit, step, est_of, runs)
     return estimate.conclude(fine, est, runs, rtol, n, limit, short)
 
 

@@ -631,41 +631,85 @@ def _polish(tn: TrajectoryNLP, res: NLPResult, solved: List[tuple]) -> None:
         solved[-1] = (tn, res.values)
 
 
+def _coarse_partner(tn: TrajectoryNLP, values, Nc: int, options, verbose, log: List[Level], omega: float,
+                    polish: bool, windowed: bool) -> Optional[tuple]:
+    """The grid ``Nc`` solved for an estimate from the answer on ``tn`` restricted to it (one or two
+    Newton iterations, or its own windows, straight away where the answer needed them: the discrete
+    motions of N and N/2 part further than the guess from N is off; the 20-flip midpoint body,
+    N = 11200: a whole attempt of 10 iterations, 2.1 s); ``(nlp, values)``, or ``None`` if it did not
+    converge.  ``polish``: it takes a Newton step too, as the answer did."""
+    pc = _trajectory_nlp(tn.dm, Nc, tn.T, tn.mode, tn.q0, tn.end)
+    n_log = len(log)
+    rc = _solve_level(pc, _refine(tn, values, pc), options, verbose, log, allow_windows=tn.mode == "initial_value",
+                      final=True, omega=omega, windows_first=windowed)
+    for lv in log[n_log:]:
+        lv.purpose = "estimate"
+    if not rc.success:
+        return None
+    if polish:
+        _polish(pc, rc, [])
+    return pc, rc.values
+
+
+def _half(n: int) -> int:
+    return n // 2 if n % 2 == 0 else (n + 1) // 2
+
+
+def _partners(solved: List[tuple], tn: TrajectoryNLP, res: NLPResult, options, verbose, log: List[Level],
+              omega: float, polish: bool):
+    """The two coarser grids of the answer's estimate, coarsest first, or why there are none.
+
+    The ladder's own levels where two of them are at most
+    :data:`~castrajectory.solve.estimate.PARTNER_RATIO` times coarser (the estimate costs nothing);
+    otherwise (the ladder jumped further, or went straight to ``N``) the grids ``N/2`` and ``N/4`` are
+    solved from the answer (:func:`_coarse_partner`).  Only ``N/2`` where ``N/4`` would have fewer than
+    :data:`~castrajectory.solve.estimate.MIN_STEPS` steps."""
+    earlier = [lv for lv in solved if lv[0] is not tn and lv[0].N < tn.N]
+    ladder = [lv for lv in earlier if tn.N / lv[0].N <= estimate.PARTNER_RATIO]
+    if len(ladder) >= 2:
+        return ladder[-2:], None
+    if _half(tn.N) < 2:
+        return [], f"N = {tn.N} has no coarser grid"
+    windowed = any(lv.n == tn.N and lv.horizon < tn.N for lv in log)
+    grids = []
+    for Nc in (_half(tn.N), _half(_half(tn.N))):
+        if Nc < estimate.MIN_STEPS or (grids and Nc >= grids[0][0].N):
+            break
+        src = grids[0] if grids else (tn, res.values)
+        got = _coarse_partner(src[0], src[1], Nc, options, verbose, log, omega, polish, windowed)
+        if got is None:
+            if not grids:
+                st = log[-1].status if log else "no log"
+                return [], (f"the grid N = {Nc} for the estimate did not converge ({st}): the answer may not "
+                            f"be converged either")
+            break
+        grids.insert(0, got)
+    return grids, None
+
+
+def _floor(tn: TrajectoryNLP, values) -> Optional[float]:
+    """The measured floor of the answer's configurations (:meth:`NLP.floor <castrajectory.solve.nlp.NLP.floor>`:
+    the Newton step to the exact solution of the rows plus rounding's effect), max over nodes and
+    coordinates; ``None`` where it cannot be measured."""
+    fl = tn.nlp.floor({k: v for k, v in values.items() if k in tn.nlp.variable_names}, bounds=tn.fixed_bounds())
+    if fl is None or "q" not in fl:
+        return None
+    return float(np.max(fl["q"], initial=0.0))
+
+
 def _estimate(solved: List[tuple], tn: TrajectoryNLP, res: NLPResult, answer: "Trajectory", options, verbose,
               log: List[Level], omega: float, polish: bool = False) -> "estimate.ErrorEstimate":
-    """Richardson estimate of the answer on ``tn`` from a coarser solved grid.
-
-    The partner is the finest level solved before, if it is at most
-    :data:`~castrajectory.solve.estimate.PARTNER_RATIO` times coarser (the ladder's own levels: the
-    estimate costs nothing).  Otherwise (the ladder jumped further, or went straight to ``N``) the
-    grid ``N/2`` is solved from the answer restricted to it (one or two Newton iterations, or its
-    own windows), and recorded in ``levels`` (``polish``: it takes a Newton step too, as the answer did)."""
-    partner = None
-    if len(solved) >= 2 and solved[-1][0] is tn and tn.N / solved[-2][0].N <= estimate.PARTNER_RATIO:
-        partner = solved[-2]
-    else:
-        Nc = tn.N // 2 if tn.N % 2 == 0 else (tn.N + 1) // 2
-        if Nc < 2:
-            return estimate.ErrorEstimate.none(f"N = {tn.N} has no coarser grid")
-        pc = _trajectory_nlp(tn.dm, Nc, tn.T, "initial_value", tn.q0, tn.end)
-        n_log = len(log)
-        # solved the way the answer was: straight to the windows if the answer needed them (its whole
-        # attempt failed or was skipped: the discrete motions of N and N/2 part further than the guess
-        # from N is off; the 20-flip midpoint body, N = 11200: a whole attempt of 10 iterations, 2.1 s)
-        windowed = any(lv.n == tn.N and lv.horizon < tn.N for lv in log)
-        rc = _solve_level(pc, _refine(tn, res.values, pc), options, verbose, log, allow_windows=True,
-                          final=True, omega=omega, windows_first=windowed)
-        for lv in log[n_log:]:
-            lv.purpose = "estimate"
-        if not rc.success:
-            return estimate.ErrorEstimate.none(f"the grid N = {Nc} for the estimate did not converge "
-                                               f"({rc.solver_status}): the answer may not be converged either")
-        if polish:
-            _polish(pc, rc, [])
-        partner = (pc, rc.values)
-    return estimate.trajectory_estimate(_path(*partner), answer, tn.dm.scheme.order,
-                                        energy_scale=estimate.kinetic_scale(tn.dm.system, answer.q, answer.v),
-                                        system=tn.dm.system)
+    """The estimate of the answer on ``tn`` from two coarser grids (:func:`_partners`; module
+    :mod:`~castrajectory.solve.estimate`) and the answer's measured floor (:func:`_floor`)."""
+    grids, why = _partners(solved, tn, res, options, verbose, log, omega, polish)
+    if why is not None:
+        return estimate.ErrorEstimate.none(why)
+    system = tn.dm.system
+    scale = estimate.kinetic_scale(system, answer.q, answer.v) if tn.mode == "initial_value" else None
+    return estimate.trajectory_estimate([_path(*g) for g in grids], answer, tn.dm.scheme.order,
+                                        energy_scale=scale, system=system,
+                                        levels=tuple(g[0].N for g in grids) + (tn.N,),
+                                        floor=_floor(tn, res.values))
 
 
 def solve_boundary(system: LagrangianSystem, q0, qT, T: float, N: int, scheme: str = "midpoint",
@@ -691,20 +735,13 @@ def solve_boundary(system: LagrangianSystem, q0, qT, T: float, N: int, scheme: s
     out = _finish(tn, res, log, "boundary")
     if not res.success:
         out.error_estimate = estimate.ErrorEstimate.none("the solve did not converge")
-    elif len(solved) < 2:
-        Nc = N // 2 if N % 2 == 0 else (N + 1) // 2
-        pc = _trajectory_nlp(dm, Nc, T, "boundary", q0, qT)
-        rc = _solve_level(pc, _refine(tn, res.values, pc), options, verbose, log, allow_windows=False)
-        log[-1].purpose = "estimate"
-        out.iterations += rc.iterations
-        out.build_time_s += rc.build_time_s
-        out.solve_time_s += rc.solve_time_s
-        solved.insert(0, (pc, rc.values))
-        out.error_estimate = estimate.trajectory_estimate(_path(pc, rc.values), out, dm.scheme.order,
-                                                          system=system) if rc.success \
-            else estimate.ErrorEstimate.none(f"the grid N = {Nc} for the estimate did not converge ({rc.solver_status})")
     else:
-        out.error_estimate = estimate.trajectory_estimate(_path(*solved[-2]), out, dm.scheme.order, system=system)
+        n_log = len(log)
+        out.error_estimate = _estimate(solved, tn, res, out, options, verbose, log, math.inf)
+        for lv in log[n_log:]:
+            out.iterations += lv.iterations
+            out.build_time_s += lv.build_time_s
+            out.solve_time_s += lv.solve_time_s
     if res.success:
         out.warnings += out.error_estimate.warnings()
     return out

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import math
 import time
-from typing import List, Optional
+from typing import Dict, List, Optional
 
 import numpy as np
 
@@ -57,44 +57,51 @@ def solve_contact(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: s
     if not fine.success:
         fine.error_estimate = estimate.ErrorEstimate.none("the solve did not converge")
         return fine
-    coarse = _solve_once(system, q0, qd0, T, N // 2 if N % 2 == 0 else (N + 1) // 2, scheme, options, verbose, co,
-                         certify=False) if N >= 4 else None
-    runs = [fine] + ([coarse] if coarse is not None else [])
+    grids = [_solve_once(system, q0, qd0, T, m, scheme, options, verbose, co, certify=False)
+             for m in estimate.coarser(N)]
+    runs = [fine] + grids
     limit = N if n_limit is None else n_limit
     order = SCHEMES[scheme].order
     fine, est, N, short = estimate.refine_runs(
-        rtol, fine, _estimate(coarse, fine, order, system), N, order, limit,
+        rtol, grids, fine, N, order, limit,
         lambda n: _solve_once(system, q0, qd0, T, n, scheme, options, verbose, co),
-        lambda c, f: _estimate(c, f, order, system), runs)
+        lambda cs, f: _estimate(cs, f, order, system), runs)
     return estimate.conclude(fine, est, runs, rtol, N, limit, short)
 
 
-def _estimate(coarse: Optional[ContactTrajectory], fine: ContactTrajectory, order: int,
-              fine_system: LagrangianSystem) -> "estimate.ErrorEstimate":
-    """Richardson estimate of a contact trajectory from the same scene on a coarser grid: the
-    configuration at the shared nodes, the energy, and the impact times (paired in order; where the
-    grids resolve different numbers of impacts, the note says so)."""
-    if coarse is None:
-        return estimate.ErrorEstimate.none(f"N = {fine.n} has no coarser grid")
-    if not coarse.success:
-        return estimate.ErrorEstimate.none(f"the grid N = {coarse.n} for the estimate did not converge "
-                                           f"({coarse.solver_status})")
-    # impacts paired in order; where the grids resolve different numbers (the tail of an accumulation,
-    # caught on one grid a bounce earlier), the unpaired ones are tiny bounces whose effect the
-    # configuration at the shared nodes carries
+def _impact_difference(coarse: ContactTrajectory, fine: ContactTrajectory) -> Dict[str, float]:
+    """The largest difference of the impact times of two grids, paired in order (where the grids resolve
+    different numbers, the tail of an accumulation caught on one grid a bounce earlier, the unpaired ones are
+    tiny bounces whose effect the configuration at the shared nodes carries)."""
     tc = [i.t for i in coarse.impacts if not i.caught]
     tf = [i.t for i in fine.impacts if not i.caught]
     n = min(len(tc), len(tf))
+    return {"impact_times": float(np.max(np.abs(np.array(tc[:n]) - np.array(tf[:n]))))} if n else {}
+
+
+def _estimate(grids: List[ContactTrajectory], fine: ContactTrajectory, order: int,
+              fine_system: LagrangianSystem) -> "estimate.ErrorEstimate":
+    """The estimate of a contact trajectory from the same scene on two coarser grids (coarsest first;
+    :func:`castrajectory.solve.estimate.trajectory_estimate`): the configuration at the shared nodes, the
+    energy, and the impact times."""
+    if not grids:
+        return estimate.ErrorEstimate.none(f"N = {fine.n} has no coarser grid")
+    for g in grids:
+        if not g.success:
+            return estimate.ErrorEstimate.none(f"the grid N = {g.n} for the estimate did not converge "
+                                               f"({g.solver_status})")
+    chain = list(grids) + [fine]
+    diffs = [_impact_difference(a, b) for a, b in zip(chain[:-1], chain[1:])]
     extra = None
-    if n:
-        dt = np.abs(np.array(tc[:n]) - np.array(tf[:n]))
-        k = int(np.argmax(dt))
-        extra = ({"impact_times": tc[k]}, {"impact_times": tf[k]}, {"impact_times": float(fine.t[-1])})
-    est = estimate.trajectory_estimate(coarse, fine, order, smooth=False, extra=extra,
+    if diffs[-1]:
+        diffs = [d if d else {"impact_times": float("nan")} for d in diffs]
+        extra = (diffs, {"impact_times": float(fine.t[-1])})
+    est = estimate.trajectory_estimate(list(grids), fine, order, smooth=False, extra=extra,
                                        energy_scale=estimate.kinetic_scale(fine_system, fine.q, fine.v),
-                                       levels=(coarse.n, fine.n), system=fine_system)
-    if len(tc) != len(tf):
-        est.note += f"; the grids resolve {len(tc)} and {len(tf)} impacts (paired in order)"
+                                       levels=tuple(g.n for g in chain), system=fine_system)
+    counts = [len([i for i in g.impacts if not i.caught]) for g in chain]
+    if len(set(counts)) > 1:
+        est.note += f"; the grids resolve {', '.join(map(str, counts))} impacts (paired in order)"
     return est
 
 
