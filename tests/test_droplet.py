@@ -135,8 +135,9 @@ def test_large_n_starts_from_a_coarse_solve(monkeypatch):
     monkeypatch.setattr(dl, "make_nlp", spy)
     drop = free_drop(60)
     sol = dl.solve(drop, dl.PRESOLVE_MIN_N)
-    # (then the error estimate's grid, N/2, from the answer resampled)
-    assert built == [(dl.PRESOLVE_N, False), (dl.PRESOLVE_MIN_N, True), (dl.PRESOLVE_MIN_N // 2, True)]
+    # (then the error estimate's grids, N/4 and N/2, from the answer resampled)
+    assert built == [(dl.PRESOLVE_N, False), (dl.PRESOLVE_MIN_N, True), (dl.PRESOLVE_MIN_N // 4, True),
+                     (dl.PRESOLVE_MIN_N // 2, True)]
     assert sol.success and sol.result.iterations <= 15
     assert droplet_errors(sol, oracle(drop))["shape"] < 1.0 / dl.PRESOLVE_MIN_N ** 2
     built.clear()
@@ -341,7 +342,7 @@ def _check_across_n(form, n):
 
 
 @pytest.mark.parametrize("form", ["curve", "graph"])
-@pytest.mark.parametrize("n", [3, 8, 100, 1000, 10000])
+@pytest.mark.parametrize("n", [8, 100, 1000, 10000])  # (N = 3: the checks refuse it, test_minimum_n_solves)
 def test_converges_across_n(form, n):
     _check_across_n(form, n)
 
@@ -533,6 +534,11 @@ def test_graph_accepts_just_below_90():
 
 
 def test_minimum_n_solves():
+    """At MIN_N the NLP converges, but three chords miss Young's law by 2.5 % of γ (measured 0.025-0.026): the
+    checks refuse the answer and say which law failed and by how much."""
     for form in ("curve", "graph"):
         sol = dl.solve(free_drop(45), dl.MIN_N, form)
-        assert sol.success and len(sol.x) == dl.MIN_N + 1
+        assert sol.result.success and len(sol.x) == dl.MIN_N + 1
+        assert not sol.success and sol.status == dl.CHECK_FAILED
+        assert abs(sol.young_residual) > dl.CHECK_RTOL * sol.drop.gamma_gl
+        assert "Young's law" in sol.message and f"{abs(sol.young_residual):.3g}" in sol.message

@@ -26,7 +26,7 @@ import numpy as np
 
 from ..discretise.droplet import (  # noqa: F401  (the discretisations, re-exported with the model)
     DISCRETISATIONS, FORMULATIONS, MIN_N, POLYLINES, Curve, Geometry, Graph, Revolution, add_gravity, add_pattern,
-    contact_angle_at_rim, contact_angle_estimate, resample_polyline)
+    chord_weights, contact_angle_at_rim, contact_angle_estimate, resample_polyline)
 from ..discretise.droplet_spectral import MAX_DEGREE, MIN_DEGREE, Spectral
 from ..models.droplet import (  # noqa: F401
     AxisymmetricDrop, BeyondFold, CircularCap, Droplet, HeavyDrop, PatternedCap, SphericalCap, analytic, arc_points,
@@ -35,7 +35,7 @@ from ..models.droplet import (  # noqa: F401
 from ..result import NLPResult, Result
 from ..validation import InputError, integer_at_least, one_of
 from .droplet_readings import check_profile, errors_against, pattern_readings, readings
-from .nlp import NLP
+from .nlp import DEFAULT_IPOPT_OPTIONS, NLP
 from .second_order import reduced_hessian
 
 
@@ -182,8 +182,8 @@ def make_nlp(drop: Droplet, n: int, formulation: str = "curve", guess=None):
                         guess)  # guess: (psi at the nodes, L), or None
     elif formulation == "curve":
         # a drop of revolution starts from the cap of its weightless angle (Young's, or Gibbs' on a pattern)
-        disc = Revolution(n, guess, analytic(replace(drop, rho_g=0.0, pendant=False)).contact_angle) \
-            if drop.axisymmetric else Curve(n, guess)
+        disc = Revolution(n, guess, analytic(replace(drop, rho_g=0.0, pendant=False)).contact_angle,
+                          _heavy_weights(drop, n)) if drop.axisymmetric else Curve(n, guess, _heavy_weights(drop, n))
     else:
         disc = DISCRETISATIONS[formulation](n)
     # The scene's terms: surface tension (the length elements, added by the discretisation) always;
@@ -199,6 +199,29 @@ def make_nlp(drop: Droplet, n: int, formulation: str = "curve", guess=None):
     if drop.rho_g > 0.0:
         add_gravity(nlp, geo, drop.gravity_sign * drop.bond_number)
     return nlp, geo, nlp.constraint("area")
+
+
+def _estimated_length(drop: Droplet) -> float:
+    """An estimate of a heavy drop's curve length from the drop alone (scaled units): the larger of the
+    weightless cap's and a puddle's of height ``h∞`` (2-D: the whole curve, ``A / h∞``; a drop of revolution:
+    the half profile from the apex, about the puddle's radius ``sqrt(V / π h∞)``)."""
+    cap = analytic(replace(drop, rho_g=0.0, pendant=False))
+    if drop.axisymmetric:
+        return max(cap.radius * cap.contact_angle, math.sqrt(drop.area / (math.pi * puddle_height(drop)))) / \
+            drop.length_scale
+    return max(2.0 * cap.radius * cap.contact_angle, drop.area / puddle_height(drop)) / drop.length_scale
+
+
+def _heavy_weights(drop: Droplet, n: int) -> Optional[np.ndarray]:
+    """The chords of a heavy drop's polyline, graded toward its contact line (:func:`chord_weights`), or None
+    (equal chords) for a weightless drop.  A drop of revolution's half profile from the apex is graded toward
+    the rim only: the half of a whole curve twice its length."""
+    if drop.rho_g <= 0.0 or drop.span is not None or drop.patterned:
+        return None
+    ell, length = drop.capillary_length / drop.length_scale, _estimated_length(drop)
+    if drop.axisymmetric:
+        return chord_weights(2 * n, ell, 2.0 * length)[n:]
+    return chord_weights(n, ell, length)
 
 
 def _scaled_step(drop: Droplet, area: Optional[float] = None) -> float:
@@ -233,6 +256,9 @@ def solve(drop: Droplet, n: int = 400, formulation: str = "curve", *, options: O
     _check_formulation(drop, formulation, n)
     _check_bracketable(drop)
     opts = {**SOLVER_OPTIONS, **(SPECTRAL_OPTIONS if formulation == "spectral" else {}), **(options or {})}
+    floor = _rounding_floor(drop, n) if formulation == "curve" else None
+    if floor is not None and floor > float(opts.get("tol", DEFAULT_IPOPT_OPTIONS["tol"])):
+        opts["tol"] = floor
     if drop.pendant:
         sol = _solve_pendant(drop, n, formulation, opts, verbose, compare, estimate)
     else:
@@ -245,7 +271,30 @@ def solve(drop: Droplet, n: int = 400, formulation: str = "curve", *, options: O
             sol.warnings.append(note)
     if not estimate and sol.success:
         sol.warnings.append("no error estimate: left out on request (estimate=False)")
+    if floor is not None and opts.get("tol") == floor and sol.success:
+        sol.warnings.append(f"Ipopt's tolerance raised to {floor:.2e}: the rounding floor of this graded polyline "
+                            "(its smallest chords against its largest coordinates)")
     return sol
+
+
+#: A graded polyline's rounding floor, in units of ``eps n / w_min`` times the largest weight of a chord's
+#: length in the energy (2-D: 1; a drop of revolution: its frustum's ``2 pi r_c``): its smallest chords,
+#: ``w_min / n`` of the mean one, are differences of coordinates as large as the curve, so each chord's
+#: direction (the gradient of its length, a unit vector) carries a rounding error of about ``eps n / w_min``,
+#: and Ipopt's dual infeasibility stalls there.  Measured: Bond number 1e4, N = 1600 (2-D): 2.9e-10 where
+#: ``eps n / w_min`` = 4.4e-10; a drop of revolution, Bond 1e4, N = 400: 2.5e-10 where the floor's unit is
+#: 8.8e-10.  Ipopt's default tolerance 1e-10 then ends in Search_Direction_Becomes_Too_Small or
+#: Solved_To_Acceptable_Level with the drop converged.
+ROUNDING_FLOOR = 2.0
+
+
+def _rounding_floor(drop: Droplet, n: int) -> Optional[float]:
+    """The smallest Ipopt tolerance a heavy drop's graded polyline of ``n`` chords can reach (None: equal chords)."""
+    w = _heavy_weights(drop, n)
+    if w is None:
+        return None
+    weight = 2.0 * math.pi * _estimated_length(drop) if drop.axisymmetric else 1.0
+    return ROUNDING_FLOOR * float(np.finfo(float).eps) * n / float(w.min()) * weight
 
 
 def _oracle(drop: Droplet):
@@ -305,7 +354,46 @@ def _solution(drop: Droplet, n: int, formulation: str, opts: dict, verbose: bool
     if sol.success and estimate:
         sol.error_estimate = _estimate(drop, n, formulation, opts, verbose, r, sol)
         sol.warnings += sol.error_estimate.warnings()
+    check_readings(sol, apex_read=formulation != "spectral" and not drop.axisymmetric)
     return sol
+
+
+#: The largest disagreement of a drop's readings with the laws they obey that still counts as an answer,
+#: relative to their size: Young's law at the contact line, ``|γ_gl cos θ + γ_sl − γ_sg| / γ_gl``, and the
+#: Laplace pressure, ``|P − (γ κ_a ± ρg h)| / (γ |κ_a| + ρg h)``.  Both are measured errors of the answer,
+#: independent of its error estimate (which a grid that misses the contact line fools: it claimed 0.87 % for a
+#: contact angle of 4.7° where Young's is 60°).  A resolved drop meets both far below it (N = 400: 8e-5 and 4e-6
+#: at Bond numbers 100 to 1e6 with graded chords; weightless, N = 6: 7.7e-3 and 1.6e-2 ... N = 10: 2.8e-3 and
+#: below 1e-2); the unresolved heavy drop does not (equal chords at Bond 1e4, N = 400: 0.497 and 0.21).
+CHECK_RTOL = 1e-2
+#: The status of an answer whose readings fail those checks.
+CHECK_FAILED = "Check_Failed"
+
+
+def check_readings(sol: DropletSolution, apex_read: bool = True) -> None:
+    """Fail a converged drop whose readings disagree with Young's law or the Laplace pressure beyond
+    ``CHECK_RTOL`` (the message says which check failed and by how much).  ``apex_read``: the apex curvature is
+    read off the vertices (a 2-D polyline), not derived from the pressure (the spectral profile, a drop of
+    revolution), so the pressure check is a check."""
+    if not sol.success:
+        return
+    drop, failed = sol.drop, []
+    if sol.young_residual is not None and abs(sol.young_residual) > CHECK_RTOL * drop.gamma_gl:
+        wanted = "Young's" if sol.pattern is None else "the regime's Young"
+        failed.append(f"Young's law: γ_gl cos θ + γ_sl − γ_sg = {sol.young_residual:.3g}, "
+                      f"{abs(sol.young_residual) / drop.gamma_gl:.3g} of γ_gl (the contact angle "
+                      f"{math.degrees(sol.contact_angle):.4g}° against {wanted} angle)")
+    if apex_read and drop.span is None and math.isfinite(sol.apex_curvature):
+        hydro = drop.gravity_sign * drop.rho_g * sol.height if drop.rho_g > 0.0 else 0.0
+        laplace = drop.gamma_gl * sol.apex_curvature + hydro
+        scale = drop.gamma_gl * abs(sol.apex_curvature) + abs(hydro)
+        if scale > 0.0 and abs(sol.pressure - laplace) > CHECK_RTOL * scale:
+            failed.append(f"the Laplace pressure: the area multiplier {sol.pressure:.6g} against γ κ_a "
+                          f"{'± ρg h ' if drop.rho_g > 0.0 else ''}= {laplace:.6g} from the vertices, "
+                          f"{abs(sol.pressure - laplace) / scale:.3g} relative")
+    if failed:
+        sol.fail(CHECK_FAILED, "the drop fails " + " and ".join(failed) + f", beyond {CHECK_RTOL:g}: the grid "
+                 "does not resolve it (under gravity, its contact line within a capillary length); raise n")
 
 
 def _add_costs(res, spent):
