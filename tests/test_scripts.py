@@ -177,6 +177,18 @@ def test_convergence_script_small(tmp_path):
     assert (tmp_path / "droplet_convergence.png").exists()
 
 
+def test_estimate_battery_quick(tmp_path):
+    """scripts/estimate_battery.py --quick: a few answers against their independent references, each estimate
+    within 10x of its true error (measured 1.0x-1.9x), and the rows written as JSON."""
+    out = tmp_path / "rows.json"
+    p = run([str(ROOT / "scripts" / "estimate_battery.py"), "--quick", "--json", str(out)])
+    assert p.returncode == 0, p.stderr
+    rows = json.loads(out.read_text())
+    assert len(rows) >= 4 and all(r["status"] == "ok" for r in rows)
+    assert all(0.1 <= r["ratio"] <= 10 for r in rows), [(r["case"], r["ratio"]) for r in rows]
+    assert "0 estimates more than 10x off" in p.stdout
+
+
 def test_every_scene_is_installed_as_castrajectory_problems():
     """problems/__init__.py makes the scripts the installed package castrajectory.problems,
     which is what `castrajectory run <scene>` imports."""
