@@ -169,7 +169,8 @@ def main(argv=None):
                    help="the families to draw from, comma-separated (default: " + ",".join(f.__name__ for f in FAMILIES)
                    + ")")
     p.add_argument("--goal-seconds", type=float, default=GOAL_SECONDS,
-                   help="the time goal: no problem over this many seconds (printed as PASS/MISS; never the exit status)")
+                   help="the time goal: no problem over this many seconds (printed as PASS/MISS; never the exit "
+                   "status)")
     args = p.parse_args(argv)
     byname = {f.__name__: f for f in FAMILIES}
     names = args.families.split(",") if args.families else list(byname)

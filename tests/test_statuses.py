@@ -54,14 +54,14 @@ def test_acceptable_level_measured_and_certified_is_ok():
 
 
 def test_acceptable_level_without_the_kkt_conditions_fails_and_says_what_to_do(monkeypatch):
-    """The same stop, its re-solve allowed no iteration (it measures the point only): the scaled KKT residual is
-    4e-4, so the answer is not ok -- rightly, its T is 0.095 off T* -- and the message names the tol that would
-    accept it."""
+    """The same stop, its re-solve allowed no iteration (it measures the point only): its scaled residual is 4e-4,
+    so the answer is not ok -- rightly, its T is 0.095 off T* -- and the message names the tol that would accept
+    it."""
     monkeypatch.setattr(optimal_control, "ACCEPTABLE_ITER", 0)
     sol = min_time().solve(options=FORCED)
     assert not sol.success and sol.status == "Solved_To_Acceptable_Level"
     assert abs(sol.T - 2.0) > 1e-3
-    assert "scaled KKT residual" in sol.message and "options={'tol': 0.001}" in sol.message
+    assert "scaled feasibility and stationarity residual" in sol.message and "options={'tol': 0.001}" in sol.message
 
 
 def test_acrobot_on_a_fine_grid_at_ipopts_acceptable_level_is_ok():
