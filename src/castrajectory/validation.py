@@ -28,7 +28,20 @@ class InputError(ValueError):
     """Bad input: a physically meaningless or unsupported parameter."""
 
 
+def _holds_text(value) -> bool:
+    """Does ``value`` hold a string anywhere (``float("0.5")`` and NumPy's conversion would read it silently)?"""
+    if isinstance(value, (str, bytes)):
+        return True
+    if isinstance(value, np.ndarray):
+        return value.dtype.kind in "USa" or (value.dtype.kind == "O" and any(map(_holds_text, value.flat)))
+    if isinstance(value, (list, tuple)):
+        return any(_holds_text(v) for v in value)
+    return False
+
+
 def finite(name: str, value) -> float:
+    if _holds_text(value):
+        raise InputError(f"{name} must be a number, not the text {value!r}")
     try:
         v = float(value)
     except (TypeError, ValueError):
@@ -62,7 +75,10 @@ def state_vector(name: str, value, n: int, names=None) -> np.ndarray:
     """``value`` as a vector of ``n`` finite numbers, one per coordinate (``names``, for the message).
 
     A nested value is refused even when its total size is ``n`` (``[[0.1, 0.2], [0.3, 0.4]]`` for four
-    coordinates is not a state); a column or row (``n × 1``, ``1 × n``, e.g. a CasADi ``DM``) is a vector."""
+    coordinates is not a state); a column or row (``n × 1``, ``1 × n``, e.g. a CasADi ``DM``) is a vector.  Text
+    is refused (``["0.5"]`` is not a number, though NumPy would read it as one)."""
+    if _holds_text(value):
+        raise InputError(f"{name} must be a list of {n} numbers, not text (got {value!r})".splitlines()[0])
     try:
         arr = np.asarray(value, dtype=float)
     except (TypeError, ValueError):

@@ -103,6 +103,9 @@ class Contact:
                                  "(no other term, no time)")
         for k, g in enumerate(self.gaps):
             check(g, f"the gap of {self.names[k]!r}")
+            if not ca.depends_on(g, q):
+                raise InputError(f"the gap of {self.names[k]!r} does not depend on the coordinates: a contact whose "
+                                 "gap never changes can never act (a body would pass through it)")
             if ca.depends_on(g, t):
                 raise InputError(f"the gap of {self.names[k]!r} depends on time: moving obstacles are "
                                  "not supported yet")

@@ -269,7 +269,11 @@ class Force:
     name: str = "force"
 
     def force(self, system: "LagrangianSystem"):
-        return ca.vec(ca.SX(self.expr))
+        Q = ca.SX(self.expr)
+        if Q.size2() != 1:  # a row (or a matrix) is not a generalised force; vec() would read it silently
+            raise InputError(f"the force {self.name!r} is a {Q.size1()}x{Q.size2()} matrix: a generalised force is "
+                             f"a column, one entry per coordinate (ca.vertcat(...))")
+        return Q
 
 
 @dataclass
