@@ -666,15 +666,14 @@ def _partners(solved: List[tuple], tn: TrajectoryNLP, res: NLPResult, options, v
     :data:`~castrajectory.solve.estimate.MIN_STEPS` steps."""
     earlier = [lv for lv in solved if lv[0] is not tn and lv[0].N < tn.N]
     ladder = [lv for lv in earlier if tn.N / lv[0].N <= estimate.PARTNER_RATIO]
-    if len(ladder) >= 2:
-        return ladder[-2:], None
-    if _half(tn.N) < 2:
+    if len(ladder) >= 2 and estimate.nested([lv[0].N for lv in ladder[-2:]] + [tn.N]):
+        return ladder[-2:], ""
+    want = estimate.coarser(tn.N)
+    if not want:
         return [], f"N = {tn.N} has no coarser grid"
     windowed = any(lv.n == tn.N and lv.horizon < tn.N for lv in log)
-    grids = []
-    for Nc in (_half(tn.N), _half(_half(tn.N))):
-        if Nc < estimate.MIN_STEPS or (grids and Nc >= grids[0][0].N):
-            break
+    grids, why = [], ""
+    for Nc in reversed(want):
         src = grids[0] if grids else (tn, res.values)
         got = _coarse_partner(src[0], src[1], Nc, options, verbose, log, omega, polish, windowed)
         if got is None:
@@ -682,9 +681,10 @@ def _partners(solved: List[tuple], tn: TrajectoryNLP, res: NLPResult, options, v
                 st = log[-1].status if log else "no log"
                 return [], (f"the grid N = {Nc} for the estimate did not converge ({st}): the answer may not "
                             f"be converged either")
+            why = f"; the grid N = {Nc} did not converge ({log[-1].status if log else 'no log'})"
             break
         grids.insert(0, got)
-    return grids, None
+    return grids, why
 
 
 def _floor(tn: TrajectoryNLP, values) -> Optional[float]:
@@ -702,14 +702,14 @@ def _estimate(solved: List[tuple], tn: TrajectoryNLP, res: NLPResult, answer: "T
     """The estimate of the answer on ``tn`` from two coarser grids (:func:`_partners`; module
     :mod:`~castrajectory.solve.estimate`) and the answer's measured floor (:func:`_floor`)."""
     grids, why = _partners(solved, tn, res, options, verbose, log, omega, polish)
-    if why is not None:
+    if not grids:
         return estimate.ErrorEstimate.none(why)
     system = tn.dm.system
     scale = estimate.kinetic_scale(system, answer.q, answer.v) if tn.mode == "initial_value" else None
     return estimate.trajectory_estimate([_path(*g) for g in grids], answer, tn.dm.scheme.order,
                                         energy_scale=scale, system=system,
                                         levels=tuple(g[0].N for g in grids) + (tn.N,),
-                                        floor=_floor(tn, res.values))
+                                        floor=_floor(tn, res.values), note=why or "")
 
 
 def solve_boundary(system: LagrangianSystem, q0, qT, T: float, N: int, scheme: str = "midpoint",
