@@ -37,11 +37,30 @@ class SubNodeImpact:
     at_node: bool = False
     #: the tangential (friction) impulse along the contact's slip direction (0 without friction)
     mu_t: float = 0.0
+    #: per contact, the (non-positive) share of the point's impulses that supports contacts held through the part
+    #: after it, moved out of the impact (:func:`_held_share`): ``v_after − v_before = M⁻¹ Jᵀ (μ + held_share)``
+    held_share: Optional[np.ndarray] = None
 
     def as_dict(self) -> dict:
         return {"step": self.step, "t": self.t, "contact": self.contact, "mu": self.mu,
                 "q": self.q, "v_before": self.v_before, "v_after": self.v_after, "caught": self.caught,
-                "at_node": self.at_node, "mu_t": self.mu_t}
+                "at_node": self.at_node, "mu_t": self.mu_t,
+                "held_share": None if self.held_share is None else np.asarray(self.held_share, float)}
+
+
+@dataclass
+class Release:
+    """A contact that leaves without an impact of its own (a lift-off): step ``k`` (the last node at which it was
+    closed), its time and contact; ``at_impact``: released by another contact's impact at that time (the force it
+    held jumps to zero there), otherwise where its held force vanishes (:func:`_releases`)."""
+
+    step: int
+    t: float
+    contact: int
+    at_impact: bool = False
+
+    def as_dict(self) -> dict:
+        return {"step": self.step, "t": self.t, "contact": self.contact, "at_impact": self.at_impact}
 
 
 @dataclass(kw_only=True)
@@ -84,20 +103,40 @@ class ContactTrajectory(Result):
     #: the slips that stop (``"stop"``: the contact then sticks) or turn (``"turn"``: it slides back) at a sub-node,
     #: which their step timed: ``(t, contact, kind)``
     slip_turns: Optional[list] = None
+    #: the lift-offs: contacts that leave without an impact of their own (:class:`Release`, by time)
+    releases: List["Release"] = field(default_factory=list)
+    #: the contact force per node, ``node_impulse`` over the node's dual cell (``[t_k − h/2, t_k + h/2]``; node 0's
+    #: from 0, node N's into the look-ahead step): (N + 1, contacts); a resting body's weight exactly
+    contact_force: Optional[np.ndarray] = None
 
     def slip_stops(self, contact: int = 0) -> List[float]:
-        """The times at which contact ``contact`` stops sliding (and sticks or rolls), read from the discrete
-        solution's impulses: the friction is impulsive, acting at the nodes and sub-nodes, so the slip stops
-        inside the cells from the first node that does not slide until the sticking ratio settles, after the
-        fraction ``f`` of them in which Coulomb's full ``μ`` acted, ``ΣΦ/ΣΛ = f (−μ ŝ) + (1 − f) r_s`` (``Φ``, ``Λ``
-        the nodes' friction and normal impulses, ``ŝ`` the slip's direction before, ``r_s`` the settled
-        sticking ratio after; where it has not settled within 20 nodes, the first cell alone, and the ringing
-        is skipped).  For a constant normal force the total friction impulse up to the stop is exact in the discrete solution
-        (the slip's balance), so the time is too; the nodes themselves resolve the stop to a step only."""
+        """The times at which contact ``contact`` stops sliding (and sticks or rolls): :meth:`slip_events`' stops."""
+        return self.slip_events(contact)[0]
+
+    def slip_reversals(self, contact: int = 0) -> List[float]:
+        """The times at which contact ``contact``'s slip reverses (it slides back without sticking):
+        :meth:`slip_events`' reversals."""
+        return self.slip_events(contact)[1]
+
+    def slip_events(self, contact: int = 0):
+        """``(stops, reversals)`` of contact ``contact``'s slip: the times at which it stops sliding (and sticks or
+        rolls), and those at which its slip reverses without sticking.  Those its step's sub-node timed (the
+        march's mode W, ``slip_turns``) are that sub-node's times.  The others are read from the discrete
+        solution's impulses: the friction is impulsive, acting at the nodes and sub-nodes, so a node whose friction
+        ratio falls inside the cone ends a slide.  If the node after it slides the other way, the slip reversed
+        inside the cell: ``Φ/Λ = μ(2f − 1)(−ŝ)``, ``f`` the fraction of the cell slid the first way (a reversal
+        read as a stop made the label change with N: the disk in the bowl at μ = 0.05 reversed at 0.71 s, a
+        "stop" at N = 400 where the march had not timed it, a "turn" at N = 100 where it had).  Otherwise the slip
+        stops inside the cells from that node until the sticking ratio settles, after the fraction ``f`` of them
+        in which Coulomb's full ``μ`` acted, ``ΣΦ/ΣΛ = f (−μ ŝ) + (1 − f) r_s`` (``Φ``, ``Λ`` the nodes' friction
+        and normal impulses, ``ŝ`` the slip's direction before, ``r_s`` the settled sticking ratio after; where it
+        has not settled within 20 nodes, the first cell alone, and the ringing is skipped).  For a constant normal
+        force the total friction impulse up to the stop is exact in the discrete solution (the slip's balance), so
+        the time is too; the nodes themselves resolve the stop to a step only."""
         if self.friction_impulse is None:
-            return []
-        # a stop that its step's sub-node timed (mode W) is that sub-node's time; the impulses read the others
+            return [], []
         timed = [t for t, j, kind in (self.slip_turns or []) if j == contact and kind == "stop"]
+        timed_turns = [t for t, j, kind in (self.slip_turns or []) if j == contact and kind == "turn"]
         near = [t for t, j, kind in (self.slip_turns or []) if j == contact]
         mu = float(self.friction_coefficients[contact])
         Lam = np.asarray(self.node_impulse, float)[:, contact]
@@ -108,12 +147,20 @@ class ContactTrajectory(Result):
         ratio = np.where(Lam[:, None] > 0, Phi / np.where(Lam > 0, Lam, 1.0)[:, None], 0.0)
         rn = np.linalg.norm(ratio, axis=1)
         sliding = (Lam > 1e-12 * max(float(np.max(Lam)), 1e-300)) & (rn >= mu * (1 - 1e-9))
-        out, skip = [], 0
+        stops, turns, skip = [], [], 0
         for k in range(1, Lam.size):
             if k <= skip:
                 continue
             if sliding[k - 1] and not sliding[k] and Lam[k] > 0:
                 d = ratio[k - 1] / max(rn[k - 1], 1e-300)                      # −ŝ: the sliding ratio's direction
+                untimed = not any(edges[max(k - 2, 0)] <= tt <= edges[min(k + 3, edges.size - 1)] for tt in near)
+                if k + 1 < Lam.size and sliding[k + 1] and float(np.dot(ratio[k + 1], d)) < 0.0:
+                    # it slides the other way from the next node on: a reversal inside cell k
+                    f = min(max(0.5 * (1.0 + float(np.dot(ratio[k], d)) / mu), 0.0), 1.0)
+                    if untimed:
+                        turns.append(float(edges[k] + f * (edges[k + 1] - edges[k])))
+                    skip = k + 1
+                    continue
                 # the stop's cells: from k until the sticking ratio has settled (two stuck nodes agree: a stop
                 # on an incline rings for two nodes about tan α; up to 20 nodes, a slip back within them included), the settled ratio r_s after them
                 K, r_s, skip = k, np.zeros_like(d), k + 20     # (unsettled: the first cell alone, the ringing skipped)
@@ -128,9 +175,9 @@ class ContactTrajectory(Result):
                 f = float(np.dot(mean - r_s, a) / max(np.dot(a, a), 1e-300))
                 f = min(max(f, 0.0), 1.0)
                 t_stop = float(edges[k] + f * (edges[K + 1] - edges[k]))
-                if not any(edges[max(k - 2, 0)] <= tt <= edges[min(K + 2, edges.size - 1)] for tt in near):
-                    out.append(t_stop)
-        return sorted(out + timed)
+                if untimed:
+                    stops.append(t_stop)
+        return sorted(stops + timed), sorted(turns + timed_turns)
 
     def as_dict(self) -> dict:
         return {**super().as_dict(), "solver_status": self.solver_status,
@@ -139,7 +186,11 @@ class ContactTrajectory(Result):
                 "node_impulse": self.node_impulse,
                 "gap": self.gap, "complementarity_residual": self.complementarity_residual,
                 "impacts": [i.as_dict() for i in self.impacts],
+                "releases": [r.as_dict() for r in self.releases], "contact_force": self.contact_force,
                 "friction_ratio": self.friction_ratio, "slip": self.slip,
+                # each contact's slip events (friction only): [stops, reversals]
+                "slip_events": None if self.friction_impulse is None else
+                [list(self.slip_events(j)) for j in range(len(self.friction_coefficients))],
                 # JSON keys of the earlier second sub-node per step, kept for existing readers: a step
                 # now holds one sub-node (the grid is halved instead), so they are always empty
                 "steps_sub2": [], "t_sub2": [], "mu_sub2": [],
@@ -204,6 +255,8 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     MUL = res.values["mul"][:N * c].reshape(N, c)
     FL = res.values["fleft"][:N * c * fd].reshape(N, c, fd) if cm.friction else np.zeros((N, c, fd))
     FL = FL[..., 0] if fd == 1 else FL
+    gap_subs = np.asarray(sysm.gap.map(N)(S.T)[0]).reshape(c, N).T
+    gap_sub_k = lambda k: gap_subs[k]  # noqa: E731  (the gaps at step k's sub-node)
     for k in np.flatnonzero(np.any((MU > tol) | (MUL > tol), axis=1)):
         pm = np.asarray(cm.p_minus(q[k], S[k], B[k], H[k], *[z[k] for z in ZM])).reshape(-1)
         pl = np.asarray(cm.p_plus(S[k], q[k + 1], B[k], H[k], *[z[k] for z in ZP])).reshape(-1)
@@ -221,10 +274,12 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
             ratio_k = (tang / np.where(imp_k > 0, imp_k, 1.0)[:, None]).reshape(RS[k, c:].shape)
         impacts += _impacts_at(cm, k, float(t_sub[k]), S[k], pm, pl, imp_k, tol, H[k], at_node=False,
                                ratios=ratio_k, leaves=(np.max(gap[k + 1:k + 3], axis=0) > tn.open_gap)
-                               & (gap[k] > TOUCH_TOL * tn.scales_ell))
+                               & (gap[k] > TOUCH_TOL * tn.scales_ell),
+                               held=closed[k + 1] & (gap_sub_k(k) <= TOUCH_TOL * tn.scales_ell))
     for k in np.flatnonzero(np.any(force[1:N] > tol, axis=1)) + 1:
         at = _impacts_at(cm, k, float(t[k]), q[k], pp[k] - 2 * half[k], pp[k], force[k], tol, H[k], at_node=True,
-                         ratios=RS[k, :c] if k < N else np.zeros_like(RS[0, :c]))
+                         ratios=RS[k, :c] if k < N else np.zeros_like(RS[0, :c]),
+                         held=closed[k] & closed[k + 1])
         if at:
             impacts += at
             p[k] = pp[k]
@@ -267,10 +322,15 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
         if fd == 1:       # planar: (N, contacts, 2) for [node force, sub-node impulse]
             fratio, slip = fratio[..., 0], slip[..., 0]
     warnings = simultaneous + _elastic_loss_warning(cm, energy, impacts, H[:N])
+    # the nodes' dual cells: node 0's is half a step; node N's reaches past T into the look-ahead step, as its Λ does
+    cell = 0.5 * (np.concatenate([[0.0], H[:N]]) + H[:N + 1])
+    contact_force = lam / cell[:, None]
+    releases = _releases(t, closed, contact_force, impacts)
     return ContactTrajectory(
         warnings=warnings,
         t=t, q=q, p=p, v=v, energy=energy, t_sub=t_sub, q_sub=S, mu=MU, nu=nu, gap=gap, gap_sub=gap_sub,
         node_impulse=lam, impacts=impacts, complementarity_residual=float(res.complementarity_residual),
+        releases=releases, contact_force=contact_force,
         status=res.status, success=res.success, message=res.message, solver_status=res.solver_status,
         iterations=int(total_iter),
         build_time_s=float(sum(a["build_time_s"] for a in attempts)),
@@ -282,8 +342,63 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
         program={"terms": sysm.terms(), "steps": int(tn.L), **tn.nlp.anatomy()})
 
 
+def _releases(t: np.ndarray, closed: np.ndarray, force: np.ndarray, impacts) -> List[Release]:
+    """The lift-offs: a contact closed with a force at node ``a`` and open at node ``a + 1``, without an impact of its
+    own between them.  Where another contact's impact lies in ``(t_a, t_{a+1}]`` it released it (the force it held
+    jumps to zero there: the rimless wheel's back spoke as the front one lands); otherwise the held force fell to
+    zero inside node ``a``'s cell, and the release is where the parabola through the forces of the three nodes
+    before ``a`` (whose cells it filled) vanishes (the line through two where only two were held; the node's time
+    where fewer).  The node forces are second-order values of the force, so the time is second order (the ladder
+    sliding down a wall: 2.9e-5, 1.8e-5, 4.1e-6, 1.2e-6 s from sin θ = (2/3) sin θ₀ at N = 70 to 560)."""
+    out = []
+    for j in range(closed.shape[1]):
+        for a in np.flatnonzero(closed[:-1, j] & ~closed[1:, j] & (force[:-1, j] > 0.0)):
+            own = [i for i in impacts if i.contact == j and t[a] < i.t <= t[a + 1] + 1e-12 * max(1.0, abs(t[a + 1]))]
+            if own:
+                continue
+            others = [i.t for i in impacts if t[a] <= i.t <= t[a + 1]]
+            if others:
+                out.append(Release(int(a), float(min(others)), int(j), at_impact=True))
+                continue
+            held = [i for i in range(a - 3, a) if i >= 0 and closed[i, j] and force[i, j] > 0.0]
+            when = float(t[a])
+            if len(held) >= 2:
+                coeffs = np.polyfit(t[held] - t[a], force[held, j], len(held) - 1)
+                roots = np.roots(coeffs)
+                roots = roots[np.isreal(roots)].real
+                roots = roots[(roots >= t[a - 1] - t[a]) & (roots <= t[a + 1] - t[a])]   # between the neighbours
+                if roots.size:
+                    when = float(t[a] + roots[np.argmin(np.abs(roots))])
+            out.append(Release(int(a), when, int(j)))
+    return sorted(out, key=lambda r: (r.t, r.contact))
+
+
+def _held_share(cm: ContactMechanics, x, p_after, held) -> np.ndarray:
+    """The normal impulses (one per contact, ≤ 0 where the contact is held) that take out of the momentum after an
+    impact at ``x`` the share of its impulse that supports a contact held through the part after it.
+
+    The discrete momentum at the start of a part is its Legendre transform, ``p⁺ = M Δq/h + (h/2) F``: for a body
+    in flight ``M v`` to O(h²), but a held contact's support acts at the part's end node (its ``h ν``), not in the
+    part, so after a plastic landing on a floor ``p⁺ = m g h/2``: ``v_after`` was ``g h/2`` upward (8e-3 m/s at
+    N = 800) where Newton's law says 0, and the landing was flagged *caught*.  A contact held through the part
+    (closed at ``x`` and at the next node: its gap does not change over the part) has no normal velocity after the
+    impact, ``J_h v⁺ = 0``; the velocity after is the one that meets it with an impulse along the held normals,
+    ``J_h M⁻¹ J_hᵀ δ = −J_h M⁻¹ p⁺``, moved from the impact to the support."""
+    js = np.flatnonzero(held)
+    delta = np.zeros(np.asarray(held).size)
+    if js.size == 0:
+        return delta
+    x = np.asarray(x, float)
+    J = np.asarray(cm.system.gap(x)[1])[js]
+    probes = np.vstack([p_after, p_after + J])                            # p⁺ and p⁺ + J_jᵀ per held contact
+    V = cm.dm.velocities(np.repeat(x[None], probes.shape[0], axis=0), probes)
+    G = (V[1:] - V[0]).T                                                    # columns M⁻¹ J_jᵀ (projected)
+    delta[js] = np.linalg.solve(J @ G, -J @ V[0])
+    return delta
+
+
 def _impacts_at(cm: ContactMechanics, k: int, t: float, x, p_before, p_after, impulses, tol: float, h: float,
-                at_node: bool, ratios=None, leaves=None) -> List[SubNodeImpact]:
+                at_node: bool, ratios=None, leaves=None, held=None) -> List[SubNodeImpact]:
     """The impacts at one point ``x`` (a sub-node, or a node where a flight landed) with the momenta on either
     side and the contacts' impulses there.  A contact whose impulse meets an arrival faster than a step's worth
     of its normal acceleration takes an impact (slower "impacts" are the discrete form of persistent contact);
@@ -295,8 +410,17 @@ def _impacts_at(cm: ContactMechanics, k: int, t: float, x, p_before, p_after, im
     follows Stronge's law, not Newton's: it is caught where the contact does not leave faster than that scale.
     An arrival slower than that scale is an impact too where it bounces (``leaves``: the contact is open at
     the next node, and its normal velocity turned from approach to separation): a coarse grid's slow bounce
-    (a pendulum's second arrival at 0.915 rad/s against 2 |a_n| h = 0.98 at N = 40 was not listed)."""
+    (a pendulum's second arrival at 0.915 rad/s against 2 |a_n| h = 0.98 at N = 40 was not listed).  ``held``: the
+    contacts closed at ``x`` and at the next node: their support's share of the impulse is not the impact's
+    (:func:`_held_share`)."""
     js = np.flatnonzero(impulses > tol)
+    delta = None
+    if held is not None and js.size:
+        held = np.asarray(held, bool) & (impulses > tol)
+        delta = _held_share(cm, x, np.asarray(p_after, float), held)
+        if np.any(delta):
+            p_after = np.asarray(p_after, float) + np.asarray(cm.system.gap(x)[1]).T @ delta
+            impulses = np.maximum(impulses + delta, 0.0)
     ratios = np.zeros(impulses.size) if ratios is None else np.asarray(ratios, float)   # (contacts,) or (contacts, 2)
     if js.size == 0:
         return []
@@ -319,7 +443,8 @@ def _impacts_at(cm: ContactMechanics, k: int, t: float, x, p_before, p_after, im
             out.append(SubNodeImpact(int(k), t, int(j), float(impulses[j]), np.array(x, float).copy(), vb, va,
                                      caught=bool(caught), at_node=at_node,
                                      mu_t=(float(ratios[j] * impulses[j]) if np.ndim(ratios[j]) == 0
-                                           else np.asarray(ratios[j], float) * impulses[j])))
+                                           else np.asarray(ratios[j], float) * impulses[j]),
+                                     held_share=None if delta is None else delta.copy()))
     return out
 
 
