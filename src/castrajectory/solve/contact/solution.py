@@ -353,7 +353,8 @@ def _releases(t: np.ndarray, closed: np.ndarray, force: np.ndarray, impacts) -> 
     out = []
     for j in range(closed.shape[1]):
         for a in np.flatnonzero(closed[:-1, j] & ~closed[1:, j] & (force[:-1, j] > 0.0)):
-            own = [i for i in impacts if i.contact == j and t[a] < i.t <= t[a + 1] + 1e-12 * max(1.0, abs(t[a + 1]))]
+            # (its own impact in the step, or at node a where a flight landed on the node: a bounce, no release)
+            own = [i for i in impacts if i.contact == j and t[a] <= i.t <= t[a + 1]]
             if own:
                 continue
             others = [i.t for i in impacts if t[a] <= i.t <= t[a + 1]]
