@@ -198,10 +198,10 @@ class Curve:
     ``(|p_{i+1} - p_i|² - |p_i - p_{i-1}|²) / (2 l_ref²) = 0`` (a gauge
     condition that removes the tangential sliding of vertices; stationarity
     alone already makes the chords equal, so its multipliers are zero at the
-    optimum and it only conditions the Newton systems; a heavy drop's chords are instead in the fixed ratios
-    ``weights``, :func:`chord_weights`, graded toward the contact lines), and the area as the sum of the
-    trapezoids under the chords.  The length is the sum of the segment lengths.  No graph assumption is made, so overhanging drops
-    (``theta > 90°``) are fine.
+    optimum and it only conditions the Newton systems; a heavy drop's chords are instead in the fixed
+    ratios ``weights``, :func:`chord_weights`, graded toward the contact lines), and the area as the sum of
+    the trapezoids under the chords.  The length is the sum of the segment lengths.  No graph assumption is
+    made, so overhanging drops (``theta > 90°``) are fine.
 
     Every piece is an element family of :class:`~castrajectory.solve.nlp.NLP` (one chord,
     one pair of chords, one area link), differentiated once per element type.
