@@ -142,7 +142,8 @@ def test_large_n_starts_from_a_coarse_solve(monkeypatch):
     assert droplet_errors(sol, oracle(drop))["shape"] < 1.0 / dl.PRESOLVE_MIN_N ** 2
     built.clear()
     dl.solve(drop, dl.PRESOLVE_MIN_N - 1)
-    assert built == [(dl.PRESOLVE_MIN_N - 1, False), ((dl.PRESOLVE_MIN_N - 1) // 2, True)]
+    assert built == [(dl.PRESOLVE_MIN_N - 1, False), ((dl.PRESOLVE_MIN_N - 1) // 4, True),
+                     ((dl.PRESOLVE_MIN_N - 1) // 2, True)]
 
 
 def test_pinned_balloon_at_large_n():

@@ -521,7 +521,9 @@ def test_windowed_solve_recorded(solve_log):
     discrete equations (the march of the same scheme agrees to 5e-10 measured)."""
     N = 200
     r = tr.solve_initial_value(double_pendulum(), [2.0, 1.0], [0.0, 0.0], 10.0, N)
-    assert r.success, r.message
+    # (the estimate's grid N = 100 does not converge even in windows: an answer whose error cannot be estimated is
+    # not ok, issue 41; the answer is the discrete solution all the same)
+    assert r.success or (r.status == "Error_Not_Estimated" and "N = 100" in r.message), r.message
     _check_levels(r, solve_log, N)
     marched = st.march(double_pendulum(), [2.0, 1.0], [0.0, 0.0], 10.0, N)
     assert np.max(np.abs(r.q - marched.q)) < 1e-7

@@ -246,9 +246,12 @@ def control_outcome(title: str, system, sol, extra: Optional[dict] = None, extra
              f"cost J = {sol.cost:.12g}; certificate (the controls marched, against the optimum) {cert}",
              *(extra_lines or []), status_line(sol.status, sol)]
     if hasattr(sol, "b_stationary") and np.isfinite(sol.b_violation):
-        # (contact-implicit: the B-stationarity proxy, the multipliers of the pairs whose both factors vanish)
+        # (contact-implicit: the B-stationarity proxy, the multipliers of the pairs whose both factors vanish, and the
+        # events held against their steps' windows, which no flip of a pair sees)
+        why = ("none found" if sol.b_stationary else "events held at their windows' edges"
+               if getattr(sol, "pinned", None) else "a descent by a flip")
         lines.insert(2, f"B-stationarity proxy: {sol.biactive} biactive pair(s), largest multiplier of a descent "
-                        f"{sol.b_violation:.1e} ({'none found' if sol.b_stationary else 'a descent by a flip'})")
+                        f"{sol.b_violation:.1e} ({why})")
     unames = [f"{c.name}[{i}]" if c.size > 1 else c.name for c in system.controls for i in range(c.size)]
 
     def plot(path):
