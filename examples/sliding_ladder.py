@@ -17,7 +17,7 @@ import castrajectory as ct
 m, L, g = 1.0, 1.0, 9.81
 theta0 = math.radians(70.0)
 title = "ladder sliding down a frictionless wall"
-T, n = 0.4, 200            # lift-off from the wall at t = 0.4896 s for θ₀ = 70°
+T, n = 0.4, 200            # lift-off from the wall at t = 0.4225 s for θ₀ = 70°
 q0 = [0.5 * L * math.cos(theta0), 0.5 * L * math.sin(theta0), theta0]   # centre (x, y), angle from the floor
 qd0 = [0.0, 0.0, 0.0]
 

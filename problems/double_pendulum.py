@@ -1,7 +1,9 @@
 """Double pendulum by least action over the whole trajectory (Exercise 2.3).
 
 Two point masses on massless rods, angles from the downward vertical.  The
-default start, θ = (2, 1) rad at rest over T = 10 s, is chaotic.  The library's
+default start, θ = (2, 1) rad at rest over T = 10 s, is chaotic: the default grid,
+galerkin4 on 16000 steps, resolves it to about 1e-7 of its excursion, where midpoint
+on 2000 steps is 8 rad off and says so (``Not_Resolved``, exit 1).  The library's
 method (``--method whole``) solves every discrete Euler–Lagrange equation of
 the trajectory in one Ipopt NLP; ``march``, ``rk4`` and ``implicit-euler`` are
 time-stepping baselines for comparison.
@@ -29,7 +31,7 @@ def parser():
     p.add_argument("--l1", type=float, default=1.0, help="length of link 1 (> 0)")
     p.add_argument("--l2", type=float, default=1.0, help="length of link 2 (> 0)")
     p.add_argument("--g", type=float, default=9.81, help="gravity (0 drops the gravity term)")
-    cli.add_trajectory_flags(p, T=10.0, n=2000)
+    cli.add_trajectory_flags(p, T=10.0, n=16000, scheme="galerkin4")
     return p
 
 

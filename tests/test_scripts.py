@@ -683,11 +683,13 @@ def test_an_unresolved_elastic_run_is_not_silent():
 
 def test_a_step_longer_than_the_motion_warns():
     """The double pendulum on 100 steps of 10⁴ s (its linearised 1/ω is 0.42 s at the start) solves and
-    said nothing; it now warns, and a resolved run (h ω = 0.02) does not."""
+    said nothing; it now warns, and its estimated error is its whole excursion: not ok (issue 41), exit 1.
+    A resolved run (h ω = 0.02) does not warn."""
     p = run([script("double_pendulum"), "--T", "1e6", "--n", "100", "--json"])
-    assert p.returncode == 0, p.stderr
-    w = json.loads(p.stdout)["warnings"]
-    assert any("longer than the motion's fastest time scale" in x and "0.415 s" in x for x in w)
+    assert p.returncode == 1, p.stderr
+    out = json.loads(p.stdout)
+    assert out["status"] == "Not_Resolved" and out["error_estimate"]["relative"] >= 0.5
+    assert any("longer than the motion's fastest time scale" in x and "0.415 s" in x for x in out["warnings"])
     p = run([script("double_pendulum"), "--T", "1", "--n", "200", "--json"])
     assert json.loads(p.stdout)["warnings"] == []
 

@@ -217,7 +217,8 @@ def state_keys(system, run) -> dict:
     """The whole state of a mechanics answer for its JSON: velocities ``v`` and momenta ``p`` at the nodes
     (``p = ∂L/∂q̇``: for a variational answer the discrete momenta, whose Legendre transform ``v`` is), the
     system's declared ``quantities`` at every node, and for a contact answer its ``impacts`` -- one entry
-    per contact and impact, so that every contact of a simultaneous impact is listed."""
+    per contact and impact, so that every contact of a simultaneous impact is listed -- and its ``releases``
+    (lift-offs, with the contact's name)."""
     t = np.asarray(run.t, float)
     q, v = np.asarray(run.q, float), np.asarray(run.v, float)
     out = {"v": v}
@@ -233,6 +234,12 @@ def state_keys(system, run) -> dict:
         # each impact as the solution records it (its contact's index, impulse mu, velocities), with the
         # contact's name and its impulse under that name
         out["impacts"] = [{**i.as_dict(), "name": names[i.contact], "impulse": float(i.mu)} for i in impacts]
+        # the lift-offs (a contact that leaves without an impact of its own), per contact by name
+        releases = getattr(run, "releases", None)
+        if releases is None:
+            releases = getattr(getattr(run, "detail", None), "releases", None)
+        if releases is not None:
+            out["releases"] = [{**r.as_dict(), "name": names[r.contact]} for r in releases]
     return out
 
 
