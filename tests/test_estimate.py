@@ -95,17 +95,20 @@ def test_boundary_estimate_sees_an_exact_parabola():
     from castrajectory.problems import thrown_ball
     out = thrown_ball.run(thrown_ball.parser().parse_args(["--distance", "100", "--n", "2000"]))
     assert out.success
-    assert out.data["error_estimate"]["available"]
-    assert out.data["error_estimate"]["errors"]["q"] < 1e-10
+    est = out.data["error_estimate"]
+    assert est["available"] and est["regime"] == "floor"
+    # the grids agree to rounding, and the estimate is the a-priori floor 10 N u max|q| (100 m over 2000 steps:
+    # 4.4e-10), no less: the least-action solve measures no floor of its own (it minimises, it is not square)
+    q = np.asarray(out.data["q"], float)
+    assert est["errors"]["q"] <= 1.01 * estimate.rounding_floor(2000, q) < 1e-9
 
 
 def test_an_unresolved_grid_warns_and_a_coarse_grid_estimate_is_honest():
-    # the chaotic double pendulum at T = 10 on 2000 midpoint steps: the answer is 8 rad off (CVODES), its
-    # estimated error more than its excursion, and it is not ok (issue 41)
+    # the chaotic double pendulum at T = 10 on 2000 midpoint steps: the answer is 8 rad off (CVODES), and its
+    # estimate says so: stalled grids, unreliable, an error above the motion's excursion
     r = simulate.simulate(DP, [2.0, 1.0], [0.0, 0.0], 10.0, 2000)
-    assert not r.success and r.status == "Not_Resolved"
-    assert r.error_estimate.relative >= estimate.FAIL_RELATIVE
-    assert any("not converged" in w for w in r.warnings)
+    assert r.error_estimate.relative > estimate.WARN_RELATIVE and not r.error_estimate.reliable
+    assert any("not converged" in w for w in r.warnings) and any("unreliable" in w for w in r.warnings)
     ref, _ = stepping.reference(DP, [2.0, 1.0], [0.0, 0.0], r.t[-1:], rtol=1e-13, atol=1e-13)
     assert np.max(np.abs(r.q[-1] - ref[-1])) > 1.0
     # the elastic ball on 10 steps of 100 s: the estimate's energy term says so too

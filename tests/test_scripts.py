@@ -660,7 +660,7 @@ def test_a_picture_format_nobody_writes_is_refused_before_the_solve(tmp_path):
 def test_max_iter_caps_the_whole_run():
     """--max-iter is the Ipopt budget of the whole run, every level and window included (it was applied
     per sub-solve: 299 solves, 1374 iterations for --max-iter 5)."""
-    p = run([script("double_pendulum"), "--T", "10", "--max-iter", "5", "--json"])
+    p = run([script("double_pendulum"), "--T", "10", "--scheme", "midpoint", "--n", "2000", "--max-iter", "5", "--json"])
     assert p.returncode == 1
     d = json.loads(p.stdout)
     assert d["status"] != "ok" and 1 <= d["iterations"] <= 5
@@ -685,7 +685,7 @@ def test_a_step_longer_than_the_motion_warns():
     """The double pendulum on 100 steps of 10⁴ s (its linearised 1/ω is 0.42 s at the start) solves and
     said nothing; it now warns, and its estimated error is its whole excursion: not ok (issue 41), exit 1.
     A resolved run (h ω = 0.02) does not warn."""
-    p = run([script("double_pendulum"), "--T", "1e6", "--n", "100", "--json"])
+    p = run([script("double_pendulum"), "--T", "1e6", "--n", "100", "--scheme", "midpoint", "--json"])
     assert p.returncode == 1, p.stderr
     out = json.loads(p.stdout)
     assert out["status"] == "Not_Resolved" and out["error_estimate"]["relative"] >= 0.5

@@ -9,6 +9,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Optional
 
+import math
+
 import numpy as np
 
 from ..baselines import stepping
@@ -76,7 +78,23 @@ def simulate(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str = 
     else:
         run = _baseline(system, q0, qd0, T, N, scheme, method, rtol, n_max)
     if run.success and system.contact is None:
-        run.warnings += resolution_warnings(system, q0, run.t[-1] / (len(run.t) - 1))
+        h = run.t[-1] / (len(run.t) - 1)
+        run.warnings += resolution_warnings(system, q0, h)
+        est = run.error_estimate
+        hw = h * _linear_frequency(system, q0)
+        # a step's polynomial of degree r (a scheme of order 2r) samples r + 1 points: it holds at most r
+        # half-periods of the motion
+        degree = max(1.0, 0.5 * (SCHEMES[scheme].order if method in ("whole", "march") else
+                                 BASELINE_ORDER.get(method, 2)))
+        if hw > math.pi * degree and est is not None and est.available and est.relative >= estimate.FAIL_RELATIVE:
+            # the step cannot represent the fastest linearised motion, and the grids' estimate is as large as the
+            # motion itself: no digit of the answer is right.  (A grid that resolves the motion keeps an unconverged
+            # chaotic answer ok, with its warnings: the 1000 periods of a pendulum on 20 steps each are a study of
+            # its energy, whose phase has drifted by design; gauss14 on 8 steps of h ω = 10 is 7e-3 off, where its
+            # coarser grids of 2 and 4 steps estimate 10 times its excursion)
+            run.fail("Not_Resolved", f"the step does not resolve the motion (h ω = {hw:.3g}, more than π times the "
+                     f"step's polynomial degree {degree:g}), and the estimated error is {est.relative:.3g} of the "
+                     f"answer's own scale: no digit of it is right; refine n")
     own = getattr(run.detail, "p", None)
     if own is not None:
         run.p = np.asarray(own, float)
@@ -134,6 +152,16 @@ def _baseline(system, q0, qd0, T, N, scheme, method, rtol, n_max) -> Run:
 
     fine, est, n, short = estimate.refine_runs(rtol, grids, fine, N, order, limit, step, est_of, runs)
     return estimate.conclude(fine, est, runs, rtol, n, limit, short)
+
+
+def _linear_frequency(system: LagrangianSystem, q0) -> float:
+    """``ω`` of :func:`resolution_warnings` (0 where it has none)."""
+    with np.errstate(all="ignore"):
+        try:
+            w = float(trajectory._fastest_frequency(system, np.asarray(q0, float), np.zeros(system.nq)))
+        except np.linalg.LinAlgError:
+            return 0.0
+    return w if np.isfinite(w) and w > 0.0 else 0.0
 
 
 def resolution_warnings(system: LagrangianSystem, q0, h: float) -> list:
