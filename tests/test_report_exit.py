@@ -7,16 +7,23 @@ from __future__ import annotations
 
 import pytest
 
+from pathlib import Path
+
 from castrajectory.cli import report
 from castrajectory.cli.report import contact_control
 
-pytestmark = pytest.mark.skipif(not contact_control.SCRIPT.exists(), reason="needs the source checkout's scripts/")
+#: the battery script: beside the package in a source checkout, else this checkout's (an installed wheel, as in CI)
+SCRIPT = contact_control.SCRIPT if contact_control.SCRIPT.exists() else \
+    Path(__file__).resolve().parents[1] / "scripts" / "contact_ocp_battery.py"
+
+pytestmark = pytest.mark.skipif(not SCRIPT.exists(), reason="needs the checkout's scripts/")
 
 
 @pytest.fixture
 def battery_only(monkeypatch):
     """The report reduced to the contact-OCP battery on one block push (the fastest family, a closed form
     each), its time goal 1e-9 s; returns the battery script's module for further patches."""
+    monkeypatch.setattr(contact_control, "SCRIPT", SCRIPT)
     mod = contact_control._script()
     monkeypatch.setattr(mod, "GOAL_SECONDS", 1e-9)
     monkeypatch.setattr(contact_control, "_script", lambda: mod)
