@@ -54,6 +54,7 @@ from scipy.integrate import solve_ivp
 import castrajectory as ct
 from castrajectory.baselines import stepping
 from castrajectory.models import collision, pendulum
+from castrajectory.models.orbit import kepler_orbit
 from castrajectory.models import rigidbody as rb
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -81,17 +82,6 @@ DP = pendulum.double_pendulum(1.0, 1.0, 1.0, 1.0, 9.81)
 def dp_reference(t):
     """CVODES at 1e-13 on the double pendulum's Euler–Lagrange equations (as tests/test_estimate.py)."""
     return stepping.reference(DP, [2.0, 1.0], [0.0, 0.0], t, rtol=1e-13, atol=1e-13)[0]
-
-
-def kepler_reference(t, v0=1.2):
-    """The exact orbit from perihelion (1, 0) with speed v0 (GM = 1): Kepler's equation by Newton (the oracle of
-    tests/test_estimate_order.py, repeated: a script does not import the tests)."""
-    e, a = v0 ** 2 - 1.0, 1.0 / (2.0 - v0 ** 2)
-    M = np.asarray(t) * a ** -1.5
-    E = M.copy()
-    for _ in range(60):
-        E = E - (E - e * np.sin(E) - M) / (1.0 - e * np.cos(E))
-    return np.column_stack([a * (np.cos(E) - e), a * math.sqrt(1.0 - e * e) * np.sin(E)])
 
 
 def ladder_reference(mod, t):
@@ -173,25 +163,6 @@ def cart_reference(mod, t):
         assert max_err(rhs(np.array([0.3, 1.0, -0.4, 0.5, -1.0, 2.0], dtype=LD))[3:].astype(float),
                        np.linalg.solve(M, f)) < 1e-12
     return _CART["ref"].q(t), _CART["err"]
-
-
-def spring_ball_height(t, H, g, k, m, anchor, e, T):
-    """The analytic height of the ball on a spring: harmonic flights between the oracle's impacts (as
-    tests/test_estimate.py builds it, repeated: a script does not import the tests)."""
-    times, _ = collision.spring_ball_oracle(H, 0.0, g, k, m, anchor, e, T)
-    w, yeq = math.sqrt(k / m), anchor - m * g / k
-    starts = np.concatenate([[0.0], times])
-    y0s, v0s = [H], [0.0]
-    for tk in times:
-        tau = tk - starts[len(y0s) - 1]
-        A, B = y0s[-1] - yeq, v0s[-1] / w
-        v_hit = -A * w * math.sin(w * tau) + B * w * math.cos(w * tau)
-        y0s.append(0.0)
-        v0s.append(-e * v_hit)
-    i = np.searchsorted(starts, t, side="right") - 1
-    tau = t - starts[i]
-    A, B = np.array(y0s)[i] - yeq, np.array(v0s)[i] / w
-    return yeq + A * np.cos(w * tau) + B * np.sin(w * tau), times
 
 
 def flip_reference(inertia, w0, t):
@@ -425,7 +396,7 @@ def cases() -> List[Case]:
     ks = kep["system"]()
     for N in (100, 400):
         out.append(Case("Kepler e=0.44, T=45", "galerkin24", N, sim(ks, kep["q0"], kep["qd0"], 45.0, N, "galerkin24"),
-                        traj_truth(kepler_reference),
+                        traj_truth(kepler_orbit),
                         alone=alone_sim(ks, kep["q0"], kep["qd0"], 45.0, N, "galerkin24")))
     # 4. the sliding ladder, both contacts held (DOP853 on the reduced equation)
     lad = example("sliding_ladder")
@@ -465,7 +436,7 @@ def cases() -> List[Case]:
     ball = collision.bouncing_ball(m, g, e, stiffness=k, anchor=anchor)
 
     def ball_truth(r):
-        y, times = spring_ball_height(np.asarray(r.t, float), H, g, k, m, anchor, e, Tb)
+        y, times = collision.spring_ball_height(np.asarray(r.t, float), H, g, k, m, anchor, e, Tb)
         err = np.abs(np.asarray(r.q, float)[:, 0] - y)
         got = np.array([i.t for i in getattr(r.detail, "impacts", []) if not i.caught])
         n = min(got.size, times.size)

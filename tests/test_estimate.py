@@ -42,24 +42,6 @@ def test_double_pendulum_estimate_is_within_3_of_the_true_error(scheme, method, 
     assert e.relative == pytest.approx(max(e.errors["q"] / e.scales["q"], e.errors["energy"] / e.scales["energy"]))
 
 
-def _spring_ball_height(t, H, g, k, m, anchor, e, T):
-    """The analytic height of the ball on a spring: harmonic flights between the oracle's impacts."""
-    times, _ = collision.spring_ball_oracle(H, 0.0, g, k, m, anchor, e, T)
-    w, yeq = math.sqrt(k / m), anchor - m * g / k
-    starts = np.concatenate([[0.0], times])
-    y0s, v0s = [H], [0.0]
-    for tk in times:  # state after each impact
-        tau = tk - starts[len(y0s) - 1]
-        A, B = y0s[-1] - yeq, v0s[-1] / w
-        v_hit = -A * w * math.sin(w * tau) + B * w * math.cos(w * tau)
-        y0s.append(0.0)
-        v0s.append(-e * v_hit)
-    i = np.searchsorted(starts, t, side="right") - 1
-    tau = t - starts[i]
-    A, B = np.array(y0s)[i] - yeq, np.array(v0s)[i] / w
-    return yeq + A * np.cos(w * tau) + B * np.sin(w * tau), times
-
-
 @pytest.mark.parametrize("e", [1.0, 0.8])
 def test_contact_estimate_is_within_3_of_the_true_error(e):
     """The ball on a spring: a harmonic flight (not exact for the midpoint rule) between impacts."""
@@ -67,7 +49,7 @@ def test_contact_estimate_is_within_3_of_the_true_error(e):
     system = collision.bouncing_ball(m, g, e, stiffness=k, anchor=anchor)
     tr = trajectory.solve_initial_value(system, [H], [0.0], T, N)
     assert tr.success
-    y, times = _spring_ball_height(tr.t, H, g, k, m, anchor, e, T)
+    y, times = collision.spring_ball_height(tr.t, H, g, k, m, anchor, e, T)
     got = np.array([i.t for i in tr.impacts if not i.caught])
     assert got.size == times.size >= 2
     est = tr.error_estimate

@@ -18,6 +18,7 @@ from scipy.integrate import solve_ivp
 import castrajectory as ct
 from castrajectory.baselines import stepping
 from castrajectory.models import pendulum
+from castrajectory.models.orbit import kepler_orbit
 from castrajectory.solve import estimate, simulate
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -75,16 +76,6 @@ def test_rtol_says_at_once_when_the_observed_order_cannot_reach_it():
 KEPLER = runpy.run_path(os.path.join(ROOT, "examples", "kepler.py"))
 
 
-def _kepler(t, v0=1.2):
-    """The exact orbit from perihelion (1, 0) with speed v0 (GM = 1): Kepler's equation by Newton."""
-    e, a = v0 ** 2 - 1.0, 1.0 / (2.0 - v0 ** 2)
-    M = np.asarray(t) * a ** -1.5
-    E = M.copy()
-    for _ in range(60):
-        E = E - (E - e * np.sin(E) - M) / (1.0 - e * np.cos(E))
-    return np.column_stack([a * (np.cos(E) - e), a * math.sqrt(1.0 - e * e) * np.sin(E)])
-
-
 @pytest.mark.parametrize("N", [100, 400])
 def test_high_order_at_its_floor_says_so_and_is_not_below_it(N):
     """galerkin24 on three Kepler periods (e = 0.44) against the closed form: the grids N/4, N/2, N
@@ -93,7 +84,7 @@ def test_high_order_at_its_floor_says_so_and_is_not_below_it(N):
     nominal order the two-grid estimate was 2^24 times below the difference of the grids."""
     r = ct.simulate(KEPLER["system"](), KEPLER["q0"], KEPLER["qd0"], T=45.0, N=N, scheme="galerkin24")
     assert r.success, r.message
-    true = float(np.max(np.abs(r.q - _kepler(r.t))))
+    true = float(np.max(np.abs(r.q - kepler_orbit(r.t))))
     e = r.error_estimate
     assert e.regime == "floor" and e.reliable and e.floor["q"] > 0
     assert e.errors["q"] >= e.floor["q"]

@@ -542,3 +542,23 @@ def rimless_wheel_oracle(spokes: int, length: float, slope: float, g: float, ine
         w = c * math.sqrt(w * w + gain)
         rates.append(w)
     return np.array(rates), c * math.sqrt(gain / (1 - c * c))
+
+
+def spring_ball_height(t, height: float, g: float, stiffness: float, mass: float, anchor: float, e: float, T: float):
+    """The analytic height of the ball on a spring (dropped from rest at ``height``) at the times ``t``: harmonic
+    flights between the impacts of :func:`spring_ball_oracle`.  ``(heights, impact times)``."""
+    times, _ = spring_ball_oracle(height, 0.0, g, stiffness, mass, anchor, e, T)
+    w, yeq = math.sqrt(stiffness / mass), anchor - mass * g / stiffness
+    starts = np.concatenate([[0.0], times])
+    y0s, v0s = [height], [0.0]
+    for tk in times:  # the state after each impact
+        tau = tk - starts[len(y0s) - 1]
+        A, B = y0s[-1] - yeq, v0s[-1] / w
+        v_hit = -A * w * math.sin(w * tau) + B * w * math.cos(w * tau)
+        y0s.append(0.0)
+        v0s.append(-e * v_hit)
+    t = np.asarray(t, float)
+    i = np.searchsorted(starts, t, side="right") - 1
+    tau = t - starts[i]
+    A, B = np.array(y0s)[i] - yeq, np.array(v0s)[i] / w
+    return yeq + A * np.cos(w * tau) + B * np.sin(w * tau), times

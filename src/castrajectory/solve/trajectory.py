@@ -651,10 +651,6 @@ def _coarse_partner(tn: TrajectoryNLP, values, Nc: int, options, verbose, log: L
     return pc, rc.values
 
 
-def _half(n: int) -> int:
-    return n // 2 if n % 2 == 0 else (n + 1) // 2
-
-
 def _partners(solved: List[tuple], tn: TrajectoryNLP, res: NLPResult, options, verbose, log: List[Level],
               omega: float, polish: bool):
     """The two coarser grids of the answer's estimate, coarsest first, or why there are none.

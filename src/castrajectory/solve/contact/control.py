@@ -412,18 +412,7 @@ def _solve_contact_control(system, T, N: int, scheme: str, start, end, running, 
         if not keep_modes:
             res.fail("Timing_Not_Settled", f"the steps that hold an impact still changed after {limit} solves")
     if before is not None:
-        # the moves are kept where they reach a converged answer whose events are off their windows' edges at no
-        # higher cost; else the answer they started from is (its pinned events said so by the answer's warning).
-        # (Measured on the hopper at N = 40, goal 0.7: moved round by round, its pinned landing and lift-off ran
-        # away from each other, the rounds spent the budget and ended uncertified at a cost of 14.8 against 11.22)
-        c0 = prog.cost(before[0].values)
-        better = (_converged(res) and res.success and not pinned(prog, res)
-                  and float(prog.residual(res.values)) <= COMPLEMENTARITY_TARGET
-                  and prog.cost(res.values) <= c0 + 1e-9 * max(1.0, abs(c0)))
-        if not better:
-            res = before[0]
-            for name, val in before[1].items():
-                prog.nlp.set_parameter(name, val)
+        res = _kept_moves(prog, res, *before)
     cert = marched = math.nan
     if _converged(res) or res.solver_status in SUCCESS_STATUSES:
         # (also where the homotopy converged short of complementarity, a local minimum of the penalties: its
@@ -580,6 +569,22 @@ def _move_edge_arrivals(prog, edges, timed, turn) -> None:
         # arrival in that step)
         for j in np.where(held[k])[0]:
             timed[k, j], timed[to, j] = False, True
+
+
+def _kept_moves(prog, res: NLPResult, start: NLPResult, params: dict) -> NLPResult:
+    """The answer of the rounds that moved pinned events (:func:`_move_edge_arrivals`) where it is converged,
+    complementary, off its windows' edges and no costlier than the answer ``start`` they moved from; else ``start``,
+    with the program's parameters ``params`` set back (its pinned events then say so in the answer's warnings).
+    (Measured on the hopper at N = 40, goal 0.7: moved round by round, its pinned landing and lift-off ran away from
+    each other, the rounds spent the budget and ended uncertified at a cost of 14.8 against 11.22)"""
+    c0 = prog.cost(start.values)
+    if (_converged(res) and res.success and not pinned(prog, res)
+            and float(prog.residual(res.values)) <= COMPLEMENTARITY_TARGET
+            and prog.cost(res.values) <= c0 + 1e-9 * max(1.0, abs(c0))):
+        return res
+    for name, val in params.items():
+        prog.nlp.set_parameter(name, val)
+    return start
 
 
 def _shift(cm: ContactMechanics, init, k: int, to: int, N: int) -> None:
