@@ -654,15 +654,9 @@ class NLP(Program):
         jmax = np.zeros(Jg.size1())
         np.maximum.at(jmax, np.asarray(rows, int), np.abs(np.asarray(Jg.nonzeros(), float)))
         scale = np.minimum(1.0, 100.0 / np.maximum(jmax[eq], 1e-300))
-        r = np.asarray(gv).reshape(-1)[eq] - a["lbg"][eq]
+        dx, r = self._newton_direction(gv, Jg, a, free, eq)
         before = float(np.max(np.abs(r) * scale, initial=0.0))
-        A = Jg[eq.tolist(), free.tolist()]
-        try:
-            dx = np.asarray(ca.solve(A, ca.DM(r), "qr")).reshape(-1)
-        except RuntimeError as exc:
-            interrupt.reraise(exc)
-            return x
-        if not np.all(np.isfinite(dx)):
+        if dx is None:
             return x
         xn = x.copy()
         xn[free] -= dx
@@ -672,18 +666,40 @@ class NLP(Program):
             return xn
         return x
 
+    @staticmethod
+    def _newton_direction(gv, Jg, a: dict, free, eq):
+        """``(Δx, g_E)``: the Newton step ``J_EF⁻¹ g_E`` of the square system's equality rows (``None`` where the
+        sparse QR fails or gives non-finite values), and their residual against their right-hand sides."""
+        r = np.asarray(gv).reshape(-1)[eq] - a["lbg"][eq]
+        try:
+            dx = np.asarray(ca.solve(Jg[eq.tolist(), free.tolist()], ca.DM(r), "qr")).reshape(-1)
+        except RuntimeError as exc:
+            interrupt.reraise(exc)
+            return None, r
+        return (dx if np.all(np.isfinite(dx)) else None), r
+
+    def _square(self, init: Dict[str, object], bounds: Optional[Dict[str, tuple]]):
+        """``(functions, arguments, x, parameters, free variables, equality rows)`` at ``init``, or ``None`` where
+        the problem has no element functions or is not square (as many equality rows as free variables)."""
+        funcs = self.functions()
+        if not funcs:
+            return None
+        a = self._arguments(init, None, bounds)
+        free = np.where(a["lbx"] < a["ubx"])[0]
+        eq = np.where(a["lbg"] == a["ubg"])[0]
+        if eq.size != free.size or not free.size:
+            return None
+        p = np.concatenate([b.init for b in self._params]) if self._params else np.zeros(0)
+        return funcs, a, a["x0"], p, free, eq
+
     def polish(self, init: Dict[str, object], tol: float, bounds: Optional[Dict[str, tuple]] = None
                ) -> Dict[str, np.ndarray]:
         """The values of ``init`` after one Newton step of the square system (see :meth:`_newton_step`);
         ``init`` itself where the problem is not square or the step does not help."""
-        funcs = self.functions()
-        a = self._arguments(init, None, bounds)
-        x = a["x0"]
-        free = np.where(a["lbx"] < a["ubx"])[0]
-        eq = np.where(a["lbg"] == a["ubg"])[0]
-        if not funcs or eq.size != free.size:
-            return self._split(x, self._vars)
-        p = np.concatenate([b.init for b in self._params]) if self._params else np.zeros(0)
+        sq = self._square(init, bounds)
+        if sq is None:
+            return self._split(self._arguments(init, None, bounds)["x0"], self._vars)
+        funcs, a, x, p, free, eq = sq
         return self._split(self._newton_step(funcs, a, x, p, free, eq, tol), self._vars)
 
     def floor(self, init: Dict[str, object], bounds: Optional[Dict[str, tuple]] = None
@@ -696,27 +712,15 @@ class NLP(Program):
         synthetic rounding residual ``u |J| |x|`` overstates the rows' rounding by ``|q| / |Δq|`` on
         short steps, where ``q_{k+1} − q_k`` is computed exactly: 16x the true error on the chaotic
         double pendulum at N = 16000.)  Fixed variables get 0."""
-        funcs = self.functions()
-        if not funcs:
+        sq = self._square(init, bounds)
+        if sq is None:
             return None
-        a = self._arguments(init, None, bounds)
-        x = a["x0"]
-        free = np.where(a["lbx"] < a["ubx"])[0]
-        eq = np.where(a["lbg"] == a["ubg"])[0]
-        if eq.size != free.size or not free.size:
-            return None
-        p = np.concatenate([b.init for b in self._params]) if self._params else np.zeros(0)
-        gv, Jg = funcs["jac_g"](x, p)
-        r = np.asarray(gv).reshape(-1)[eq] - a["lbg"][eq]
-        try:
-            d = np.asarray(ca.solve(Jg[eq.tolist(), free.tolist()], ca.DM(r), "qr")).reshape(-1)
-        except RuntimeError as exc:
-            interrupt.reraise(exc)
+        funcs, a, x, p, free, eq = sq
+        d, _ = self._newton_direction(*funcs["jac_g"](x, p), a, free, eq)
+        if d is None:
             return None
         out = np.zeros_like(x)
         out[free] = np.abs(d)
-        if not np.all(np.isfinite(out)):
-            return None
         return self._split(out, self._vars)
 
     def _variable_name(self, i: int) -> str:
