@@ -47,6 +47,21 @@ def test_puddle_meets_young_height_and_pressure(rho_g):
     assert abs(balance - rho_g * drop.area) / (rho_g * drop.area) < 1e-5
 
 
+def test_right_angle_puddle_follows_its_family():
+    """Young's angle 90° (γ_sl = γ_sg), Bond 1e4: the first solve fails and the continuation in the area takes
+    over.  Its steps once started without the last drop's multipliers and stalled at Bond 28.23
+    (Continuation_Stalled, the default report's stability table exiting 1); now the answer meets Young's angle
+    and the puddle's height ``2 l_c sin 45°``."""
+    drop = md.Droplet(1.0, 1.0, 1.0, 1.0, rho_g=1e4)
+    sol = dl.solve(drop, 400)
+    assert sol.success, sol.message
+    assert abs(sol.contact_angle - 0.5 * math.pi) < 1e-3  # measured 1.35e-4 rad
+    h_inf = md.puddle_height(drop)
+    assert h_inf == pytest.approx(math.sqrt(2.0) * drop.capillary_length, rel=1e-15)
+    assert abs(sol.height - h_inf) / h_inf < 1e-4  # measured 1.4e-6
+    assert abs(sol.pressure - 1e4 * h_inf) / (1e4 * h_inf) < 1e-6  # measured 5.4e-9
+
+
 def test_puddle_of_revolution_meets_young():
     """A drop of revolution at Bond 1e4 (a puddle of radius 560 l_c), N = 400: Young's angle at the rim, and
     the height within the rim's azimuthal-curvature correction of h∞ (measured h/h∞ − 1 = 0.47 l_c / r_c)."""
