@@ -44,18 +44,20 @@ def test_bounce_off_a_wall_reaches_the_closed_form_from_a_guess_in_the_wrong_ste
     assert np.max(np.abs(sol.q[-1] - [0.2, 0.0])) <= 1e-8
 
 
-def test_an_event_pinned_at_its_window_is_named_and_not_b_stationary():
+def test_an_event_pinned_at_its_window_fails_and_is_named():
     """keep_modes holds the impact in the guess's step, where the least-squares optimum (cost 0 at the closed form)
     wants it 4 steps later: the answer is a motion (every step certified), but its impact sits against the step's
-    end, held by the transcription's window.  It is not B-stationary, and it says which event is pinned and where.
-    (A warning, not yet a failure: the hopper's own answers hold such events; docs/notes.md)"""
+    end, held by the transcription's window.  It is no optimum of the continuous problem: not ok
+    (``Event_Pinned``), not B-stationary, and it says which event is pinned and where."""
     sol = _wall(0.8, 45, least_squares=True).solve(guess={"qd0": [2.0, G * T / 2]}, keep_modes=True)
     assert sol.certificate <= 1e-7            # (the motion itself is right: only its event is held)
+    assert not sol.success and sol.status == "Event_Pinned"
     assert not sol.b_stationary
     (p,) = sol.pinned
     h = T / 45
-    assert p["edge"] == "end" and p["t"] == pytest.approx((p["step"] + 1) * h, abs=2e-3 * h)
-    assert any(f"step {p['step']}" in w and "window" in w for w in sol.warnings)
+    assert p["edge"] == "end" and p["held"] == "window"
+    assert p["t"] == pytest.approx((p["step"] + 1) * h, abs=2e-3 * h)
+    assert f"step {p['step']}'s at the end of its window" in sol.message
     assert sol.cost > 1e-3                     # the closed form's cost is 0
     # without keep_modes the rounds move the impact to its step, and the closed form is the answer
     free = _wall(0.8, 45, least_squares=True).solve(guess={"qd0": [2.0, G * T / 2]})

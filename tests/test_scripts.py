@@ -156,18 +156,19 @@ def test_console_list_run_and_report(quick_report):
     assert "FAILED" not in cic and cic.count("status: ok") == 5 and (out / "hopper.gif").exists()
     # the hopper at its defaults (N = 40): a motion of the hopper under its own controls (the contact march of its
     # controls reproduces it: certificate 2e-14, the whole march 6e-13), complementarity 3e-11, no flipped biactive
-    # pair descends, the foot never enters the floor and the leg keeps its bounds; its cost 11.22 within 5 % of
-    # nosnoc's own local optimum on the same problem (11.38, scripts/bench_contact_ocp.py --hopper)
+    # pair descends, the foot never enters the floor and the leg keeps its bounds; its cost 10.826 below nosnoc's own
+    # local optimum on the same problem (11.38, scripts/bench_contact_ocp.py --hopper)
     d = json.loads((out / "hopper.json").read_text())
     assert d["status"] == "ok" and d["certificate"] < 1e-9 and d["march_distance"] < 1e-8
     assert d["complementarity"] < 1e-9
-    # (its landing and a lift-off sit against their steps' windows: no B-stationary point, and it says so; issue 41)
-    assert d["b_stationary"] == (not d["pinned"]) and all(f"step {p['step']}" in " ".join(d["warnings"])
-                                                          for p in d["pinned"])
+    # (its landing and lift-off, once pinned against their steps' windows at 11.22, moved across their nodes: no event
+    # is held by a window, and any held on a node says so; issue 41)
+    assert d["b_stationary"] and all(p["held"] == "node" for p in d["pinned"])
+    assert all(f"step {p['step']} sits on the node" in " ".join(d["warnings"]) for p in d["pinned"])
     q = np.asarray(d["q"])
     assert np.min(q[:, 1] - q[:, 3] * np.cos(q[:, 2])) > -1e-9
     assert 0.1 - 1e-9 <= np.min(q[:, 3]) and np.max(q[:, 3]) <= 0.5 + 1e-9
-    assert d["cost"] <= 1.05 * 11.38 and len(d["impact_times"]) >= 1
+    assert d["cost"] <= 10.83 and len(d["impact_times"]) >= 1          # (measured 10.8259)
     # the built-in scenes' derivations, generated and linked (sympy is in CI's extras)
     assert "(derivation_double_pendulum.md)" in summary
     assert "## The Euler–Lagrange equations" in (out / "derivation_double_pendulum.md").read_text()
