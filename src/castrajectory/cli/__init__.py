@@ -37,6 +37,8 @@ def main(argv: Optional[List[str]] = None) -> int:
     size.add_argument("--quick", action="store_true", help="the smallest sweeps (for tests: N up to 2048)")
     size.add_argument("--full", action="store_true", help="the larger sweeps (droplet to N = 1e5, pendulum to 16000)")
     rep.add_argument("--quiet", action="store_true", help="no progress lines")
+    rep.add_argument("--jobs", type=int, default=None, metavar="J",
+                     help="processes that run the report's sections (default: one per core; 1: in this process)")
     sub.add_parser("system", help="solve the system described in FILE.py: castrajectory system FILE.py [flags]",
                    add_help=False)
     sub.add_parser("derive", help="write the derivation of FILE.py: castrajectory derive FILE.py --out PATH",
@@ -69,9 +71,12 @@ def main(argv: Optional[List[str]] = None) -> int:
         return 0
     from .report import write_report
     from .scene import EXIT_INTERRUPTED, _interrupted
+    if args.jobs is not None and args.jobs < 1:
+        print("castrajectory report: error: --jobs must be at least 1", file=sys.stderr)
+        return 2
     try:
         return write_report(args.out, size="quick" if args.quick else "full" if args.full else "default",
-                            quiet=args.quiet)
+                            quiet=args.quiet, jobs=args.jobs)
     except BaseException as exc:  # Ctrl-C: the report stops, files already written stay as they are
         if isinstance(exc, SystemExit) or not _interrupted(exc):
             raise

@@ -101,8 +101,15 @@ def sweep(bonds: Sequence[float], dims: Sequence[str] = ("2-D", "3-D"), theta_de
 
 def overshoot(theta_deg: float = 90.0, lo: float = 10.0, hi: float = 1000.0, rtol: float = 1e-4) -> dict:
     """The 3-D sessile drop's largest height (shooting) over ``V`` in ``[lo, hi]``: a 5-point grid in ``log V``
-    zoomed onto its best point's neighbours until it is ``rtol`` wide."""
-    height = lambda lv: reference(drop("3-D", math.exp(lv) ** (2.0 / 3.0), theta_deg))[0]  # noqa: E731
+    zoomed onto its best point's neighbours until it is ``rtol`` wide.  Each zoom keeps three of its five points,
+    whose shootings are not run again (45 shootings to 21 at ``rtol`` 1e-2: the default report's study from 14 s
+    to 7)."""
+    seen: Dict[float, float] = {}
+
+    def height(lv: float) -> float:
+        if lv not in seen:
+            seen[lv] = reference(drop("3-D", math.exp(lv) ** (2.0 / 3.0), theta_deg))[0]
+        return seen[lv]
     a, c = math.log(lo), math.log(hi)
     best = None
     while c - a > rtol:
