@@ -47,8 +47,8 @@ def _progress_printer(quiet: bool):
     return progress
 
 
-#: The report's sizes: ``quick`` (the tests), ``default`` (225 s of CPU with a warm compile cache, measured for
-#: issue 41; see docs/notes.md), ``full`` (the larger sweeps: the droplet to N = 10⁵, the pendulum to 16 000
+#: The report's sizes: ``quick`` (the tests), ``default`` (138 s wall and 251 s of CPU on 2 cores with a warm compile
+#: cache, measured for issue 41; see docs/notes.md), ``full`` (the larger sweeps: the droplet to N = 10⁵, the pendulum to 16 000
 #: steps).  No size has a time limit: the exit code says whether the answers are right, never how fast they came.
 SIZES = ("quick", "default", "full")
 
