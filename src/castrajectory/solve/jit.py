@@ -23,6 +23,17 @@ either no library or a whole one, never a half-written one.  Two processes
 compiling the same function at once both succeed; the later rename wins,
 with identical content.
 
+Verified loads.  Nothing is loaded that the cache cannot vouch for: beside each library lies its stamp
+(``NAME.so.sha256``: the key it was compiled for and the SHA-256 of its bytes), written before the library
+is renamed into place.  Before ``dlopen`` the library's bytes are hashed and checked against the stamp; a
+library without a stamp, with another key's stamp, or whose bytes differ (swapped, truncated, zeroed) is
+never loaded, since loading a damaged shared library can crash the process (SIGBUS, SIGSEGV) before Python
+can react.  It is moved to the cache's ``quarantine`` folder, one line says so on stderr, and the function
+is compiled again; a verified library that still fails to load is quarantined and compiled again once.  The
+key covers the generated code, the compiler (its path and its ``--version``), the flags and the casadi
+version.  Build folders of compilations whose process died (named by host and pid) are removed at the next
+compilation, others after :data:`STALE_BUILD_S`.
+
 Fallback.  Whenever no C compiler is found, compilation or loading fails, the code is longer
 than :data:`MAX_CODE_CHARS`, or compilation is switched off, :func:`compiled` returns the function unchanged
 (CasADi's virtual machine): results are the same, only slower.
@@ -42,7 +53,9 @@ from __future__ import annotations
 import hashlib
 import os
 import shutil
+import socket
 import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -60,7 +73,7 @@ FLAGS = ("-O2", "-ffp-contract=off", "-fPIC", "-shared")
 COMPILE_TIMEOUT_S = 60.0
 
 #: Counters (per process), for tests and diagnostics.
-stats: Dict[str, int] = {"compiled": 0, "cache_hits": 0, "memory_hits": 0, "fallbacks": 0}
+stats: Dict[str, int] = {"compiled": 0, "cache_hits": 0, "memory_hits": 0, "fallbacks": 0, "quarantined": 0}
 
 #: Generated C code longer than this (characters) is not compiled: the VM evaluates it.  The exact
 #: Hessian of Newton's law for a box on SO(3) (a 7 × 7 mass matrix solved symbolically, projected on
@@ -119,12 +132,74 @@ def c_code(fn: ca.Function) -> str:
     return cg.dump()
 
 
+_compiler_ids: Dict[str, str] = {}
+
+
+def _compiler_id(cc: str) -> str:
+    """The compiler's identity for the cache's keys: its path and the first line of its ``--version``."""
+    if cc not in _compiler_ids:
+        try:
+            out = subprocess.run([cc, "--version"], capture_output=True, text=True, timeout=10).stdout
+            first = (out.strip().splitlines() or [""])[0]
+        except (OSError, subprocess.SubprocessError):
+            first = ""
+        _compiler_ids[cc] = f"{cc} {first}"
+    return _compiler_ids[cc]
+
+
 def _key(code: str, cc: str) -> str:
     h = hashlib.sha256()
-    for part in (code, os.path.basename(cc), " ".join(FLAGS), ca.__version__):
+    for part in (code, _compiler_id(cc), " ".join(FLAGS), ca.__version__):
         h.update(part.encode())
         h.update(b"\0")
     return h.hexdigest()[:24]
+
+
+def _stamp_path(lib: Path) -> Path:
+    return lib.with_name(lib.name + ".sha256")
+
+
+def _digest(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for chunk in iter(lambda: fh.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def _check(lib: Path, key: str) -> Optional[str]:
+    """None where ``lib`` holds the bytes compiled for ``key`` (its stamp says so); else what is wrong."""
+    try:
+        stamp = _stamp_path(lib).read_text().split()
+    except OSError:
+        return "has no stamp"
+    if len(stamp) != 2 or stamp[0] != key:
+        return "carries the stamp of another function"
+    try:
+        digest = _digest(lib)
+    except OSError:
+        return "cannot be read"
+    return None if digest == stamp[1] else "differs from its stamp (changed or damaged on disk)"
+
+
+def _quarantine(lib: Path, why: str) -> None:
+    """Set a library the cache cannot vouch for aside (``quarantine``), with one line on stderr."""
+    dest = lib.parent / "quarantine"
+    try:
+        dest.mkdir(exist_ok=True)
+        os.replace(lib, dest / f"{lib.name}.{os.getpid()}.{time.time_ns()}")
+    except OSError:
+        try:
+            lib.unlink(missing_ok=True)
+        except OSError:
+            pass
+    try:
+        _stamp_path(lib).unlink(missing_ok=True)
+    except OSError:
+        pass
+    stats["quarantined"] += 1
+    print(f"castrajectory: the cached compiled function {lib.name} {why}: set aside in {dest} and compiled again",
+          file=sys.stderr, flush=True)
 
 
 def compiled(fn: ca.Function, build: bool = True) -> ca.Function:
@@ -152,14 +227,18 @@ def compiled(fn: ca.Function, build: bool = True) -> ca.Function:
         # across processes, the serialised form names its library too (an index file beside it), so a
         # function compiled before is loaded without generating its C code again (3-10 ms per kernel of
         # a new system: every simulate() builds its system afresh)
+        _clean_dead_builds(folder)
         indexed = _indexed(folder, form, cc)
         if indexed is not None:
             key, lib = indexed
-            out = _load(fn, lib)
-            stats["cache_hits"] += 1
-            _loaded[key] = out
-            _by_form[form] = key
-            return out
+            why = _check(lib, key)
+            if why is None:
+                out = _load(fn, lib)
+                stats["cache_hits"] += 1
+                _loaded[key] = out
+                _by_form[form] = key
+                return out
+            _quarantine(lib, why)        # (then compiled again below, from its code)
         if not build:
             # not compiled before (no index names it) and not to be compiled now: the virtual machine, without
             # generating the C code only to look for a library that is not there
@@ -178,15 +257,31 @@ def compiled(fn: ca.Function, build: bool = True) -> ca.Function:
             return fn
         lib = folder / f"{fn.name()}_{key}.so"
         if lib.exists():
+            why = _check(lib, key)
+            if why is not None:
+                _quarantine(lib, why)
+        built = False
+        if lib.exists():
             stats["cache_hits"] += 1
             _touch(lib)
         elif not build:
             return fn
         else:
-            _build(code, cc, folder, lib)
+            _build(code, cc, folder, key, lib)
+            built = True
             stats["compiled"] += 1
             _prune(folder)
-        out = _load(fn, lib)
+        try:
+            out = _load(fn, lib)
+        except Exception as exc:
+            interrupt.reraise(exc)
+            if built:
+                raise
+            # (verified bytes that do not load: compiled on another machine of the cache, say) once again
+            _quarantine(lib, f"does not load ({exc.__class__.__name__})")
+            _build(code, cc, folder, key, lib)
+            stats["compiled"] += 1
+            out = _load(fn, lib)
         _loaded[key] = out
         _by_form[form] = key
         _index(folder, form, cc, lib)
@@ -200,19 +295,16 @@ def compiled(fn: ca.Function, build: bool = True) -> ca.Function:
 
 
 def _load(fn: ca.Function, lib: Path) -> ca.Function:
-    try:
-        out = ca.external(fn.name(), str(lib))
-        if out.n_in() != fn.n_in() or out.n_out() != fn.n_out():
-            raise RuntimeError("compiled function has another signature")
-    except Exception:
-        lib.unlink(missing_ok=True)  # a damaged library: the next run compiles it again
-        raise
+    """``dlopen`` a library :func:`_check` verified (its bytes are the ones compiled for its key)."""
+    out = ca.external(fn.name(), str(lib))
+    if out.n_in() != fn.n_in() or out.n_out() != fn.n_out():
+        raise RuntimeError("compiled function has another signature")
     return out
 
 
 def _index_path(folder: Path, form: str, cc: str) -> Path:
     """The index file of a serialised form (with the compiler and flags, as the library's own key)."""
-    h = hashlib.sha256("\0".join([form, cc, *FLAGS]).encode()).hexdigest()[:24]
+    h = hashlib.sha256("\0".join([form, _compiler_id(cc), *FLAGS, ca.__version__]).encode()).hexdigest()[:24]
     return folder / f"form_{h}.txt"
 
 
@@ -270,6 +362,7 @@ def _prune(folder: Path) -> None:
         libs = sorted(folder.glob("*.so"), key=lambda q: q.stat().st_mtime)
         for old in libs[:max(0, len(libs) - MAX_ENTRIES)]:
             old.unlink()
+            _stamp_path(old).unlink(missing_ok=True)
         forms = sorted(folder.glob("form_*.txt"), key=lambda q: q.stat().st_mtime)  # (an index file is tiny)
         for old in forms[:max(0, len(forms) - 4 * MAX_ENTRIES)]:
             old.unlink()
@@ -282,14 +375,54 @@ def _prune(folder: Path) -> None:
                 shutil.rmtree(tmp, ignore_errors=True)
         except OSError:
             pass
+    try:
+        quarantined = sorted((folder / "quarantine").glob("*"), key=lambda q: q.stat().st_mtime)
+        for old in quarantined[:max(0, len(quarantined) - MAX_QUARANTINED)]:
+            old.unlink()
+    except OSError:
+        pass
 
 
-def _build(code: str, cc: str, folder: Path, lib: Path) -> None:
+#: Libraries kept in the quarantine folder (the latest; evidence of what was set aside, not reused).
+MAX_QUARANTINED = 20
+_cleaned: set = set()  # cache folders whose dead builds this process removed
+
+
+def _build_prefix() -> str:
+    """A build folder's name prefix: its host and process, so that a later run can tell a dead compilation."""
+    return f".build-{socket.gethostname().replace('-', '_')}-{os.getpid()}-"
+
+
+def _clean_dead_builds(folder: Path) -> None:
+    """Remove (once per process) the build folders of this host's compilations whose process is gone (killed
+    during a compile): the age rule (:data:`STALE_BUILD_S`) left them for an hour."""
+    if folder in _cleaned:
+        return
+    _cleaned.add(folder)
+    host = socket.gethostname().replace("-", "_")
+    for tmp in folder.glob(".build-*"):
+        parts = tmp.name.split("-")
+        if len(parts) < 4 or parts[1] != host or not parts[2].isdigit():
+            continue
+        try:
+            os.kill(int(parts[2]), 0)
+        except ProcessLookupError:
+            shutil.rmtree(tmp, ignore_errors=True)
+        except OSError:
+            pass                                    # (alive, another user's)
+
+
+def _build(code: str, cc: str, folder: Path, key: str, lib: Path) -> None:
+    """Compile ``code`` into ``lib``: in a private build folder, its stamp written and renamed into place before
+    the library (a reader finds no library, or a whole one with its stamp)."""
     folder.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(dir=folder, prefix=".build-") as tmp:
+    with tempfile.TemporaryDirectory(dir=folder, prefix=_build_prefix()) as tmp:
         src = Path(tmp) / "f.c"
         src.write_text(code)
         tmp_lib = Path(tmp) / "f.so"
         subprocess.run([cc, *FLAGS, "-o", str(tmp_lib), str(src), "-lm"], check=True,
                        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, timeout=COMPILE_TIMEOUT_S)
+        stamp = Path(tmp) / "f.sha256"
+        stamp.write_text(f"{key} {_digest(tmp_lib)}\n")
+        os.replace(stamp, _stamp_path(lib))
         os.replace(tmp_lib, lib)  # atomic: a concurrent reader sees no half-written library
