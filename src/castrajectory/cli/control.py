@@ -6,20 +6,27 @@ The file is plain Python and defines ``problem()`` returning a :class:`castrajec
 pictures ``exact_u(t)``, a closed-form control to draw beside the answer.  ``--n`` and ``--scheme``
 override the grid and the scheme the file chose.
 
+The file is loaded as a system file is (:func:`.system.load`: its folder on the import path, an exit refused).
+
 Bad input is refused before any solve (exit 2, one line): a file that does not exist or does not import,
-no ``problem()``, a ``problem()`` that does not return an ``OptimalControl`` or raises (its message), and
-every refusal of the problem itself (boundary conditions of the wrong length or off the constraints,
-bounds crossed, a cost that is not a scalar, a control in no force, a free-time interval out of order).
+or exits while it loads, no ``problem()``, a ``problem()`` that does not return an ``OptimalControl`` or
+raises (its message), a ``title`` that is not text, an ``exact_u`` that is not a function, a name that differs
+from one of these only in case, and every refusal of the problem itself (boundary conditions of the wrong
+length or off the constraints, a mass matrix that is not positive definite at the initial configuration, as
+for a system file, bounds crossed, a cost that is not a scalar, a control in no force, a free-time interval
+out of order).
 """
 from __future__ import annotations
 
-import os
 import sys
 from typing import List, Optional
 
-from ..validation import integer_at_least, one_of
+from ..validation import InputError, integer_at_least, one_of, quoted
 from .scene import ArgumentParser, add_plot, check_animation_path, control_outcome, ipopt_options, run_scene
-from .system import call_user, load
+from .system import call_user, check_case, file_title, load
+
+#: The names a control file may define for the command, each with the test of its kind.
+KEYS = {"problem": callable, "title": lambda v: isinstance(v, str), "exact_u": callable}
 
 
 def parser() -> ArgumentParser:
@@ -39,21 +46,24 @@ def parser() -> ArgumentParser:
 
 def described(module, path: str):
     from ..solve.optimal_control import OptimalControl
+    check_case(module, path, KEYS)
     return call_user(module, path, "problem", OptimalControl)
 
 
 def run(args):
     check_animation_path(args.animate)
-    module = load(args.file)
+    module = load(args.file, defines="problem()")
     ocp = described(module, args.file)
+    title = file_title(module, args.file)
+    exact_u = getattr(module, "exact_u", None)
+    if exact_u is not None and not callable(exact_u):
+        raise InputError(f"{args.file}: exact_u must be a function of t (got {quoted(exact_u)})")
     if args.n is not None:
         ocp.N = integer_at_least("n", args.n, 2)
     if args.scheme is not None:
         ocp.scheme = one_of("scheme", args.scheme, (args.scheme,))
     sol = ocp.solve(options=ipopt_options(args), verbose=args.verbose)
-    title = str(getattr(module, "title", os.path.splitext(os.path.basename(args.file))[0]))
-    exact_u = getattr(module, "exact_u", None)
-    return control_outcome(title, ocp.system, sol, exact_u=exact_u if callable(exact_u) else None)
+    return control_outcome(title, ocp.system, sol, exact_u=exact_u)
 
 
 def main(argv: Optional[List[str]] = None) -> int:

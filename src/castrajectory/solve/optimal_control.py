@@ -39,6 +39,7 @@ from ..models.mechanics import LagrangianSystem
 from ..result import ControlResult
 from ..validation import InputError, integer_at_least, one_of
 from .nlp import NLP
+from .trajectory import check_inertia
 
 #: Ipopt settings of the DMOC solve (exact Hessian; MUMPS scaling off as for every program here).
 OCP_IPOPT = {"tol": 1e-10, "max_iter": 3000, "mumps_pivtol": 1e-8, "bound_relax_factor": 0.0}
@@ -164,6 +165,8 @@ class OptimalControl:
         vv = _vector(f"{which} qd", qd, s.nq, s.names, allow_none=which == "initial" and s.contact is not None)
         if vv is not None and np.any(np.isnan(qv)):
             raise InputError(f"a {which} velocity needs the {which} configuration given in full")
+        if which == "initial" and not np.any(np.isnan(qv)):
+            check_inertia(s, qv)  # a negative or a missing mass: refused as simulate and system files refuse it
         if s.nc and not np.any(np.isnan(qv)):
             c, C = (np.asarray(x, float) for x in s.constraint(qv, 0.0))
             if np.max(np.abs(c)) > 1e-9 * (1.0 + np.max(np.abs(qv))):

@@ -31,7 +31,7 @@ from __future__ import annotations
 import math
 from typing import Union
 
-from .scene import (CircularCap, Droplet, _angle_from_aspect, arc_points, distance_to_reference,  # noqa: F401
+from .scene import (CircularCap, Droplet, arc_on_span, arc_points, distance_to_reference,  # noqa: F401
                     reduced_energy, segment_area_factor, young_angle)
 from .heavy import BeyondFold, HeavyDrop, _unit_pendant, heavy_drop, pendant_fold, puddle_height  # noqa: F401
 from .revolution import (AxisymmetricDrop, NoContact, SphericalCap, YoungLaplaceProfile, _illinois,  # noqa: F401
@@ -54,6 +54,5 @@ def analytic(drop: Droplet) -> Union[CircularCap, HeavyDrop, SphericalCap, Axisy
         theta = young_angle(drop.gamma_gl, drop.gamma_sl, drop.gamma_sg)
         radius = math.sqrt(drop.area / segment_area_factor(theta))
     else:
-        theta = _angle_from_aspect(drop.area / drop.span ** 2)
-        radius = drop.span / (2.0 * math.sin(theta))
+        theta, radius = arc_on_span(drop.area, drop.span)
     return CircularCap(theta, radius, drop.gamma_gl, drop.wetting)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass
 from typing import Dict, Optional
 
@@ -113,6 +114,11 @@ class Droplet:
             raise InputError("a pinned span under gravity has no oracle yet; leave the span free")
         if self.span is not None:
             positive("span", self.span)
+            radius = arc_on_span(self.area, self.span)[1]
+            if not self.gamma_gl / radius >= sys.float_info.min:
+                log_r = 3.0 * math.log10(self.span) - math.log10(12.0 * self.area)  # R = a³ / (12 A) when flat
+                raise InputError(f"span {self.span:g} with area {self.area:g} is an arc of radius about 1e{log_r:.0f}, "
+                                 "whose pressure gamma_gl / R is beyond double precision")
             return
         if self.spreading_coefficient >= 0.0:
             raise InputError(
@@ -146,21 +152,79 @@ def young_angle(gamma_gl: float, gamma_sl: float, gamma_sg: float) -> float:
 
 
 def segment_area_factor(theta):
-    """``theta - sin(2 theta)/2``: area of a circular cap of half-angle theta divided by R²."""
-    return theta - 0.5 * np.sin(2.0 * theta) if not isinstance(theta, (ca.SX, ca.MX)) \
-        else theta - 0.5 * ca.sin(2.0 * theta)
+    """``theta - sin(2 theta)/2``: area of a circular cap of half-angle theta divided by R².
+
+    For a float or an array it is evaluated without cancellation: below ``2 theta = 1`` as the series of
+    ``(u - sin u) / 2`` in ``u = 2 theta`` (``2 theta³ / 3`` for a flat cap, where the difference of the two
+    terms kept no digit: at theta = 6e-12 it read 0 for 1.44e-34)."""
+    if isinstance(theta, (ca.SX, ca.MX)):
+        return theta - 0.5 * ca.sin(2.0 * theta)
+    t = np.asarray(theta, dtype=float)
+    u = 2.0 * t
+    small = np.abs(u) < 1.0
+    us = np.where(small, u, 0.0)
+    term = us ** 3 / 6.0
+    series = term.copy()
+    for k in range(1, 12):  # u - sin u = u³/3! - u⁵/5! + ...: 12 terms reach rounding for |u| < 1
+        term = -term * us ** 2 / ((2 * k + 2) * (2 * k + 3))
+        series = series + term
+    out = np.where(small, 0.5 * series, t - 0.5 * np.sin(u))
+    return float(out) if out.ndim == 0 else out
 
 
-def _angle_from_aspect(area_over_span2: float) -> float:
-    """Solve ``(t - sin(2t)/2) / (4 sin² t) = A / a²`` for ``t`` in (0, pi) by bisection (monotone)."""
-    lo, hi = 1e-12, math.pi - 1e-12
+def _aspect(t: float) -> float:
+    """``A / a²`` of a cap of half-angle ``t`` in (0, pi/2]: ``(t - sin t cos t) / (4 sin² t)``."""
+    return segment_area_factor(t) / (4.0 * math.sin(t) ** 2)
+
+
+def _aspect_beyond(s: float) -> float:
+    """``A / a²`` of a cap of half-angle ``pi - s``, ``s`` in (0, pi/2]: no cancellation near a full circle."""
+    return (math.pi - s + math.sin(s) * math.cos(s)) / (4.0 * math.sin(s) ** 2)
+
+
+def _bisect(f, lo: float, hi: float, target: float, increasing: bool) -> float:
+    """The root of the monotone ``f(x) = target`` in ``[lo, hi]``, to the last bit."""
     for _ in range(200):
         mid = 0.5 * (lo + hi)
-        if segment_area_factor(mid) / (4.0 * math.sin(mid) ** 2) < area_over_span2:
+        if mid <= lo or mid >= hi:
+            break
+        if (f(mid) < target) == increasing:
             lo = mid
         else:
             hi = mid
     return 0.5 * (lo + hi)
+
+
+def arc_on_span(area: float, span: float) -> tuple:
+    """``(theta, R)``: the half-angle and radius of the circular cap of area ``A`` on the span ``a``, the root of
+    ``(t - sin(2t)/2) / (4 sin² t) = A / a²`` on (0, pi), which is monotone, and ``R = a / (2 sin t)``.
+
+    It is solved without cancellation at both ends, so that a flat cap (a huge span) and a nearly round one
+    (a tiny span) keep their digits:
+
+    * below a semicircle (``A / a² <= pi/8``) on t, whose root lies in ``[4, 6] A / a²`` (``A/a² / t`` runs from
+      1/6 at t -> 0 to 1/4 at pi/2), and is ``6 A / a²`` to rounding below ``A / a² = 1e-9`` (the next term is
+      ``2 t² / 15``);
+    * beyond it on ``s = pi - t``, whose root lies in ``[0.78, 0.97]^(1/2) / sqrt(A / a²)`` (``A/a² s²`` runs
+      from pi/4 to 0.969), and ``sin theta`` is ``sin s`` (``pi - t`` rounded keeps no digit of a small ``s``);
+      above ``A / a² = 1e18`` the cap is a full circle, ``R = sqrt(A / pi)``, to rounding.
+
+    ``A / a²`` is formed as two quotients (``a ** 2`` overflows beyond 1e154).  ``R`` is ``inf`` where it is
+    beyond double precision (:meth:`Droplet.validate` refuses that span)."""
+    r = area / span / span
+    if r <= math.pi / 8.0:
+        if r < 1e-9:
+            t = 6.0 * (area / span) / span
+        else:
+            t = _bisect(_aspect, 3.9 * r, min(6.1 * r, 0.5 * math.pi), r, increasing=True)
+        sin_t = math.sin(t)
+    else:
+        if r > 1e18:  # a full circle: R = sqrt(A / pi), whatever s underflows to
+            return math.pi - 0.5 * span * math.sqrt(math.pi / area), math.sqrt(area / math.pi)
+        s = _bisect(_aspect_beyond, min(math.sqrt(0.78 / r), 0.5 * math.pi),
+                    min(math.sqrt(0.97 / r), 0.5 * math.pi), r, increasing=False)
+        t, sin_t = math.pi - s, math.sin(s)
+    return t, (0.5 * span / sin_t if sin_t > 0.0 else math.inf)
 
 
 @dataclass(frozen=True)
