@@ -6,6 +6,7 @@
 from __future__ import annotations
 
 import importlib
+import os
 import sys
 from typing import List, Optional
 
@@ -70,9 +71,12 @@ def main(argv: Optional[List[str]] = None) -> int:
             print(f"{name:16s} {doc[0] if doc else ''}")
         return 0
     from .report import write_report
-    from .scene import EXIT_INTERRUPTED, _interrupted
+    from .scene import _interrupted
     if args.jobs is not None and args.jobs < 1:
         print("castrajectory report: error: --jobs must be at least 1", file=sys.stderr)
+        return 2
+    if os.path.exists(args.out) and not os.path.isdir(args.out):
+        print(f"castrajectory report: error: --out {args.out} is a file, not a folder", file=sys.stderr)
         return 2
     try:
         return write_report(args.out, size="quick" if args.quick else "full" if args.full else "default",
@@ -80,8 +84,9 @@ def main(argv: Optional[List[str]] = None) -> int:
     except BaseException as exc:  # Ctrl-C: the report stops, files already written stay as they are
         if isinstance(exc, SystemExit) or not _interrupted(exc):
             raise
-        print("castrajectory report: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        from ..solve import interrupt
+        print(f"castrajectory report: {interrupt.what()}", file=sys.stderr)
+        return interrupt.exit_code()
 
 
 if __name__ == "__main__":  # pragma: no cover

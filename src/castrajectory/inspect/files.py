@@ -10,6 +10,8 @@ import os
 import tempfile
 from typing import Callable
 
+from ..solve import interrupt
+
 
 def write_atomically(path: str, write: Callable[[str], None]) -> None:
     """``write(tmp)`` to a temporary file beside ``path`` (same extension, so a format read from it is the
@@ -21,6 +23,8 @@ def write_atomically(path: str, write: Callable[[str], None]) -> None:
     os.close(fd)
     try:
         write(tmp)
+        # (a Ctrl-C that matplotlib's weakref callback swallowed while rendering: the earlier file stays)
+        interrupt.check()
         # mkstemp makes the file private (0600); the output gets the mode an ordinary open() would give it
         os.chmod(tmp, 0o666 & ~_umask())
         os.replace(tmp, path)

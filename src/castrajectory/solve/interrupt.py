@@ -15,32 +15,60 @@ import signal
 import sys
 import tempfile
 import threading
+from typing import Optional
 
 _seen = False
-#: A SIGINT arrived since :func:`install` (kept until the process handles it: a KeyboardInterrupt raised
-#: inside a finaliser or a weakref callback is printed and dropped by Python, so long-running commands
-#: also call :func:`check` at their safe points)
+#: A SIGINT or SIGTERM arrived since :func:`install` (kept until the process handles it: a KeyboardInterrupt
+#: raised inside a finaliser or a weakref callback is printed and dropped by Python, and one raised inside
+#: CasADi comes back as a solver status, so commands also call :func:`check` at their safe points)
 _pending = False
+#: The signal :func:`install`'s handler saw last (SIGINT or SIGTERM): the exit code's (:func:`exit_code`)
+_signal: Optional[int] = None
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised as an interrupt so that every interrupt's clean-up runs (temporaries removed, one line);
+    the command then exits 143, as a shell reports a run that SIGTERM ended."""
 
 
 def install() -> None:
-    """For a long-running command (the report): every SIGINT is noted and raised as ``KeyboardInterrupt``;
-    :func:`check` raises it again at the command's safe points if Python dropped it (a SIGINT that lands in
-    a matplotlib weakref callback is "ignored" and the report went on to exit 0).  A SIGINT that whoever
-    started the process ignores stays ignored."""
-    if not _main_thread() or signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+    """For a command (a scene, the report, a sweep): every SIGINT and SIGTERM is noted and raised as
+    ``KeyboardInterrupt`` (:class:`Terminated` for SIGTERM, whose default would kill the process and leave its
+    temporary files); :func:`check` raises it again at the command's safe points if Python or CasADi dropped it
+    (a SIGINT that lands in a matplotlib weakref callback is "ignored" and the report went on to exit 0).  A
+    signal that whoever started the process ignores stays ignored."""
+    global _pending, _signal
+    if not _main_thread():
         return
+    _pending, _signal = False, None          # (a new command: what an earlier one in this process saw is done)
 
     def note(signum, frame):
-        global _pending
-        _pending = True
+        global _pending, _signal
+        _pending, _signal = True, signum
         if _in_finaliser(frame):
             # raised there, Python would print "Exception ignored in ..." with a traceback on stderr and
             # drop it: leave it to check() at the command's next safe point
             return
-        raise KeyboardInterrupt
+        raise Terminated if signum == signal.SIGTERM else KeyboardInterrupt
 
-    signal.signal(signal.SIGINT, note)
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        if signal.getsignal(sig) != signal.SIG_IGN:
+            signal.signal(sig, note)
+
+
+def pending() -> bool:
+    """Whether :func:`install`'s handler saw a signal that the command has not acted on yet."""
+    return _pending
+
+
+def exit_code() -> int:
+    """The exit code of a command a signal stopped: 143 for SIGTERM, 130 for SIGINT (as a shell reports them)."""
+    return 143 if _signal == signal.SIGTERM else 130
+
+
+def what() -> str:
+    """``terminated`` (SIGTERM) or ``interrupted`` (SIGINT), for the command's one line."""
+    return "terminated" if _signal == signal.SIGTERM else "interrupted"
 
 
 #: Code that Python runs as a finaliser or a weakref callback, where an exception is printed and dropped.
@@ -60,9 +88,9 @@ def _in_finaliser(frame) -> bool:
 
 
 def check() -> None:
-    """Raise ``KeyboardInterrupt`` if a SIGINT arrived since :func:`install` (see there)."""
+    """Raise ``KeyboardInterrupt`` (:class:`Terminated`) if a signal arrived since :func:`install` (see there)."""
     if _pending:
-        raise KeyboardInterrupt
+        raise Terminated if _signal == signal.SIGTERM else KeyboardInterrupt
 
 
 def _main_thread() -> bool:
@@ -98,7 +126,7 @@ def watching():
         yield
     finally:
         signal.signal(signal.SIGINT, previous)
-        _release_stderr(held, drop="KeyboardInterrupt" if _seen else None)
+        _release_stderr(held, drop="KeyboardInterrupt" if (_seen or _pending) else None)
 
 
 def _hold_stderr():
@@ -129,11 +157,13 @@ def _release_stderr(held, drop):
 
 
 def raise_if_interrupted() -> None:
-    """Raise ``KeyboardInterrupt`` if a SIGINT arrived in the last :func:`watching` block."""
+    """Raise ``KeyboardInterrupt`` if a SIGINT arrived in the last :func:`watching` block, or any signal
+    :func:`install`'s handler noted (a SIGTERM inside Ipopt: CasADi stops the solve and drops the exception)."""
     global _seen
     if _seen:
         _seen = False
         raise KeyboardInterrupt
+    check()
 
 
 def reraise(exc: BaseException) -> None:

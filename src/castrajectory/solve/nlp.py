@@ -760,6 +760,7 @@ class NLP(Program):
             variable block or a constraint (``(-inf, inf)`` switches a constraint off;
             ``lb == ub`` fixes variables, which Ipopt then removes).
         """
+        interrupt.check()           # (a signal a finaliser or CasADi dropped since the last solve stops here)
         left = budget.remaining()
         if left is not None:
             # a run-wide iteration budget (solve.budget): at most what is left, and nothing once it is spent

@@ -13,10 +13,13 @@ default), the longest first; the summary keeps their order.
 """
 from __future__ import annotations
 
+import glob
 import importlib
 import multiprocessing
 import os
+import shutil
 import signal
+import tempfile
 import time
 from typing import List, Optional
 
@@ -65,8 +68,11 @@ def _section(name: str, out: str, size: str, quiet: bool):
 
 
 def _worker_init() -> None:
-    # a Ctrl-C is the parent's to handle: it stops the pool (terminate), and no worker prints a traceback
+    # a Ctrl-C is the parent's to handle: it stops the pool (terminate: SIGTERM, whose default ends a worker at
+    # once, inside Ipopt too), and no worker prints a traceback; what a worker was writing lies in the report's
+    # partial folder, which the parent removes
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
 def _run_sections(out: str, size: str, quiet: bool, jobs: int) -> list:
@@ -96,12 +102,74 @@ def _run_sections(out: str, size: str, quiet: bool, jobs: int) -> list:
 def write_report(out: str, size: str = "default", quiet: bool = False, jobs: Optional[int] = None) -> int:
     """Solve every scene and study at ``size`` and write ``DIR/summary.md`` (0: every solve converged and
     every stability case passed; 1 otherwise, after the whole report is written).  ``jobs``: processes that run
-    the sections (default: one per core; 1 runs them in this process)."""
+    the sections (default: one per core; 1 runs them in this process).  The report is written into a hidden
+    folder beside ``out`` and moved into place when it is whole (:func:`_move_into_place`): an interrupted,
+    terminated or killed run leaves an earlier report in ``out`` as it was."""
     if size not in SIZES:
         raise ValueError(f"size must be one of {SIZES}")
+    if os.path.exists(out) and not os.path.isdir(out):
+        raise ValueError(f"--out {out}: a file, not a folder")
     jobs = min(len(SECTIONS), os.cpu_count() or 1) if jobs is None else int(jobs)
-    os.makedirs(out, exist_ok=True)
     interrupt.install()
+    t0 = time.perf_counter()
+    final = out
+    out = _partial_folder(final)
+    try:
+        code = _write(out, size, quiet, jobs)
+        _move_into_place(out, final)
+    except BaseException:
+        shutil.rmtree(out, ignore_errors=True)
+        raise
+    print(f"report written to {os.path.join(final, 'summary.md')} and index.html in {time.perf_counter() - t0:.1f} s "
+          f"({'every solve converged, every stability case passed' if code == 0 else 'SOME SOLVES OR CASES FAILED'})")
+    return code
+
+
+def _partial_folder(final: str) -> str:
+    """A new hidden folder beside ``final`` (same file system) that the report is written into, named by this
+    process; those of processes that are gone (a report killed with SIGKILL) are removed first."""
+    parent, base = os.path.split(os.path.abspath(final))
+    os.makedirs(parent, exist_ok=True)
+    for old in glob.glob(os.path.join(parent, f".{glob.escape(base)}.partial-*")):
+        pid = os.path.basename(old)[len(base) + 10:].split("-")[0]
+        if pid.isdigit() and not _alive(int(pid)):
+            shutil.rmtree(old, ignore_errors=True)
+    tmp = tempfile.mkdtemp(prefix=f".{base}.partial-{os.getpid()}-", dir=parent)
+    mask = os.umask(0)
+    os.umask(mask)
+    os.chmod(tmp, 0o777 & ~mask)      # (mkdtemp's is private; the report's folder gets an ordinary one's mode)
+    return tmp
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:
+        return True
+    return True
+
+
+def _move_into_place(partial: str, final: str) -> None:
+    """The finished report moved from ``partial`` into ``final``: the whole folder where ``final`` is new, else
+    file by file (each rename atomic) with ``summary.md`` and ``index.html`` last, so that a report stopped
+    before this point leaves the earlier one as it was, never beside files of its own."""
+    if not os.path.exists(final):
+        os.replace(partial, final)
+        return
+    last = ("summary.md", "index.html")
+    names = sorted(os.listdir(partial), key=lambda n: (n in last, last.index(n) if n in last else 0, n))
+    for name in names:
+        src, dst = os.path.join(partial, name), os.path.join(final, name)
+        if os.path.isdir(src) and os.path.isdir(dst):
+            shutil.rmtree(dst)
+        os.replace(src, dst)
+    os.rmdir(partial)
+
+
+def _write(out: str, size: str, quiet: bool, jobs: int) -> int:
+    """The report written into the folder ``out`` (:func:`write_report`)."""
     t0 = time.perf_counter()
     lines: List[str] = ["# castrajectory report", ""]
     ok, carried = True, []
@@ -121,6 +189,4 @@ def write_report(out: str, size: str = "default", quiet: bool = False, jobs: Opt
     files.write_text(os.path.join(out, "summary.md"), "\n".join(lines) + "\n")
     from .. import html  # the same content as one self-contained page: figures inline, animations playing
     html.write_index(out, "\n".join(lines) + "\n")
-    print(f"report written to {os.path.join(out, 'summary.md')} and index.html in {elapsed:.1f} s "
-          f"({'every solve converged, every stability case passed' if ok else 'SOME SOLVES OR CASES FAILED'})")
     return 0 if ok else 1
