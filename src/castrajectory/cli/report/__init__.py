@@ -73,6 +73,13 @@ def _worker_init() -> None:
     # partial folder, which the parent removes
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    # and a report killed outright (SIGKILL) takes its workers with it: on Linux the kernel sends them SIGKILL
+    # when the parent dies (they solved on for 26 s, holding the caller's pipes open)
+    try:
+        import ctypes
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)      # PR_SET_PDEATHSIG = 1
+    except (OSError, AttributeError):
+        pass
 
 
 def _run_sections(out: str, size: str, quiet: bool, jobs: int) -> list:
