@@ -117,3 +117,24 @@ def test_ctrl_c_into_an_optimal_control_run_is_never_lost():
         assert p.returncode == 130, (d, p.returncode, err[-500:])
         assert err.strip().splitlines() == ["block_move.py: interrupted"], (d, err[-500:])
         assert time.perf_counter() - t0 < 10.0
+
+
+def test_a_refusal_is_one_short_line_whatever_it_quotes(tmp_path):
+    """The last guard of every scene's refusal: a message that quotes a huge value (here the optimal control's
+    ``T`` check, which quotes it whole) is cut to one line of at most MESSAGE_LIMIT characters."""
+    from castrajectory.cli import scene
+    from castrajectory.validation import InputError
+
+    def run(args):
+        raise InputError("T must be positive (got " + "9" * 10 ** 6 + ")\nsecond line")
+
+    parser = scene.scene_parser("probe.py", "a probe")
+    import io
+    import contextlib
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err):
+        code = scene.run_scene(parser, run, [])
+    assert code == 2
+    lines = err.getvalue().splitlines()
+    assert len(lines) == 1 and len(lines[0]) <= scene.MESSAGE_LIMIT + len("probe.py: error: ")
+    assert lines[0].startswith("probe.py: error: T must be positive (got 999") and lines[0].endswith("…")

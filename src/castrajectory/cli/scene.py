@@ -35,7 +35,7 @@ import numpy as np
 from ..inspect.files import write_atomically
 from ..solve import budget, interrupt
 from ..result import SUCCESS_STATUSES, Result
-from ..validation import InputError
+from ..validation import InputError, cut
 from .registry import scene_modules
 
 #: Scene name -> module (the files in problems/, installed as castrajectory.problems): read from the
@@ -431,6 +431,8 @@ def check_output_path(flag: str, path: Optional[str]) -> None:
 EXIT_INTERRUPTED = 130
 #: Exit code of a solved run whose answer was printed but a requested file could not be written.
 EXIT_OUTPUT = 3
+#: The longest line a refusal prints (characters).
+MESSAGE_LIMIT = 1000
 
 
 def _interrupted(exc: BaseException) -> bool:
@@ -465,7 +467,9 @@ def run_scene(parser: argparse.ArgumentParser, run: Callable[[argparse.Namespace
             # SIGINTs into block_move at N = 20000 ran on to exit 0 with the answer)
             interrupt.check()
         except InputError as exc:
-            print(f"{prog}: error: {exc}", file=sys.stderr)
+            # (one line, never the whole of a huge value that a message quoted: the last guard, the validation
+            # helpers cut their own quotes to 80 characters)
+            print(f"{prog}: error: {cut(str(exc), MESSAGE_LIMIT)}", file=sys.stderr)
             return 2
         if args.json:
             sys.stdout.write(json.dumps(jsonable(outcome.as_dict()), allow_nan=False) + "\n")
