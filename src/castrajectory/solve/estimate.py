@@ -340,12 +340,13 @@ def _trajectory_differences(coarse, fine, smooth: bool, order: float = 2.0) -> D
     q_c, q_f = np.asarray(coarse.q, float), np.asarray(fine.q, float)
     E_c, E_f = np.asarray(coarse.energy, float), np.asarray(fine.energy, float)
     ic, jf = common_nodes(t_c, t_f)
-    if ic.size >= max(3, 0.4 * (t_c.size - 1)) or not smooth or order >= INTERPOLATION_ORDER:
-        dq = q_c[ic] - q_f[jf]
-        dE = E_c[ic] - E_f[jf]
-    else:
-        dq = q_c - _interpolate(t_f, q_f, t_c)
-        dE = E_c - _interpolate(t_f, E_f[:, None], t_c)[:, 0]
+    with np.errstate(invalid="ignore", over="ignore"):     # (an energy that is not finite: judged below, quietly)
+        if ic.size >= max(3, 0.4 * (t_c.size - 1)) or not smooth or order >= INTERPOLATION_ORDER:
+            dq = q_c[ic] - q_f[jf]
+            dE = E_c[ic] - E_f[jf]
+        else:
+            dq = q_c - _interpolate(t_f, q_f, t_c)
+            dE = E_c - _interpolate(t_f, E_f[:, None], t_c)[:, 0]
     out = {"q": float(np.max(np.abs(dq), initial=0.0)), "q_T": float(np.max(np.abs(q_c[-1] - q_f[-1])))}
     if np.all(np.isfinite(dE)) and dE.size:
         out["energy"] = float(np.max(np.abs(dE)))
