@@ -502,3 +502,16 @@ def test_animation_links_join_the_pairs_asked_for():
         PointsAnimation(P, t, links=[(0, 3)])
     with pytest.raises(ValueError):
         PointsAnimation(P, t, links=[(-1, 0)], pivot=None)
+
+
+def test_control_plot_without_controls_is_quiet():
+    """A contact problem without controls (the bounce to a target: only its launch is free) drew an empty legend,
+    and matplotlib's "No artists with labels" warning reached the report's stderr."""
+    import warnings
+
+    from castrajectory.inspect.plotting import control_plot
+    t = np.linspace(0.0, 1.0, 11)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fig = control_plot(t, np.c_[t, t ** 2], ["x", "y"], np.zeros((10, 0)), [])
+    assert len(fig.axes) == 2 and fig.axes[1].get_legend() is None

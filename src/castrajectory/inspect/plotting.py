@@ -319,7 +319,8 @@ def control_plot(t, q, names: Sequence[str], u, control_names: Sequence[str], ti
     bx.set_xlabel("t")
     bx.set_ylabel("u")
     bx.grid(True, alpha=0.3)
-    bx.legend(fontsize=8)
+    if u.shape[1] or exact_u is not None:      # (a problem without controls: no legend, and no warning on stderr)
+        bx.legend(fontsize=8)
     return fig
 
 
