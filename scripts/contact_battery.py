@@ -88,7 +88,9 @@ N >= 100 the schemes of order 6 and 8 are mostly at that floor).  Goals: at leas
 
     python scripts/contact_battery.py --schemes       # 20 scenes and their twins (seed 13)
 
-Exit status 0 when it ran (the goals are printed as PASS/MISS lines), 2 for bad flags.
+Exit status 0 when it ran (the goals are printed as PASS/MISS lines), 2 for bad flags.  Ctrl-C (SIGTERM) stops it
+within a second with one line on stderr, the CSV and the summary of the scenes that finished written: exit 130
+(143); a Dask scheduler lost midway keeps them the same way, the line says how many scenes were not run: exit 1.
 """
 from __future__ import annotations
 
@@ -107,7 +109,7 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 import numpy as np  # noqa: E402
 
 from castrajectory.cli import sweeps  # noqa: E402
-from castrajectory.inspect import study  # noqa: E402
+from castrajectory.inspect import files, study  # noqa: E402
 from castrajectory.inspect.battery import (  # noqa: E402  (the scenes, their solve and their checks)
     COMP_TOL, ENERGY_TOL, FRICTION_FAMILIES, GAP_TOL, LAW_TOL, SCHEME_SET, TIME_FLOOR, battery_task,
     check_friction_twins, check_twins, draw_friction_scenes, draw_scenes, draw_scheme_scenes, fitted_order)
@@ -119,6 +121,9 @@ def run_all(scenes, timeout: float, log, executor=None, bar=None, quiet=False):
     ``log(row)`` as each finishes."""
     return study.run_tasks(battery_task, [(sc, timeout) for sc in scenes], executor, log, bar, quiet,
                            desc="battery", label=lambda r: f"{r['id']} {r['family']}")
+
+
+PROG = "contact_battery.py"
 
 
 # ----------------------------------------------------------------------------- report
@@ -140,12 +145,6 @@ def _fmt(v):
     if isinstance(v, float):
         return f"{v:.3g}"
     return "" if v is None else str(v)
-
-
-def write_atomic(path: Path, text: str):
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
 
 
 def _family_rows(rows, families, columns):
@@ -333,7 +332,7 @@ def main(argv=None):
     if args.count < 1 or (args.workers is not None and args.workers < 1) or not args.timeout > 0:
         print("contact_battery: --count and --workers must be >= 1 and --timeout > 0", file=sys.stderr)
         return 2
-    executor = sweeps.executor(args, "contact_battery")
+    executor = sweeps.executor(args, PROG)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     if args.schemes:
@@ -366,25 +365,41 @@ def main(argv=None):
               f"solved={str(r.get('solved')):5s} {r.get('iterations', 0) or 0:5d} it {r.get('time_s', math.nan):7.2f} s "
               f"law {r.get('impact_law', math.nan):.1e} t-err {r.get('impact_time_error', math.nan):.1e}", flush=True)
 
-    t0 = time.perf_counter()
-    with executor:
-        rows = run_all(scenes, args.timeout, log, executor, sweeps.bar(args), args.quiet)
-    seconds = time.perf_counter() - t0
-    if args.schemes:
-        check_twins(rows)
-    elif args.friction:
-        check_friction_twins(rows)
     fields, names = (SCHEME_FIELDS, ("schemes.csv", "schemes_summary.md")) if args.schemes else \
         (FRICTION_FIELDS, ("friction.csv", "friction_summary.md")) if args.friction else \
         (FIELDS, ("battery.csv", "summary.md"))
-    sio = io.StringIO()
-    w = csv.DictWriter(sio, fieldnames=fields, extrasaction="ignore")
-    w.writeheader()
-    for r in rows:
-        w.writerow({k: _fmt(r.get(k)) for k in fields})
-    write_atomic(out / names[0], sio.getvalue())
-    summary = (summarise_schemes if args.schemes else summarise_friction if args.friction else summarise)(rows, seconds)
-    write_atomic(out / names[1], summary)
+
+    def write(rows, seconds, stopped=None):
+        """The CSV and the summary of ``rows``, written atomically (if the battery ``stopped``: the rows of the scenes
+        that finished, and a sentence saying so heads the summary); returns the summary."""
+        if args.schemes:
+            check_twins(rows)
+        elif args.friction:
+            check_friction_twins(rows)
+        sio = io.StringIO()
+        w = csv.DictWriter(sio, fieldnames=fields, extrasaction="ignore")
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: _fmt(r.get(k)) for k in fields})
+        files.write_text(str(out / names[0]), sio.getvalue())
+        summary = (summarise_schemes if args.schemes else summarise_friction if args.friction else summarise)(
+            rows, seconds)
+        if stopped:
+            summary = f"**{stopped}**\n\n{summary}"
+        files.write_text(str(out / names[1]), summary)
+        return summary
+
+    def write_finished(rows):
+        order = {sc["id"]: i for i, sc in enumerate(scenes)}
+        rows = sorted(rows, key=lambda r: order.get(r["id"], len(order)))
+        write(rows, time.perf_counter() - t0, f"Stopped after {len(rows)} of {len(scenes)} scenes: this covers those.")
+        return str(out / names[0])
+
+    t0 = time.perf_counter()
+    rows = sweeps.run(PROG, executor, lambda on_row: run_all(scenes, args.timeout, on_row, executor, sweeps.bar(args),
+                                                             args.quiet),
+                      write_finished, total=len(scenes), noun="scenes", progress=log)
+    summary = write(rows, time.perf_counter() - t0)
     print()
     print(summary)
     n_ok = sum(1 for r in rows if r.get("solved"))
@@ -410,4 +425,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(sweeps.command(main, PROG))

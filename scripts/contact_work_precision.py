@@ -27,6 +27,8 @@ import numpy as np
 from castrajectory.cli import sweeps
 from castrajectory.inspect import plotting, study
 
+PROG = "contact_work_precision.py"
+
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -35,14 +37,20 @@ def main(argv=None) -> int:
     sweeps.add_sweep_flags(p)
     args = p.parse_args(argv)
     if any(n < 2 for n in args.sizes):
-        print("contact_work_precision.py: error: every size must be >= 2", file=sys.stderr)
+        print(f"{PROG}: error: every size must be >= 2", file=sys.stderr)
         return 2
-    executor = sweeps.executor(args, "contact_work_precision.py")
+    executor = sweeps.executor(args, PROG)
     os.makedirs(args.out, exist_ok=True)
-    with executor:
-        rows = study.contact_work_precision(sorted(args.sizes), executor=executor, bar=sweeps.bar(args),
-                                            quiet=args.quiet)
-    study.write_csv(rows, os.path.join(args.out, "contact_work_precision.csv"))
+    csv_path = os.path.join(args.out, "contact_work_precision.csv")
+
+    def write(rows):
+        study.write_csv(rows, csv_path)
+        return csv_path
+
+    rows = sweeps.run(PROG, executor, lambda on_row: study.contact_work_precision(
+        sorted(args.sizes), executor=executor, progress=on_row, bar=sweeps.bar(args), quiet=args.quiet),
+        write, total=len(args.sizes) * len(study.CONTACT_CASES) * 2)       # (2 methods: whole, moreau-jean)
+    write(rows)
     fig = plotting.contact_work_precision(rows, title="Contact trajectories: bounce times against the analytic ones")
     fig.savefig(os.path.join(args.out, "contact_work_precision.png"))
     print(f"{'case':12s} {'method':12s} {'N':>6s} {'time s':>8s} {'|Δt| max':>10s} {'|Δv|/v max':>11s} "
@@ -63,4 +71,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(sweeps.command(main, PROG))

@@ -19,6 +19,8 @@ from castrajectory.cli import sweeps
 from castrajectory.solve import droplet
 from castrajectory.inspect import plotting, study
 
+PROG = "droplet_convergence.py"
+
 
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -30,7 +32,7 @@ def main(argv=None):
     args = p.parse_args(argv)
     if args.n_min < droplet.MIN_N or args.n_max < args.n_min:
         p.error(f"need {droplet.MIN_N} <= --n-min <= --n-max")
-    executor = sweeps.executor(args, "droplet_convergence.py")
+    executor = sweeps.executor(args, PROG)
     os.makedirs(args.out, exist_ok=True)
 
     def progress(r):
@@ -38,12 +40,18 @@ def main(argv=None):
               f"build={r['build_time_s']:.3f}s solve={r['solve_time_s']:.3f}s  "
               + " ".join(f"{k}={r['err_' + k]:.2e}" for k in study.DROPLET_ERRORS), flush=True)
 
-    with executor:
-        rows = study.droplet_sweep(study.sweep_sizes(args.n_max, args.n_min), args.formulations, executor=executor,
-                                   progress=None if args.quiet else progress, bar=sweeps.bar(args), quiet=args.quiet)
     csv_path, png_path = os.path.join(args.out, "droplet_convergence.csv"), os.path.join(args.out,
                                                                                          "droplet_convergence.png")
-    study.write_csv(rows, csv_path)
+
+    def write(rows):
+        study.write_csv(rows, csv_path)
+        return csv_path
+
+    ns = study.sweep_sizes(args.n_max, args.n_min)
+    rows = sweeps.run(PROG, executor, lambda on_row: study.droplet_sweep(
+        ns, args.formulations, executor=executor, progress=on_row, bar=sweeps.bar(args), quiet=args.quiet),
+        write, total=len(ns) * len(args.formulations), progress=None if args.quiet else progress)
+    write(rows)
     plotting.droplet_convergence(rows, png_path)
     print(f"wrote {csv_path} and {png_path}")
     print("observed orders (err ~ N^-p, fit over N >= 32):")
@@ -57,4 +65,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(sweeps.command(main, PROG))

@@ -47,6 +47,7 @@ from castrajectory.models import pendulum  # noqa: E402
 from castrajectory.cli import sweeps  # noqa: E402
 from castrajectory.inspect import plotting, study  # noqa: E402
 
+PROG = "long_horizon.py"
 BOUNDED_FACTOR = 1.5
 DRIFT_TAIL_RATIO = 3.0
 
@@ -69,7 +70,7 @@ def main(argv=None) -> int:
         p.error("--periods and --steps-per-period must be at least 2")
     if not (args.length > 0 and args.g > 0 and math.isfinite(args.length) and math.isfinite(args.g)):
         p.error("--length and --g must be positive")
-    executor = sweeps.executor(args, "long_horizon.py")
+    executor = sweeps.executor(args, PROG)
     os.makedirs(args.out, exist_ok=True)
 
     # a factory, not a built system: a process pool or a Dask worker builds it where it runs
@@ -93,11 +94,16 @@ def main(argv=None) -> int:
         print(f"  {row['label']:16s} {row['status']:>4s} build={row['build_time_s']:7.3f}s "
               f"solve={row['solve_time_s']:8.3f}s wall={row['wall_time_s']:8.3f}s{extra}", flush=True)
 
+    csv_path, png_path = os.path.join(args.out, "long_horizon.csv"), os.path.join(args.out, "long_horizon.png")
+
+    def write(results):
+        study.write_csv([row for row, _, _ in results], csv_path)
+        return csv_path
+
     t_all = time.perf_counter()
-    with executor:
-        results = study.long_horizon_sweep(system, q0, qd0, T, N, runs, executor=executor,
-                                           progress=None if args.quiet else progress, bar=sweeps.bar(args),
-                                           quiet=args.quiet)
+    results = sweeps.run(PROG, executor, lambda on_result: study.long_horizon_sweep(
+        system, q0, qd0, T, N, runs, executor=executor, progress=on_result, bar=sweeps.bar(args), quiet=args.quiet),
+        write, total=len(runs), progress=None if args.quiet else progress)
     rows, series, tseries = [], {}, {}
     for row, t, energy in results:
         rows.append(row)
@@ -106,7 +112,6 @@ def main(argv=None) -> int:
             tseries[row["label"]] = t
     total = time.perf_counter() - t_all
 
-    csv_path, png_path = os.path.join(args.out, "long_horizon.csv"), os.path.join(args.out, "long_horizon.png")
     study.write_csv(rows, csv_path)
     fig = plotting.long_horizon_plot(tseries, series, period=period,
                                      title=f"Simple pendulum, θ0 = {args.amplitude:g} rad, "
@@ -145,4 +150,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(sweeps.command(main, PROG))

@@ -51,6 +51,7 @@ from castrajectory.cli import sweeps  # noqa: E402
 from castrajectory.inspect import plotting, study  # noqa: E402
 from castrajectory.baselines import stepping  # noqa: E402
 
+PROG = "work_precision.py"
 TARGET = 1e-8
 #: CVODES tolerance of the reference: at 1e-13 the double pendulum's q(5) is off by
 #: ~1.5e-10 (measured against 1e-14 / 1e-15 and RK4 at 128 000 steps), too close to
@@ -95,7 +96,7 @@ def main(argv=None) -> int:
         p.error("--T must be positive")
     if not (math.isfinite(args.theta1) and math.isfinite(args.theta2)):
         p.error("--theta1 and --theta2 must be finite")
-    executor = sweeps.executor(args, "work_precision.py")
+    executor = sweeps.executor(args, PROG)
     os.makedirs(args.out, exist_ok=True)
 
     q0, qd0 = np.array([args.theta1, args.theta2]), np.zeros(2)
@@ -116,16 +117,21 @@ def main(argv=None) -> int:
               f"build={r['build_time_s']:8.3f}s solve={r['solve_time_s']:8.3f}s "
               f"err={r['error_final']:9.2e} dE={r['energy_error_max']:9.2e}", flush=True)
 
-    t_start = time.perf_counter()
-    with executor:
-        rows = study.work_precision_sweep(pendulum.double_pendulum, q0, qd0, args.T, METHODS_SCHEMES,
-                                          sizes(args.quick), executor=executor, reference_rtol=REFERENCE_RTOL,
-                                          progress=None if args.quiet else progress, bar=sweeps.bar(args),
-                                          quiet=args.quiet)
-    sweep_s = time.perf_counter() - t_start
-
     csv_path = os.path.join(args.out, "work_precision.csv")
-    study.write_csv(rows, csv_path)
+
+    def write(rows):
+        study.write_csv(rows, csv_path)
+        return csv_path
+
+    ns = sizes(args.quick)
+    t_start = time.perf_counter()
+    rows = sweeps.run(PROG, executor, lambda on_row: study.work_precision_sweep(
+        pendulum.double_pendulum, q0, qd0, args.T, METHODS_SCHEMES, ns, executor=executor,
+        reference_rtol=REFERENCE_RTOL, progress=on_row, bar=sweeps.bar(args), quiet=args.quiet),
+        write, total=sum(len(study._ns_for(ns, m, s)) for m, s in METHODS_SCHEMES),
+        progress=None if args.quiet else progress)
+    sweep_s = time.perf_counter() - t_start
+    write(rows)
     title = f"double pendulum, θ0 = ({args.theta1:g}, {args.theta2:g}), T = {args.T:g} s"
     figs = {
         "work_precision_error.png": plotting.work_precision(rows, x="time", y="error", group=("label",),
@@ -178,4 +184,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(sweeps.command(main, PROG))

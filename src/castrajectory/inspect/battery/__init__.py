@@ -20,6 +20,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import signal
 import subprocess
 import sys
 import time
@@ -199,10 +200,14 @@ def battery_task(task) -> dict:
     return {**sc, **res, "command": command(sc)}
 
 
+#: The environment variable that gives the child its parent's process id (see :func:`_end_with_parent`).
+_PARENT = "CASTRAJECTORY_BATTERY_PARENT"
+
+
 def _run_in_child(sc, timeout) -> dict:
     try:
         p = subprocess.run([sys.executable, "-c", _CHILD], input=json.dumps(sc), capture_output=True,
-                           text=True, timeout=timeout)
+                           text=True, timeout=timeout, env={**os.environ, _PARENT: str(os.getpid())})
     except subprocess.TimeoutExpired:
         return {"status": f"timeout ({timeout:g} s)", "success": False, "solved": False, "time_s": timeout}
     if p.returncode == 0 and p.stdout.strip():
@@ -214,6 +219,7 @@ def _run_in_child(sc, timeout) -> dict:
 def _child_main() -> None:
     """The child: a scene as JSON on stdin, its results as JSON on the original stdout (anything the
     solver prints goes to stderr)."""
+    _end_with_parent()
     out = os.fdopen(os.dup(1), "w")
     os.dup2(2, 1)
     sc = json.loads(sys.stdin.read())
@@ -223,3 +229,22 @@ def _child_main() -> None:
         res = {"status": f"error: {type(exc).__name__}: {exc}"[:200], "success": False, "solved": False}
     json.dump(res, out)
     out.flush()
+
+
+def _end_with_parent() -> None:
+    """The child ends (SIGTERM) when the process that started it ends: a sweep stopped by Ctrl-C ends its pool's
+    workers with SIGTERM, and their scenes' children would otherwise run on as orphans to the end of their
+    scene or its time limit (Linux's ``PR_SET_PDEATHSIG``; elsewhere nothing).  A parent that ended before the
+    call ends the child now."""
+    parent = os.environ.get(_PARENT)
+    if not sys.platform.startswith("linux") or not parent:
+        return
+    try:
+        import ctypes
+
+        if ctypes.CDLL(None, use_errno=True).prctl(1, int(signal.SIGTERM), 0, 0, 0) != 0:   # 1: PR_SET_PDEATHSIG
+            return
+    except (OSError, AttributeError):
+        return
+    if os.getppid() != int(parent):
+        os._exit(1)
