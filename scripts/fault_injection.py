@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import resource
 import shutil
 import signal
@@ -290,11 +291,13 @@ def sweep_cases():
     def ctrl_c(workers):
         def case():
             with tempfile.TemporaryDirectory() as tmp:
-                out = Path(tmp) / "rows.csv"
-                args = [str(ROOT / "scripts" / "contact_battery.py"), "--count", "30", "--out", str(out)]
+                folder = Path(tmp) / "battery"
+                out = folder / "battery.csv"
+                args = [str(ROOT / "scripts" / "contact_battery.py"), "--count", "30", "--family", "ball", "--out",
+                        str(folder)]
                 if workers:
                     args += ["--workers", str(workers)]
-                got = _signal_after(args, 12.0, signal.SIGINT)
+                got = _signal_after(args, 8.0, signal.SIGINT)
                 if got is None:
                     return "ended before the signal", False
                 rc, o, err, dt = got
@@ -303,8 +306,53 @@ def sweep_cases():
                 return f"exit {rc} after {dt:.1f} s, {len(lines)} line(s), {rows} finished rows kept", \
                     rc == 130 and len(lines) == 1 and "Traceback" not in err and dt < 5.0 and rows > 0
         return case
+    def dask_dies():
+        try:
+            import distributed  # noqa: F401
+        except ImportError:
+            return "distributed not installed (the dist extra): skipped", True
+        cluster = subprocess.Popen([PY, "-c", CLUSTER], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                   env=ENV)
+        try:
+            address = cluster.stdout.readline().strip()
+            with tempfile.TemporaryDirectory() as tmp:
+                folder = Path(tmp) / "battery"
+                p = subprocess.Popen([PY, str(ROOT / "scripts" / "contact_battery.py"), "--count", "30", "--family",
+                                      "ball", "--dask-scheduler", address, "--out", str(folder)],
+                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV)
+                done = 0
+                while done < 2:                           # two finished scenes, then the scheduler dies
+                    line = p.stdout.readline()
+                    if not line:
+                        break
+                    done += bool(re.match(r"\s*\d{3} ", line))
+                cluster.kill()
+                t0 = time.perf_counter()
+                _, err = p.communicate(timeout=120)
+                dt = time.perf_counter() - t0
+                out = folder / "battery.csv"
+                rows = max(0, len(out.read_text().splitlines()) - 1) if out.exists() else 0
+                lines = err.strip().splitlines()
+                return f"exit {p.returncode} after {dt:.1f} s, {len(lines)} line(s), {rows} finished rows kept", \
+                    p.returncode == 1 and len(lines) == 1 and "Traceback" not in err and rows > 0
+        finally:
+            cluster.kill()
+            cluster.communicate()
+
     return [("sweeps", "Ctrl-C into contact_battery.py (serial)", ctrl_c(0)),
-            ("sweeps", "Ctrl-C into contact_battery.py --workers 2", ctrl_c(2))]
+            ("sweeps", "Ctrl-C into contact_battery.py --workers 2", ctrl_c(2)),
+            ("sweeps", "the Dask scheduler killed mid-sweep", dask_dies)]
+
+
+#: a Dask scheduler and worker in one process, for the sweep case (its address on the first line)
+CLUSTER = """
+import time
+from distributed import LocalCluster
+cluster = LocalCluster(host="127.0.0.1", protocol="tcp", scheduler_port=0, n_workers=1, threads_per_worker=2,
+                       processes=False, dashboard_address=None)
+print(cluster.scheduler_address, flush=True)
+time.sleep(300)
+"""
 
 
 FAMILIES = {"cache": cache_cases, "signals": signal_cases, "inputs": input_cases, "memory": memory_cases,
