@@ -34,6 +34,7 @@ from ..models.droplet import (  # noqa: F401
     step_measure, young_angle)
 from ..result import NLPResult, Result
 from ..validation import InputError, integer_at_least, one_of
+from . import memory
 from .droplet_readings import check_profile, errors_against, pattern_readings, readings
 from .nlp import DEFAULT_IPOPT_OPTIONS, NLP
 from .second_order import reduced_hessian
@@ -255,6 +256,7 @@ def solve(drop: Droplet, n: int = 400, formulation: str = "curve", *, options: O
     n = integer_at_least("n", n, MIN_N)
     _check_formulation(drop, formulation, n)
     _check_bracketable(drop)
+    memory.check_droplet(drop, n, formulation, compare)  # refused before anything is built
     opts = {**SOLVER_OPTIONS, **(SPECTRAL_OPTIONS if formulation == "spectral" else {}), **(options or {})}
     floor = _rounding_floor(drop, n) if formulation == "curve" else None
     if floor is not None and floor > float(opts.get("tol", DEFAULT_IPOPT_OPTIONS["tol"])):
@@ -738,6 +740,7 @@ def solve_pattern_sweep(drop: Droplet, areas, n: int = 100, formulation: str = "
         raise InputError("a pattern sweep needs a patterned table (pattern_width and gamma_sl_out)")
     n = integer_at_least("n", n, MIN_N)
     _check_formulation(drop, formulation)
+    memory.check_droplet(drop, n, formulation, compare=False)
     opts = {**SOLVER_OPTIONS, **PATTERN_OPTIONS, **(options or {})}
     nlp, geo, _ = make_nlp(drop, n, formulation)
     out, last = [], None
@@ -766,6 +769,7 @@ def pattern_transitions(drop: Droplet, n: int = 100, formulation: str = "curve",
     non-wetting outside) and ``{"solves": k, "iterations": i}``.  A study helper, not a scene's solve: a drop
     that does not converge raises ``RuntimeError``."""
     from ..models.droplet import _illinois, patterned_cap
+    memory.check_droplet(drop, n, formulation, compare=False)
     opts = {**SOLVER_OPTIONS, **PATTERN_OPTIONS, **(options or {})}
     nlp, geo, _ = make_nlp(drop, n, formulation)
     jump = drop.gamma_sl_out - drop.gamma_sl

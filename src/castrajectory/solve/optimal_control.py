@@ -38,6 +38,7 @@ from ..discretise.optimal_control import ControlTranscription, split_controls
 from ..models.mechanics import LagrangianSystem
 from ..result import ControlResult
 from ..validation import InputError, integer_at_least, one_of
+from . import memory
 from .nlp import NLP
 from .trajectory import check_inertia
 
@@ -249,6 +250,7 @@ class OptimalControl:
         why = self._inconsistency()
         if why:
             raise InputError(f"the problem is inconsistent: {why}; nothing was solved")
+        memory.check_control(self)  # a grid this process cannot hold: refused before anything is built
         if self.system.contact is not None:
             return self._solve_contact(guess, options, verbose, keep_modes)
         if keep_modes:
