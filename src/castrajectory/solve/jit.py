@@ -256,32 +256,9 @@ def compiled(fn: ca.Function, build: bool = True) -> ca.Function:
         if key in _failed:
             return fn
         lib = folder / f"{fn.name()}_{key}.so"
-        if lib.exists():
-            why = _check(lib, key)
-            if why is not None:
-                _quarantine(lib, why)
-        built = False
-        if lib.exists():
-            stats["cache_hits"] += 1
-            _touch(lib)
-        elif not build:
+        out = _from_disk(fn, code, cc, folder, key, lib, build)
+        if out is None:
             return fn
-        else:
-            _build(code, cc, folder, key, lib)
-            built = True
-            stats["compiled"] += 1
-            _prune(folder)
-        try:
-            out = _load(fn, lib)
-        except Exception as exc:
-            interrupt.reraise(exc)
-            if built:
-                raise
-            # (verified bytes that do not load: compiled on another machine of the cache, say) once again
-            _quarantine(lib, f"does not load ({exc.__class__.__name__})")
-            _build(code, cc, folder, key, lib)
-            stats["compiled"] += 1
-            out = _load(fn, lib)
         _loaded[key] = out
         _by_form[form] = key
         _index(folder, form, cc, lib)
@@ -292,6 +269,37 @@ def compiled(fn: ca.Function, build: bool = True) -> ca.Function:
         if "key" in locals():
             _failed.add(key)
         return fn
+
+
+def _from_disk(fn: ca.Function, code: str, cc: str, folder: Path, key: str, lib: Path, build: bool):
+    """The library ``lib`` of ``fn`` loaded: verified (:func:`_check`; set aside if it fails), compiled where it is
+    missing (None where ``build`` is off), and, where verified bytes do not load, set aside and compiled once more."""
+    if lib.exists():
+        why = _check(lib, key)
+        if why is not None:
+            _quarantine(lib, why)
+    built = False
+    if lib.exists():
+        stats["cache_hits"] += 1
+        _touch(lib)
+    elif not build:
+        return None
+    else:
+        _build(code, cc, folder, key, lib)
+        built = True
+        stats["compiled"] += 1
+        _prune(folder)
+    try:
+        return _load(fn, lib)
+    except Exception as exc:
+        interrupt.reraise(exc)
+        if built:
+            raise
+        # (verified bytes that do not load: compiled on another machine of the cache, say) once again
+        _quarantine(lib, f"does not load ({exc.__class__.__name__})")
+        _build(code, cc, folder, key, lib)
+        stats["compiled"] += 1
+        return _load(fn, lib)
 
 
 def _load(fn: ca.Function, lib: Path) -> ca.Function:
