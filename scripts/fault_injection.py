@@ -204,7 +204,45 @@ def signal_cases():
                     same and rc == {signal.SIGINT: 130, signal.SIGTERM: 143, signal.SIGKILL: -9}[sig]
         return case
 
+    def during_compile(sig, group):
+        def case():
+            word, code = ("interrupted", 130) if sig == signal.SIGINT else ("terminated", 143)
+            held, notes = [], []
+            for delay in (0.0, 0.05, 0.2, 0.5):
+                with tempfile.TemporaryDirectory() as tmp:
+                    cache = Path(tmp) / "cache"
+                    env = {**ENV, "CASTRAJECTORY_CACHE_DIR": str(cache)}
+                    args = [PY, str(ROOT / "problems" / "n_link_pendulum.py"), "--links", "6", "--n", "3000", "--T",
+                            "3"]
+                    p = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                                         start_new_session=True)
+                    t0 = time.perf_counter()
+                    while not any((b / "f.c").exists() for b in (cache / "jit").glob(".build-*")):
+                        if p.poll() is not None or time.perf_counter() - t0 > 60:
+                            break
+                        time.sleep(0.005)
+                    if p.poll() is not None:
+                        p.communicate()
+                        notes.append("ended first")
+                        continue
+                    time.sleep(delay)
+                    (os.killpg(p.pid, sig) if group else p.send_signal(sig))
+                    out, err = p.communicate(timeout=300)
+                    jit_dir = cache / "jit"
+                    clean = not list(jit_dir.glob(".build-*")) and all(
+                        (jit_dir / (f.name + ".sha256")).exists() for f in jit_dir.glob("*.so"))
+                    again, _ = _run(args[1:], env=env)
+                    ok = (p.returncode == code and err.strip().splitlines() == [f"n_link_pendulum.py: {word}"]
+                          and clean and again.returncode == 0 and again.stderr == "")
+                    held.append(ok)
+            return (f"{sum(held)} of {len(held)} delays: exit {code}, one line, no build folder or unstamped "
+                    f"library left, the next run ok and silent" + (f" ({', '.join(notes)})" if notes else "")), \
+                all(held) and len(held) >= 3
+        return case
+
     return [("signals", "SIGINT into optimal control (block_move, 25 delays)", sigint_block_move),
+            ("signals", "Ctrl-C (process group) during a compile, 4 delays", during_compile(signal.SIGINT, True)),
+            ("signals", "SIGTERM during a compile, 4 delays", during_compile(signal.SIGTERM, False)),
             ("signals", "SIGTERM during Ipopt with --plot", sigterm_solve),
             ("signals", "SIGINT into the report", report(signal.SIGINT, "SIGINT")),
             ("signals", "SIGTERM into the report", report(signal.SIGTERM, "SIGTERM")),

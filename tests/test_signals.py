@@ -138,3 +138,38 @@ def test_a_refusal_is_one_short_line_whatever_it_quotes(tmp_path):
     lines = err.getvalue().splitlines()
     assert len(lines) == 1 and len(lines[0]) <= scene.MESSAGE_LIMIT + len("probe.py: error: ")
     assert lines[0].startswith("probe.py: error: T must be positive (got 999") and lines[0].endswith("…")
+
+
+@pytest.mark.parametrize("sig,group", [(signal.SIGINT, True), (signal.SIGTERM, False)])
+def test_a_signal_during_a_compile_leaves_a_cache_that_the_next_run_trusts(tmp_path, sig, group):
+    """A signal while the C compiler runs (an empty cache, a 6-link pendulum on 3000 steps: its element
+    functions compile for about 1.3 s): exit 130 (Ctrl-C, sent to the whole process group as a terminal sends
+    it, so the compiler gets it too) or 143 (SIGTERM, to the run only), one line, no build folder left behind
+    and no library without its stamp; the next run loads or compiles what it needs, says nothing about the
+    cache, and ends ok with the same answer as a run that was never interrupted."""
+    cache = tmp_path / "cache"
+    env = {**ENV, "CASTRAJECTORY_CACHE_DIR": str(cache)}
+    args = [sys.executable, str(ROOT / "problems" / "n_link_pendulum.py"), "--links", "6", "--n", "3000", "--T", "3",
+            "--json"]
+    p = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                         start_new_session=True)
+    jit_dir, t0 = cache / "jit", time.perf_counter()
+    while not any((b / "f.c").exists() for b in jit_dir.glob(".build-*")):   # the compiler has its source
+        assert p.poll() is None and time.perf_counter() - t0 < 60, "no compile seen"
+        time.sleep(0.005)
+    time.sleep(0.05)
+    (os.killpg(p.pid, sig) if group else p.send_signal(sig))
+    out, err = p.communicate(timeout=120)
+    code, word = (130, "interrupted") if sig == signal.SIGINT else (143, "terminated")
+    assert p.returncode == code and out == "", (p.returncode, err[-800:])
+    assert err.strip().splitlines() == [f"n_link_pendulum.py: {word}"], err[-800:]
+    assert list(jit_dir.glob(".build-*")) == []
+    libs = list(jit_dir.glob("*.so"))
+    assert all((jit_dir / (f.name + ".sha256")).exists() for f in libs)
+    again = subprocess.run(args, capture_output=True, text=True, env=env, timeout=300)
+    assert again.returncode == 0 and again.stderr == "", again.stderr[-800:]
+    fresh = subprocess.run(args, capture_output=True, text=True, env={**ENV, "CASTRAJECTORY_JIT": "0"}, timeout=300)
+    import json
+    a, b = json.loads(again.stdout), json.loads(fresh.stdout)
+    assert a["status"] == "ok"
+    assert max(abs(x - y) for x, y in zip(a["q"][-1], b["q"][-1])) <= 1e-13   # (measured: identical)
