@@ -2,7 +2,6 @@
 failure reporting, output, timing, complementarity and naming rules."""
 from __future__ import annotations
 
-import math
 import time
 
 import casadi as ca
@@ -284,119 +283,6 @@ def test_nlp_frozen_after_build():
         nlp.equal("late", ca.SX.sym("q"), 0.0)
 
 
-# ----------------------------------------------------------------------------- complementarity
-@SYMBOLICS
-@pytest.mark.parametrize("init", [(0.5, 0.5), (1.0, 0.2), (0.2, 1.0), (0.0, 0.0), (2.0, 1.0)])
-def test_complementarity_scalar(sym, init):
-    nlp = NLP(sym)
-    x = nlp.variable("x", init=init[0])
-    y = nlp.variable("y", init=init[1])
-    nlp.minimize((x - 1) ** 2 + (y - 1) ** 2)
-    nlp.complementarity("c", x, y)
-    res = nlp.solve()
-    assert res.success, res.message
-    sol = (float(res["x"][0]), float(res["y"][0]))
-    assert min(math.dist(sol, (1.0, 0.0)), math.dist(sol, (0.0, 1.0))) < 1e-7
-    assert res.objective == pytest.approx(1.0, abs=1e-7)
-    assert res.complementarity_residual <= 1e-8
-    assert abs(sol[0] * sol[1]) <= 1e-8
-    # homotopy bookkeeping
-    sigmas = [s.sigma for s in res.homotopy]
-    assert len(sigmas) >= 2
-    assert all(a > b for a, b in zip(sigmas, sigmas[1:]))
-    assert sigmas[-1] == 0.0
-    for step in res.homotopy:
-        assert step.status == "Solve_Succeeded"
-        assert step.iterations >= 0 and step.solve_time_s > 0
-        # the relaxed product a*b <= sigma holds at each step (up to Ipopt's tolerance)
-        assert step.complementarity_residual <= step.sigma + 1e-8
-    assert res.iterations == sum(s.iterations for s in res.homotopy)
-    assert res.solve_time_s == pytest.approx(sum(s.solve_time_s for s in res.homotopy))
-    # documented signs: the sides a >= 0, b >= 0 are lower-bounded inequalities
-    assert res.multipliers["c.a"][0] >= -1e-8
-    assert res.multipliers["c.b"][0] >= -1e-8
-    assert res.multipliers["c"][0] <= 1e-8  # a*b - sigma <= 0 is an upper bound
-
-
-def test_complementarity_partial_homotopy_says_so():
-    nlp = NLP()
-    x = nlp.variable("x", init=1.0)
-    y = nlp.variable("y", init=0.2)
-    nlp.minimize((x - 1) ** 2 + (y - 1) ** 2)
-    nlp.complementarity("c", x, y)
-    res = nlp.solve(homotopy=(1e-1, 1e-2))
-    assert res.success
-    assert [s.sigma for s in res.homotopy] == [1e-1, 1e-2]
-    assert "sigma = 0.01" in res.message
-    # the relaxed solution has a*b = sigma (the relaxation is active)
-    assert res.complementarity_residual == pytest.approx(1e-2, rel=1e-6)
-
-
-def test_complementarity_vector_pairs():
-    nlp = NLP()
-    x = nlp.variable("x", 3, init=0.5)
-    y = nlp.variable("y", 3, init=0.5)
-    tx, ty = np.array([1.0, 2.0, -1.0]), np.array([2.0, 1.0, 1.0])
-    nlp.minimize(ca.sumsqr(x - tx) + ca.sumsqr(y - ty))
-    nlp.complementarity("c", x, y)
-    res = nlp.solve()
-    assert res.success
-    # componentwise: keep the side that costs more to zero; third pair: x wants < 0, so x = 0, y = 1
-    assert res["x"] == pytest.approx([0.0, 2.0, 0.0], abs=1e-5)
-    assert res["y"] == pytest.approx([2.0, 0.0, 1.0], abs=1e-5)
-    assert res.complementarity_residual <= 1e-8
-    assert np.all(res.multipliers["c.a"] >= -1e-8) and np.all(res.multipliers["c.b"] >= -1e-8)
-
-
-def _mpcc(targets_a, targets_b, elements: bool):
-    """min |x - A|² + |y - B|²  s.t.  0 <= x_i ⟂ y_i >= 0 (oracle: keep the larger target, zero the other)."""
-    E = len(targets_a)
-    nlp = NLP()
-    x = nlp.variable("x", E, init=0.5)
-    y = nlp.variable("y", E, init=0.5)
-    nlp.minimize(ca.sumsqr(x - targets_a) + ca.sumsqr(y - targets_b))
-    if elements:
-        a, b = ca.SX.sym("a"), ca.SX.sym("b")
-        pair = ca.Function("pair", [a, b], [ca.vertcat(a, b)])
-        nlp.complementarity_elements("c", pair, [X(nlp.index("x")[:, None]), X(nlp.index("y")[:, None])])
-    else:
-        nlp.complementarity("c", x, y)
-    return nlp.solve()
-
-
-def test_complementarity_elements_match_expressions_and_oracle():
-    rng = np.random.default_rng(0)
-    A, B = rng.uniform(0.2, 2.0, 40), rng.uniform(0.2, 2.0, 40)
-    ref, res = _mpcc(A, B, elements=False), _mpcc(A, B, elements=True)
-    assert res.success and ref.success
-    assert res.iterations == ref.iterations
-    assert np.max(np.abs(res["x"] - ref["x"])) <= 1e-10 and np.max(np.abs(res["y"] - ref["y"])) <= 1e-10
-    # oracle (the final sigma = 0 step is degenerate for Ipopt: accurate to ~sqrt(tol))
-    assert res["x"] == pytest.approx(np.where(A > B, A, 0.0), abs=1e-5)
-    assert res["y"] == pytest.approx(np.where(A > B, 0.0, B), abs=1e-5)
-    assert res.complementarity_residual <= 1e-12
-    assert [s.sigma for s in res.homotopy] == [1e-1, 1e-2, 1e-3, 1e-5, 1e-7, 0.0]
-    for step in res.homotopy:  # each relaxation step reports a residual at most its sigma
-        assert step.status == "Solve_Succeeded" and step.complementarity_residual <= step.sigma + 1e-12
-    assert np.all(res.multipliers["c.a"] >= -1e-8) and np.all(res.multipliers["c.b"] >= -1e-8)
-
-
-def test_complementarity_elements_need_pairs():
-    nlp = NLP()
-    nlp.variable("x", 3)
-    a = ca.SX.sym("a")
-    with pytest.raises(ValueError):
-        nlp.complementarity_elements("c", ca.Function("odd", [a], [a]), [X(nlp.index("x")[:, None])])
-
-
-def test_complementarity_size_mismatch():
-    nlp = NLP()
-    x = nlp.variable("x", 2)
-    y = nlp.variable("y", 3)
-    with pytest.raises(ValueError):
-        nlp.complementarity("c", x, y)
-
-
 # ----------------------------------------------------------------------------- names and symbolics
 @SYMBOLICS
 def test_duplicate_names_rejected(sym):
@@ -412,9 +298,6 @@ def test_duplicate_names_rejected(sym):
     nlp.equal("c", x[0], 1.0)
     with pytest.raises(ValueError, match="duplicate"):
         nlp.inequality("c", x[1], lb=0.0)
-    nlp.complementarity("cc", x[0], x[1])
-    with pytest.raises(ValueError, match="duplicate"):
-        nlp.equal("cc.a", x[0], 0.0)
 
 
 def test_objective_set_once_and_required():

@@ -59,6 +59,10 @@ import numpy as np
 #: every row of a square problem holds to the tolerance at a point computed piecewise, and its
 #: multipliers follow from stationarity, so it is a KKT point).
 SUCCESS_STATUSES = frozenset({"Solve_Succeeded", "Rows_Verified"})
+#: Ipopt stopped at its acceptable level: the requested tolerance was not reached, so it is never a success by
+#: itself; a strategy may go on from its point (:attr:`NLPResult.continuable`), and the method's own measurement
+#: (a re-solve, a certificate) decides the answer.
+ACCEPTABLE = "Solved_To_Acceptable_Level"
 
 _ADVICE = {
     "Maximum_Iterations_Exceeded": "raise max_iter or supply a better initial guess",
@@ -183,6 +187,12 @@ class NLPResult(Result):
 
     def __getitem__(self, name: str) -> np.ndarray:
         return self.values[name]
+
+    @property
+    def continuable(self) -> bool:
+        """A point a strategy may go on from: a success, or Ipopt's acceptable level (:data:`ACCEPTABLE`), whose point
+        the next solve or the certificate takes up.  The one acceptance predicate besides ``success``."""
+        return self.success or self.solver_status == ACCEPTABLE
 
     def as_dict(self) -> dict:
         return {**super().as_dict(), "objective": self.objective, "values": self.values,

@@ -43,6 +43,11 @@ from ..models.mechanics import LagrangianSystem
 from .schemes import SCHEMES, Scheme, scheme  # noqa: F401  (the registry lives with the schemes)
 
 
+#: RK4 substeps per step of an integrated guess (rk4_step): the trajectory guesses' first (solve/guesses.py) and the
+#: contact program's event-located guess (discretise/contact/elements.py)
+GUESS_SUBSTEPS = 4
+
+
 def rk4_step(f, x, dt, t=None):
     """One classical Runge–Kutta step ``x ↦ x + dt/6 (k₁ + 2k₂ + 2k₃ + k₄)`` of ``ẋ = f(x)``, or of
     ``ẋ = f(x, t)`` from the time ``t`` when one is given (CasADi expressions): the integrator of the

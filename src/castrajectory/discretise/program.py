@@ -153,8 +153,6 @@ class Program:
         self._gub: List[np.ndarray] = []
         self._cons: Dict[str, Constraint] = {}
         self._ng = 0
-        self._comps: List[tuple] = []  # (name, a, b) expressions
-        self._comp_groups: List[tuple] = []  # (name, |a b| function, element args, count)
         #: complementarity pairs the program holds by other means than complementarity() (an exact
         #: penalty of the products, say), declared by name and count by whoever writes them
         self.declared_pairs: Dict[str, int] = {}
@@ -217,24 +215,6 @@ class Program:
             raise ValueError(f"{name}: lower bound above upper bound")
         return self._add(name, "inequality", expr, lo, hi)
 
-    def complementarity(self, name: str, a, b) -> Constraint:
-        """Add the pairs ``0 <= a_i  ⟂  b_i >= 0``.
-
-        The multipliers of ``a >= 0`` and ``b >= 0`` are reported as
-        ``"<name>.a"`` and ``"<name>.b"``; the relaxed products as ``"<name>"``.
-        """
-        if a.numel() != b.numel():
-            raise ValueError(f"{name}: both sides of a complementarity pair need the same size")
-        n = a.numel()
-        self._add(f"{name}.a", "inequality", a, np.zeros(n), np.full(n, np.inf))
-        self._add(f"{name}.b", "inequality", b, np.zeros(n), np.full(n, np.inf))
-        if "__sigma" not in [p.name for p in self._params]:
-            self.parameter("__sigma", 1, 0.0)
-        sigma = [p.sym for p in self._params if p.name == "__sigma"][0]
-        con = self._add(name, "inequality", a * b - sigma, np.full(n, -np.inf), np.zeros(n))
-        self._comps.append((name, a, b))
-        return con
-
     # ------------------------------------------------------------------ element families
     @staticmethod
     def _position(blocks, name: str) -> np.ndarray:
@@ -288,41 +268,6 @@ class Program:
         self._f_groups.append(grp)
         self._t_described = time.perf_counter()
 
-    def complementarity_elements(self, name: str, fn: ca.Function, args: Sequence) -> Constraint:
-        """Add ``0 <= a_e ⟂ b_e >= 0`` for every element, with ``[a; b] = fn(args_e)``.
-
-        ``fn`` returns one column of even length ``2r``: the first ``r`` entries
-        are ``a``, the last ``r`` are ``b``.  As for :meth:`complementarity`, the
-        rows ``"<name>.a" >= 0``, ``"<name>.b" >= 0`` and the relaxed products
-        ``"<name>": a_i b_i - sigma <= 0`` are added (element families), and
-        :meth:`solve` runs the Scholtes homotopy ``sigma -> 0``.
-        """
-        k = fn.size1_out(0) * fn.size2_out(0)
-        if k % 2:
-            raise ValueError(f"{name}: a complementarity element returns [a; b] of even length")
-        r = k // 2
-        syms = [ca.SX.sym(f"a{i}", fn.size1_in(i), fn.size2_in(i)) for i in range(fn.n_in())]
-        out = ca.vec(fn(*syms))
-        a, b = out[:r], out[r:]
-        sig = ca.SX.sym("sigma")
-        fa = ca.Function(f"{name}_a", syms, [a])
-        fb = ca.Function(f"{name}_b", syms, [b])
-        fprod = ca.Function(f"{name}_prod", syms + [sig], [a * b - sig])
-        nargs, count = _element_args(fn, args, name)
-        if "__sigma" not in [p.name for p in self._params]:
-            self.parameter("__sigma", 1, 0.0)
-        n = count * r
-        self.inequality_elements(f"{name}.a", fa, args, lb=np.zeros(n))
-        self.inequality_elements(f"{name}.b", fb, args, lb=np.zeros(n))
-        con = self.inequality_elements(name, fprod, list(args) + [P(self.parameter_index("__sigma"))],
-                                       ub=np.zeros(n))
-        self._comp_groups.append((name, ca.Function(f"{name}_abs", syms, [ca.fabs(a * b)]), nargs, count))
-        return con
-
-    @property
-    def has_complementarity(self) -> bool:
-        return bool(self._comps or self._comp_groups)
-
     def constraint(self, name: str) -> Constraint:
         return self._cons[name]
 
@@ -364,12 +309,10 @@ class Program:
 
     def anatomy(self) -> dict:
         """What the program carries, read from its description: variables, equality and inequality rows,
-        complementarity pairs (those of :meth:`complementarity` and :meth:`complementarity_elements`,
-        and :attr:`declared_pairs`), and each element family: its kind, elements, inputs and outputs per
+        complementarity pairs (:attr:`declared_pairs`: a transcription that poses pairs, as the contact one
+        does with its exact penalties, declares them), and each element family: its kind, elements, inputs and outputs per
         element, and the size of its function (SX instructions)."""
-        pairs = sum(int(ca.vec(a).numel()) for _, a, _ in self._comps)
-        pairs += sum(int(count * (fn.size1_out(0) * fn.size2_out(0))) for _, fn, _, count in self._comp_groups)
-        pairs += sum(int(v) for v in self.declared_pairs.values())
+        pairs = sum(int(v) for v in self.declared_pairs.values())
         kinds = {}
         for c, g in zip(self._cons.values(), self._g):
             if isinstance(g, _Group):

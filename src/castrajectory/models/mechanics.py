@@ -567,10 +567,15 @@ class LagrangianSystem:
         return ca.vertcat(*[ca.vec(c) for c in self.constraints]) if self.constraints else ca.SX(0, 1)
 
     # -- numerical functions (built once)
-    def _get(self, key, build):
+    def derived(self, key, build):
+        """The object derived from this system under ``key``, built by ``build()`` on first use and kept with the
+        system (its functions, and what the layers above derive from it once, as the contact elements of a
+        scheme): it lives and dies with the system, and nothing is keyed by the system's ``id``."""
         if key not in self._fn:
             self._fn[key] = build()
         return self._fn[key]
+
+    _get = derived
 
     # Every function below takes the time as its last input; a time-independent system's may be called
     # without it (see _Timed), a time-dependent system's may not.

@@ -13,7 +13,7 @@ from typing import Dict, Optional, Tuple
 import casadi as ca
 import numpy as np
 
-from ..discretise.lagrangians import DiscreteMechanics, rk4_step
+from ..discretise.lagrangians import GUESS_SUBSTEPS, DiscreteMechanics, rk4_step
 from . import jit
 from . import nlp as _nlp
 
@@ -107,8 +107,6 @@ def _extrapolate(coarse, fine, nxt) -> Dict[str, np.ndarray]:
     return _refine(tf, ext, nxt, EXTRAPOLATION_POINTS)
 
 
-#: RK4 substeps per step of the integrated guesses (:func:`_flow_guess`): the first of its ladder.
-GUESS_SUBSTEPS = 4
 #: The integrated guess doubles its substeps until two successive flows agree to this (the largest
 #: difference at a node, per coordinate relative to 1 + the coordinate's largest magnitude): the
 #: difference is the coarser flow's error, so the finer one kept is about 2⁴ = 16 times closer.

@@ -22,16 +22,15 @@ A program with element families is differentiated element by element
 operations per nonzero instead of whole-graph AD; large families run compiled
 element functions (:mod:`castrajectory.solve.jit`).
 
-Complementarity pairs ``0 <= a  ⟂  b >= 0`` are relaxed in the Scholtes way,
-``a >= 0, b >= 0, a_i b_i <= sigma``, and solved by a homotopy ``sigma -> 0``
-that warm-starts each step from the last (see :meth:`NLP.solve`).
+Complementarity is not this module's: the contact transcription poses its pairs with exact ℓ1 penalties and
+runs its own penalty ladder (:meth:`castrajectory.solve.contact.nlp.ContactNLP._ladder`).
 """
 from __future__ import annotations
 
 import hashlib
 import time
 from dataclasses import dataclass
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, Optional
 
 import casadi as ca
 import numpy as np
@@ -39,8 +38,8 @@ import numpy as np
 from . import budget, interrupt, jit
 from .assembly import Contribution, assemble, dense_vector
 from ..discretise.program import (  # noqa: F401  (X, P, Constraint: re-exported)
-    Constraint, P, Program, X, _column, _Group)
-from ..result import SUCCESS_STATUSES, HomotopyStep, NLPResult
+    Constraint, P, Program, X, _column, _Group, _nz)
+from ..result import SUCCESS_STATUSES, NLPResult
 
 #: Ipopt options used unless the caller overrides them.
 #: MUMPS scaling is switched off: on the large, sparse, square systems of this
@@ -229,11 +228,6 @@ def _gather_columns(src, idx: np.ndarray, n: int):
     return ca.reshape(_gather(src, flat), n, idx.shape[0] if idx.ndim == 2 else 1)
 
 
-def _nz(M):
-    """The structural nonzeros of an SX matrix as a dense column (constant zeros kept)."""
-    return ca.densify(ca.vertcat(*M.nonzeros())) if M.nnz() else ca.SX(0, 1)
-
-
 
 
 class NLP(Program):
@@ -249,8 +243,6 @@ class NLP(Program):
     # ------------------------------------------------------------------ solving
     def _ipopt_options(self, options, verbose):
         ipopt = dict(DEFAULT_IPOPT_OPTIONS)
-        if self.has_complementarity:
-            ipopt["bound_relax_factor"] = 0.0
         ipopt.update(options or {})
         if not verbose:
             ipopt.setdefault("print_level", 0)
@@ -458,22 +450,6 @@ class NLP(Program):
             self.build()
         return dict(self._functions)
 
-    def _comp_residual(self, x: np.ndarray, p: np.ndarray) -> Optional[float]:
-        """``max |a_i b_i|`` over every complementarity pair (expressions and element families)."""
-        if not self.has_complementarity:
-            return None
-        worst = 0.0
-        if self._comps:
-            if getattr(self, "_comp_fun", None) is None:
-                self._comp_fun = self.evaluator(ca.vertcat(*[ca.fabs(a * b) for _, a, b in self._comps]))
-            vals = np.asarray(self._comp_fun(x, p)).reshape(-1)
-            worst = max(worst, float(vals.max()) if vals.size else 0.0)
-        for name, fabs, args, count in self._comp_groups:
-            call = self._element_values(_Group(name, fabs, args, count, 0), x, p)
-            vals = np.asarray((fabs.map(count) if count > 1 else fabs)(*call)).reshape(-1)
-            worst = max(worst, float(vals.max()) if vals.size else 0.0)
-        return worst
-
     def _arguments(self, init, warm, bounds) -> dict:
         """Ipopt's ``x0, lbx, ubx, lbg, ubg`` from a guess by name, a warm start and bound overrides."""
         x0 = np.concatenate([b.init for b in self._vars])
@@ -548,7 +524,7 @@ class NLP(Program):
         result fails with ``Rows_Not_Verified`` and the caller solves.  Costs one evaluation of
         the rows, a small fraction of building the solver.
         """
-        if self._f_groups or self.has_complementarity or (
+        if self._f_groups or (
                 self._f is not None and not ca.SX(self._f).is_constant()):
             raise ValueError("check() is for square feasibility problems (constant objective, no complementarity)")
         t = time.perf_counter()
@@ -744,7 +720,6 @@ class NLP(Program):
 
     def solve(self, init: Optional[Dict[str, object]] = None, *, warm: Optional[NLPResult] = None,
               options: Optional[dict] = None, verbose: bool = False, expand: bool = False,
-              homotopy: Sequence[float] = (1e-1, 1e-2, 1e-3, 1e-5, 1e-7, 0.0),
               bounds: Optional[Dict[str, tuple]] = None) -> NLPResult:
         """Solve and return a :class:`~castrajectory.result.NLPResult` (never raises on non-convergence).
 
@@ -754,8 +729,6 @@ class NLP(Program):
         warm: a previous result of this NLP; its primal and dual values start the solve.
         options: Ipopt options overriding :data:`DEFAULT_IPOPT_OPTIONS`.
         verbose: stream Ipopt's banner and iteration log.
-        homotopy: relaxation values ``sigma`` used when the NLP has complementarity pairs;
-            each step warm-starts from the previous one.
         bounds: ``{name: (lb, ub)}`` overriding, for this solve only, the bounds of a
             variable block or a constraint (``(-inf, inf)`` switches a constraint off;
             ``lb == ub`` fixes variables, which Ipopt then removes).
@@ -772,48 +745,30 @@ class NLP(Program):
         if warm is not None and warm.lam_g is not None:
             args.update(lam_x0=warm.lam_x, lam_g0=warm.lam_g)
 
-        sigmas = list(homotopy) if self.has_complementarity else [None]
-        steps: List[HomotopyStep] = []
-        total_iter, total_time = 0, 0.0
-        sol, status = None, "Not_Solved"
-        for k, sigma in enumerate(sigmas):
-            if sigma is not None:
-                self.set_parameter("__sigma", sigma)
-            p = np.concatenate([b.init for b in self._params]) if self._params else np.zeros(0)
-            t = time.perf_counter()
-            if budget.remaining() == 0:
-                # the run's iteration budget is spent: not solved, and Ipopt not started
-                nx = np.asarray(args["x0"]).size
-                sol = {"x": args["x0"], "lam_x": np.zeros(nx), "lam_g": np.zeros(self._ng), "f": float("nan")}
-                status = "Maximum_Iterations_Exceeded"
-                break
+        p = np.concatenate([b.init for b in self._params]) if self._params else np.zeros(0)
+        t = time.perf_counter()
+        if budget.remaining() == 0:
+            # the run's iteration budget is spent: not solved, and Ipopt not started
+            nx = np.asarray(args["x0"]).size
+            sol = {"x": args["x0"], "lam_x": np.zeros(nx), "lam_g": np.zeros(self._ng), "f": float("nan")}
+            status, iters = "Maximum_Iterations_Exceeded", 0
+        else:
             # an interrupt stops Ipopt between iterations and is raised here, not reported as a
             # failed solve that a strategy would retry (solve.interrupt)
             with interrupt.watching():
                 sol = solver(p=p, **args)
             interrupt.raise_if_interrupted()
-            dt = time.perf_counter() - t
             stats = self.last_stats = solver.stats()
             status = stats.get("return_status", "unknown")
             iters = int(stats.get("iter_count", 0))
             budget.spend(iters)
-            total_iter += iters
-            total_time += dt
-            xk = np.asarray(sol["x"]).reshape(-1)
-            if sigma is not None:
-                steps.append(HomotopyStep(sigma, status, iters, dt, self._comp_residual(xk, p)))
-            if status not in SUCCESS_STATUSES:
-                break
-            args.update(x0=sol["x"], lam_x0=sol["lam_x"], lam_g0=sol["lam_g"])
+        total_time = time.perf_counter() - t
 
         x = np.asarray(sol["x"]).reshape(-1)
         lam_x = np.asarray(sol["lam_x"]).reshape(-1)
         lam_g = np.asarray(sol["lam_g"]).reshape(-1)
-        p = np.concatenate([b.init for b in self._params]) if self._params else np.zeros(0)
         success = status in SUCCESS_STATUSES
         message = NLPResult.describe_status(status)
-        if self.has_complementarity and success and steps[-1].sigma != 0.0:
-            message += f"; relaxation stopped at sigma = {steps[-1].sigma:g}"
         res = NLPResult(
             values=self._split(x, self._vars),
             multipliers={c.name: -lam_g[c.slice] for c in self._cons.values()},
@@ -822,11 +777,9 @@ class NLP(Program):
             solver_status=status,
             success=success,
             message=message,
-            iterations=total_iter,
+            iterations=iters,
             build_time_s=build_time,
             solve_time_s=total_time,
-            complementarity_residual=self._comp_residual(x, p),
-            homotopy=steps,
             x=x, lam_x=lam_x, lam_g=lam_g,
         )
         return res

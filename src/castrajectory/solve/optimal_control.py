@@ -36,7 +36,7 @@ import numpy as np
 from ..discretise.lagrangians import SCHEMES, discrete_mechanics
 from ..discretise.optimal_control import ControlTranscription, split_controls
 from ..models.mechanics import LagrangianSystem
-from ..result import ControlResult
+from ..result import ACCEPTABLE, ControlResult
 from ..validation import InputError, integer_at_least, one_of
 from . import memory
 from .nlp import NLP
@@ -396,7 +396,7 @@ class OptimalControl:
         opts = {**OCP_IPOPT, **(options or {})}
         res = tr.nlp.solve(init, options=opts, verbose=verbose, bounds=tr.bounds())
         acceptable = None
-        if res.solver_status == "Solved_To_Acceptable_Level":
+        if res.solver_status == ACCEPTABLE:
             res, acceptable = _remeasure(tr, res, opts, verbose)
         wall = _time.perf_counter() - t0
         vals = res.values
@@ -505,7 +505,7 @@ def _judge_acceptable(out: ControlResult, m: dict, cert: float) -> None:
     else:
         why = f"its march departs from the answer by {cert:.3g} (relative; at most {CERTIFICATE_TOL:g} certifies)"
         what = "refine the grid (N) or start from a better guess; a looser tol does not make it a motion"
-    out.fail("Solved_To_Acceptable_Level",
+    out.fail(ACCEPTABLE,
              f"Ipopt stopped at its acceptable level (the requested tol = {m['requested']:g} not reached), and "
              f"{why}: not ok (cost {first.objective:.12g}); {what}")
 

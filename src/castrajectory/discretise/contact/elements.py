@@ -21,13 +21,11 @@ import numpy as np
 
 from ...models.mechanics import LagrangianSystem
 from ...validation import InputError
-from ..lagrangians import DiscreteMechanics, rk4_step
+from ..lagrangians import GUESS_SUBSTEPS, DiscreteMechanics, rk4_step
 
 
 #: Weight of Σβ² (the split of impact-free steps), far below the penalties.
 SPLIT_WEIGHT = 1e-6
-#: RK4 substeps per step in the event-located guess.
-GUESS_SUBSTEPS = 4
 
 
 class ContactMechanics:
@@ -41,6 +39,7 @@ class ContactMechanics:
                              "contact scene")
         dm = DiscreteMechanics(system, scheme, control_points="step")
         self.system, self.dm = system, dm
+        self._derived: Dict[str, object] = {}
         self.n, self.c, self.e = n, c, e = dm.n, system.ncontact, system.contact.restitution
         #: stage values per part of a step (each step has two parts, split at its sub-node), and the
         #: constraint multipliers at those stages (none for the two-point schemes)
@@ -217,6 +216,13 @@ class ContactMechanics:
             self.acc_normal = ca.Function("acc_normal", [qk, v, U], [ca.mtimes(J(qk), acc(qk, v, U))])
 
     # ------------------------------------------------------------------ stages
+    def derived(self, key: str, build):
+        """What the layers above derive from these functions once (the compiled march step, its chunks), built by
+        ``build()`` on first use and kept with them."""
+        if key not in self._derived:
+            self._derived[key] = build()
+        return self._derived[key]
+
     def stage_guess(self, Q, S) -> np.ndarray:
         """Stages ``(L, 2s)`` on the straight lines of each step's parts, ``q_k → q̃_k`` and ``q̃_k → q_{k+1}``
         (``Q`` the ``L + 1`` nodes, ``S`` the ``L`` sub-nodes), at the scheme's stage times."""

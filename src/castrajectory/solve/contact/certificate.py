@@ -14,7 +14,7 @@ import math
 import numpy as np
 
 from ...discretise.contact.elements import ContactMechanics
-from ...result import NLPResult
+from . import modes as M
 from .march import discrete_march
 from .nlp import CONTACT_IPOPT
 
@@ -45,12 +45,6 @@ STEP_VALUES = ("qs", "beta", "nu", "mu", "mul", "fleft", "fratio")
 #: ... and a step's stages and their multipliers.  (A restarted round that took them too: the hopper at N = 20 cost
 #: 11.774 against 11.697 with galerkin4 and 11.187 against 11.154 with gauss4, the push to a target unchanged)
 STAGE_VALUES = ("zs", "lam", "lam_sub", "lam_stage")
-
-
-def _converged(res: NLPResult) -> bool:
-    """Ipopt solved it, to its tolerance or only to its acceptable level (whose answer the next solve or the
-    certificate takes up)."""
-    return res.success or res.solver_status == "Solved_To_Acceptable_Level"
 
 
 def _start_of(prog, V, q0):
@@ -97,7 +91,7 @@ def _polish(cm, prog, res, q0, N, scales, bounds, opts, verbose, steps):
         solves += 1
         got = _branch(cm, prog, q0, point, res.values, bounds, opts, rho, verbose, scales)
         steps.extend(got.homotopy)
-        if not _converged(got):
+        if not got.continuable:
             if solves == 1:
                 continue          # (the whole march's branch next)
             break
@@ -107,7 +101,7 @@ def _polish(cm, prog, res, q0, N, scales, bounds, opts, verbose, steps):
         # its steps are marched from the branch's modes first (:func:`.search._started`): where a step has two
         # solutions, the march checks the one the branch holds
         hint = (point["modes"], point["fmodes"] if "fmodes" in point else
-                np.full((N, 2 * cm.c), "-"))
+                np.full((N, 2 * cm.c), M.FREE))
     h, p0, U = _start_of(prog, res.values, q0)
     marched = _distance(discrete_march(cm, q0, p0, N, h, scales, controls=U if cm.nu else None,
                                        starts=_starts(cm, res.values, N, hint)),
@@ -137,9 +131,9 @@ def _local(cm, prog, V, q0, N, scales, hint=None, steps=None):
     # each step's march is kept for the values' next call, which marches only the steps not marched yet)
     key = b"".join(np.ascontiguousarray(V[k], float).tobytes() for k in sorted(V)) + \
         (b"" if hint is None else np.asarray(hint[0]).tobytes() + np.asarray(hint[1]).tobytes())
-    memo = getattr(prog, "_local_memo", None)
+    memo = prog.local_memo
     if memo is None or memo[0] != key:
-        memo = prog._local_memo = (key, {})
+        memo = prog.local_memo = (key, {})
     done = memo[1]
     return _local_marches(cm, prog, V, q0, N, scales, hint, range(N) if steps is None else steps, done)
 
@@ -206,16 +200,16 @@ def _branch(cm, prog, q0, point, values, bounds, opts, rho, verbose, scales, war
     if cm.friction:
         # a slot without friction force (an open contact: no force, so its ratio is free; the march fixes it at 0)
         # keeps its ratio in the cone, where the slip pair sets it against the slip
-        free = np.asarray(point["fmodes"]).reshape(-1) == "-"
+        free = np.asarray(point["fmodes"]).reshape(-1) == M.FREE
         lo_r, hi_r = branch["fratio"]
         muf = np.tile(np.concatenate([cm.mu_f, cm.mu_f]), N)
         branch["fratio"] = (np.where(free, -muf, lo_r), np.where(free, muf, hi_r))
     modes = np.asarray(point["modes"]).reshape(N, cm.c)
-    arrive = np.isin(modes, ("I", "C", "T", "F", "K"))
+    arrive = np.isin(modes, M.SUB_IMPACT)
     prog.nlp.set_parameter("timed", arrive.astype(float).reshape(-1))
-    prog.nlp.set_parameter("bounce", ((modes == "I") & np.asarray(point["bounced"], bool).reshape(N, cm.c))
+    prog.nlp.set_parameter("bounce", ((modes == M.I) & np.asarray(point["bounced"], bool).reshape(N, cm.c))
                            .astype(float).reshape(-1))
-    prog.nlp.set_parameter("node_impact", np.isin(modes, ("N", "P")).astype(float).reshape(-1))
+    prog.nlp.set_parameter("node_impact", np.isin(modes, M.AT_NODE).astype(float).reshape(-1))
     if warm:       # (a continuation's next step: from the last answer on the same branch)
         init = {k: np.asarray(v, float).copy() for k, v in values.items()}
     else:
@@ -233,7 +227,7 @@ def _branch(cm, prog, q0, point, values, bounds, opts, rho, verbose, scales, war
     # (one solved only to Ipopt's acceptable level is the polish's to certify and solve again from: the homotopy's
     # barrier from the march's point instead spent 3000 iterations on the hopper's first branch at N = 40, where
     # the small one reached its acceptable level in 456 and the next branch solved in 106)
-    if _converged(got):
+    if got.continuable:
         return got
     again = prog._ladder(init, opts, branch, [rho], verbose, "branch", "the march's branch")
     again.homotopy = list(got.homotopy) + list(again.homotopy)

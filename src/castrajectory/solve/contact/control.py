@@ -33,7 +33,7 @@ from __future__ import annotations
 import math
 import time as _time
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional
+from typing import List, Optional
 
 import casadi as ca
 import numpy as np
@@ -47,8 +47,9 @@ from .. import budget
 from ..nlp import NLP
 from ...result import SUCCESS_STATUSES, ControlResult
 from ...validation import InputError
-from .certificate import (CERTIFICATE_TOL, EDGE, STEP_VALUES, _branch, _converged, _local, _polish, _slips,
+from .certificate import (CERTIFICATE_TOL, EDGE, STEP_VALUES, _branch, _local, _polish, _slips,
                           _start_of, _zparts)
+from . import modes as M
 from .march import discrete_march
 from .nlp import CONTACT_IPOPT, ContactNLP
 from .strategy import _length_scale
@@ -111,17 +112,13 @@ class _Program(ContactControlTranscription, ContactNLP):
     #: a scaled product of 1e-8 with its force, was 2e-9 on the hopper, and the march flew from it.  At 1e-11 the
     #: products leave gaps below the march's tolerance)
     complementarity_target = COMPLEMENTARITY_TARGET
-
-
-_CACHE: Dict[tuple, ContactMechanics] = {}
+    #: the one-step marches of the last values certified (:func:`.certificate._local`): ``(key, {step: march})``
+    local_memo = None
 
 
 def mechanics(system, scheme: str) -> ContactMechanics:
-    """The contact elements of ``system`` and ``scheme``, built once per pair."""
-    key = (id(system), scheme)
-    if key not in _CACHE or _CACHE[key].system is not system:
-        _CACHE[key] = ContactMechanics(system, scheme)
-    return _CACHE[key]
+    """The contact elements of ``system`` and ``scheme``, built once per pair and kept with the system."""
+    return system.derived(("contact elements", scheme), lambda: ContactMechanics(system, scheme))
 
 
 @dataclass(kw_only=True)
@@ -353,10 +350,10 @@ def _solve_contact_control(system, T, N: int, scheme: str, start, end, running, 
             warm = prog._ladder(init, {**opts, **WARM_IPOPT,
                                        **({"max_iter": RESTART_ITER} if restarted or before is not None else {})},
                                 round_bounds, OCP_PENALTY, verbose, "rho", "Ipopt", warm=res)
-            if before is not None and not _converged(warm):
+            if before is not None and not warm.continuable:
                 steps.extend(warm.homotopy)
                 break                       # (a moved round that does not converge warm ends the moves)
-            if restarted and not _converged(warm):
+            if restarted and not warm.continuable:
                 steps.extend(warm.homotopy)
                 warm = prog._ladder(last, {**opts, **WARM_IPOPT}, round_bounds, OCP_PENALTY, verbose, "rho", "Ipopt",
                                     warm=res)
@@ -369,18 +366,18 @@ def _solve_contact_control(system, T, N: int, scheme: str, start, end, running, 
             warm = prog._ladder(init, {**opts, **NEAR_IPOPT}, round_bounds, OCP_PENALTY, verbose, "rho", "Ipopt")
         else:
             warm = None
-        if warm is not None and _converged(warm):
+        if warm is not None and warm.continuable:
             res = warm
         else:
             steps.extend(warm.homotopy if warm is not None else [])
             res = prog._ladder(last if restarted else init, opts, round_bounds, OCP_PENALTY, verbose, "rho", "Ipopt")
         steps.extend(res.homotopy)
-        if _converged(res) and before is None:
+        if res.continuable and before is None:
             answers.append((res, {name: prog.nlp.parameter_value(name) for name in prog.nlp.parameter_names}))
         # (a round Ipopt solved only to its acceptable level is read as the others are: the next round starts from
         # it with its arrivals.  Measured on the hopper at N = 40: its third round stopped so with its landing untimed,
         # and the fourth and fifth settled it, cost 10.346 where the answer of the third was 10.478)
-        if not _converged(res):
+        if not res.continuable:
             # (a later rung of the ladder failed -- restoration, or its iteration limit -- after an earlier one
             # converged short of complementarity: that one's controls are the polish's to march and solve on their
             # branch, as for any answer short of complementarity.  Measured on the battery's seed 1 with the hopper:
@@ -414,7 +411,7 @@ def _solve_contact_control(system, T, N: int, scheme: str, start, end, running, 
     if before is not None:
         res = _kept_moves(prog, res, *before)
     cert = marched = math.nan
-    if _converged(res) or res.solver_status in SUCCESS_STATUSES:
+    if res.continuable or res.solver_status in SUCCESS_STATUSES:
         # (also where the homotopy converged short of complementarity, a local minimum of the penalties: its
         # controls, marched, are a motion, and the program on that motion's branch is solved from it; measured on
         # the battery, 2 of 30 pushes to a target stopped so, at residuals 5.8e-3 and 0.45)
@@ -583,7 +580,7 @@ def _kept_moves(prog, res: NLPResult, start: NLPResult, params: dict) -> NLPResu
     (Measured on the hopper at N = 40, goal 0.7: moved round by round, its pinned landing and lift-off ran away from
     each other, the rounds spent the budget and ended uncertified at a cost of 14.8 against 11.22)"""
     c0 = prog.cost(start.values)
-    if (_converged(res) and res.success and not pinned(prog, res)
+    if (res.continuable and res.success and not pinned(prog, res)
             and float(prog.residual(res.values)) <= COMPLEMENTARITY_TARGET
             and prog.cost(res.values) <= c0 + 1e-9 * max(1.0, abs(c0))):
         return res
@@ -651,7 +648,7 @@ def _across(cm, prog, res: NLPResult, cert, marched, q0, N: int, scales, bounds,
             solves += 1
             if got.success and prog.cost(got.values) >= c0 - 1e-9 * max(1.0, abs(c0)):
                 on_node.append(edge)          # (converged across the node, and no cheaper there)
-            if not (_converged(got) and prog.cost(got.values) < c0 - 1e-9 * max(1.0, abs(c0))):
+            if not (got.continuable and prog.cost(got.values) < c0 - 1e-9 * max(1.0, abs(c0))):
                 continue
             got, c, m, polished = _polish(cm, prog, got, q0, N, scales, bounds, opts, verbose, steps)
             solves += polished
@@ -776,8 +773,8 @@ def slip_turns(cm: ContactMechanics, prog, V, q0, timed, scales):
             continue
         modes = np.asarray(pt["modes"]).reshape(-1)
         fm = np.asarray(pt["fmodes"]).reshape(-1)
-        for j in np.where(modes == "W")[0]:
-            out[k, j], ratio[k, j] = True, (-cm.mu_f[j] if fm[j] == "U" else cm.mu_f[j])
+        for j in np.where(modes == M.W)[0]:
+            out[k, j], ratio[k, j] = True, (-cm.mu_f[j] if fm[j] == M.UP else cm.mu_f[j])
     return out, ratio
 
 

@@ -181,7 +181,7 @@ def _turns(cm, fm, held, Q, Pm) -> np.ndarray:
     out = np.zeros(K, bool)
     if cm.fd != 1:
         return out
-    sl = [(j, 1.0 if fm[j] == "U" else -1.0) for j in range(cm.c) if held[j] and fm[j] in ("U", "D")]
+    sl = [(j, 1.0 if fm[j] == _modes.UP else -1.0) for j in range(cm.c) if held[j] and fm[j] in (_modes.UP, _modes.DOWN)]
     if not sl:
         return out
     V = cm.dm.velocities(Q.T, Pm.T)

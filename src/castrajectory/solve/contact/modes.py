@@ -22,6 +22,35 @@ FREE, STICK, UP, DOWN = "-", "S", "U", "D"
 FIX = "X"
 #: ... and, on a tangent plane (3-D), sliding against the slip's direction at the circular cone's edge
 SLIDE = "L"
+
+# The mode sets, named once (every test of a mode against a set uses one of these):
+#: an impact at the sub-node (the step's impulse μ there): Newton's law, caught, fixed by the sequential law, Stronge's
+SUB_IMPACT = (I, C, T, F, K)
+#: ... or a held contact's slip turning there: the contacts that arrive at the sub-node, whose slip counts after it
+AT_SUB = SUB_IMPACT + (W,)
+#: the contacts whose gap times the sub-node (it is on the surface there)
+TIMES_SUB = (I, C, T, K)
+#: the arrivals the march times by their gap alone (Newton's law or a catch)
+GAP_TIMED = (I, C)
+#: the contacts held through the first part of the step (their node force free, their sub-node gap closed)
+HELD = (H, R, W)
+#: the contacts closed at the step's next node
+CLOSES = (H, C, K, W)
+#: an impact at the step's first node (Newton's law there; P with its impulse fixed by the sequential law)
+AT_NODE = (N, P)
+#: impulses fixed by the sequential law (at the sub-node)
+SEQUENTIAL = (F, T)
+#: ... and at the node: the impacts exempt from Newton's law row
+LAW_FIXED = SEQUENTIAL + (P,)
+#: the contacts whose sub-node impulse μ is free (≥ 0)
+FREE_IMPULSE = (H, I, C, K, W)
+#: the contacts that may push at the sub-node in the search's cascade (an impulse shared by a timed arrival)
+PUSHING = (I, C, H, R)
+#: the contacts that must not penetrate at the sub-node
+KEPT_OUT = PUSHING + (W,)
+#: friction modes that slide with a positive slip velocity (the force against it): up, and on a plane's cone
+SLIDING_UP = (UP, SLIDE)
+
 #: A contact approaching faster than this many steps' worth of its normal acceleration arrives with an
 #: impact (resting contact approaches at about ½ step's worth): touching at a step's first node it takes the
 #: impact there (mode N), and an answer lists its impulse as an impact (solution.py).
@@ -32,7 +61,7 @@ def releases(modes) -> np.ndarray:
     """Per contact, 1 where its sub-node impulse μ⁻ is its share of the first part's force
     (:meth:`ContactMechanics.release_row`): held until an impact's sub-node and released there (mode R in a step
     with an impact at its sub-node: I, C, T, F or K), or held with its slip stopping or turning there (W)."""
-    impact = any(m in (I, C, T, F, K) for m in modes)
+    impact = any(m in SUB_IMPACT for m in modes)
     return np.array([float(impact and m == R or m == W) for m in modes])
 
 

@@ -10,6 +10,7 @@ from ...discretise.contact.elements import SPLIT_WEIGHT
 from ...discretise.contact.transcription import (ALPHA_MIN, COMPLEMENTARITY_TOL, PENALTY, TOUCH_TOL,
                                                  ContactTranscription)
 from ..nlp import NLP
+from . import modes as M
 
 
 #: Ipopt options of contact solves: bound_relax_factor 0 (impulses, forces and gaps stay exactly
@@ -83,27 +84,27 @@ class ContactNLP(ContactTranscription):
         the answer)."""
         c, L = self.cm.c, self.L
         modes = np.asarray(point["modes"]).reshape(L, c)
-        timed = np.isin(modes, ("I", "C", "T", "K"))
+        timed = np.isin(modes, M.TIMES_SUB)
         # the first timed contact of a step fixes its sub-node (simultaneous ones share it); a held contact whose slip
         # stops or turns there (W) times it by its slip (left_slip, below)
         first = timed & (np.cumsum(timed, axis=1) == 1)
-        turns = modes == "W"
+        turns = modes == M.W
         # (which slips stop or turn at a sub-node, for the answer: stop where the second part sticks)
-        fm_all = np.asarray(point.get("fmodes", np.full((L, 2 * c), "-")), dtype=object).reshape(L, 2 * c)
-        self.turns = [(int(k), int(j), "stop" if fm_all[k, c + j] == "S" else "turn") for k, j in zip(*np.where(turns))]
-        held = np.isin(modes, ("H", "R", "W"))
-        closes = np.isin(modes, ("H", "C", "K", "W"))
-        law = (modes == "I") & np.asarray(point["bounced"], bool).reshape(L, c)
-        node = np.isin(modes, ("N", "P")).reshape(-1)
-        fixed = np.isin(modes, ("F", "T")).reshape(-1)
+        fm_all = np.asarray(point.get("fmodes", np.full((L, 2 * c), M.FREE)), dtype=object).reshape(L, 2 * c)
+        self.turns = [(int(k), int(j), "stop" if fm_all[k, c + j] == M.STICK else "turn") for k, j in zip(*np.where(turns))]
+        held = np.isin(modes, M.HELD)
+        closes = np.isin(modes, M.CLOSES)
+        law = (modes == M.I) & np.asarray(point["bounced"], bool).reshape(L, c)
+        node = np.isin(modes, M.AT_NODE).reshape(-1)
+        fixed = np.isin(modes, M.SEQUENTIAL).reshape(-1)
         # the first part's closing impulses μ⁻: a contact released at its step's impact (R with an impact at the
         # sub-node) takes its share of the first part's force there (free, its release row zero); a plastic arrival
         # with friction (K) Stronge's impulse, fixed at the march's (ContactMechanics.sub_row)
-        release = (modes == "R") & np.any(np.isin(modes, ("I", "C", "T", "F", "K")), axis=1, keepdims=True) | turns
-        leftfix = modes == "K"
+        release = (modes == M.R) & np.any(np.isin(modes, M.SUB_IMPACT), axis=1, keepdims=True) | turns
+        leftfix = modes == M.K
         self.release = release.astype(float)
         self.nlp.set_parameter("release", self.release.reshape(-1))
-        self.law_exempt = np.isin(modes, ("F", "T", "P"))
+        self.law_exempt = np.isin(modes, M.LAW_FIXED)
         mul_march = np.asarray(point["mul"], float).reshape(-1)
         mu_march = np.asarray(point["mu"], float).reshape(-1)
         nu_march = np.asarray(point["nu"], float).reshape(-1)
@@ -118,7 +119,7 @@ class ContactNLP(ContactTranscription):
             "nu": (np.where(node, nu_march, 0.0), np.where(held.reshape(-1), np.inf, np.where(node, nu_march, 0.0))),
             # the sequential law's impulses (modes F and T) are the march's cascade
             "mu": (np.where(fixed, mu_march, 0.0),
-                   np.where(np.isin(modes, ("H", "I", "C", "K", "W")).reshape(-1), np.inf, np.where(fixed, mu_march, 0.0))),
+                   np.where(np.isin(modes, M.FREE_IMPULSE).reshape(-1), np.inf, np.where(fixed, mu_march, 0.0))),
             "mul": (np.where(leftfix.reshape(-1), mul_march, 0.0),
                     np.where(release.reshape(-1), np.inf, np.where(leftfix.reshape(-1), mul_march, 0.0))),
             "release": (np.where(release.reshape(-1), 0.0, -np.inf), np.where(release.reshape(-1), 0.0, np.inf)),
@@ -136,13 +137,13 @@ class ContactNLP(ContactTranscription):
             # (an impact's ratio, mode X, is the frictional impact law's: fixed at the march's value)
             rx = np.asarray(point["fratio"], float).reshape(L, 2 * c, d)
             fmd, mud = np.repeat(fm[..., None], d, axis=2), np.repeat(muf[..., None], d, axis=2)
-            rlo = np.select([fmd == "S", fmd == "U", fmd == "D", fmd == "X", fmd == "L"], [-mud, -mud, mud, rx, -mud], 0.0)
-            rhi = np.select([fmd == "S", fmd == "U", fmd == "D", fmd == "X", fmd == "L"], [mud, -mud, mud, rx, mud], 0.0)
-            slo = np.select([fmd == "S", fmd == "U"], [0.0, 0.0], -np.inf)
-            shi = np.select([fmd == "S", fmd == "D"], [0.0, 0.0], np.inf)
+            rlo = np.select([fmd == M.STICK, fmd == M.UP, fmd == M.DOWN, fmd == M.FIX, fmd == M.SLIDE], [-mud, -mud, mud, rx, -mud], 0.0)
+            rhi = np.select([fmd == M.STICK, fmd == M.UP, fmd == M.DOWN, fmd == M.FIX, fmd == M.SLIDE], [mud, -mud, mud, rx, mud], 0.0)
+            slo = np.select([fmd == M.STICK, fmd == M.UP], [0.0, 0.0], -np.inf)
+            shi = np.select([fmd == M.STICK, fmd == M.DOWN], [0.0, 0.0], np.inf)
             bounds["fratio"] = (rlo.reshape(-1), rhi.reshape(-1))
             # the contacts that arrive at their sub-node (an impact, caught or fixed by a law): slip after it
-            self.arrive = np.isin(modes, ("I", "C", "T", "F", "K", "W")).astype(float)
+            self.arrive = np.isin(modes, M.AT_SUB).astype(float)
             self.nlp.set_parameter("arrive", self.arrive.reshape(-1))
             bounds["slip"] = (slo.reshape(-1), shi.reshape(-1))
             # a released contact's share: its ratio and the slip before the impact as its node slot's mode (stick, or
@@ -151,21 +152,21 @@ class ContactNLP(ContactTranscription):
             rel_d = np.repeat(release[..., None], d, axis=2)
             fl_march = np.asarray(point["fleft"], float).reshape(L, c, d)
             kd = np.repeat(leftfix[..., None], d, axis=2)
-            flo = np.where(kd, fl_march, np.where(rel_d, np.select([fn == "S", fn == "U", fn == "D", fn == "L"],
+            flo = np.where(kd, fl_march, np.where(rel_d, np.select([fn == M.STICK, fn == M.UP, fn == M.DOWN, fn == M.SLIDE],
                                                                    [-mud[:, :c], -mud[:, :c], mud[:, :c], fl_march],
                                                                    0.0), 0.0))
-            fhi = np.where(kd, fl_march, np.where(rel_d, np.select([fn == "S", fn == "U", fn == "D", fn == "L"],
+            fhi = np.where(kd, fl_march, np.where(rel_d, np.select([fn == M.STICK, fn == M.UP, fn == M.DOWN, fn == M.SLIDE],
                                                                    [mud[:, :c], -mud[:, :c], mud[:, :c], fl_march],
                                                                    0.0), 0.0))
             bounds["fleft"] = (flo.reshape(-1), fhi.reshape(-1))
             turn_d = np.repeat(turns[..., None], d, axis=2)
-            bounds["left_slip"] = (np.where(turn_d | rel_d & np.isin(fn, ("S", "U")), 0.0, -np.inf).reshape(-1),
-                                   np.where(turn_d | rel_d & np.isin(fn, ("S", "D")), 0.0, np.inf).reshape(-1))
+            bounds["left_slip"] = (np.where(turn_d | rel_d & np.isin(fn, (M.STICK, M.UP)), 0.0, -np.inf).reshape(-1),
+                                   np.where(turn_d | rel_d & np.isin(fn, (M.STICK, M.DOWN)), 0.0, np.inf).reshape(-1))
             if d == 2:
                 # the circular cone: |ρ| ≤ μ_f sticking or sliding; sliding, ρ|s| + μ_f s = 0
-                on = np.isin(fm, ("S", "L"))
+                on = np.isin(fm, (M.STICK, M.SLIDE))
                 bounds["cone"] = (np.where(on, 0.0, -np.inf).reshape(-1), np.full(L * 2 * c, np.inf))
-                sl = np.repeat((fm == "L")[..., None], d, axis=2).reshape(-1)
+                sl = np.repeat((fm == M.SLIDE)[..., None], d, axis=2).reshape(-1)
                 bounds["slide"] = (np.where(sl, 0.0, -np.inf), np.where(sl, 0.0, np.inf))
         return bounds
 

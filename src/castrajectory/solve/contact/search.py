@@ -10,8 +10,8 @@ import numpy as np
 from ...discretise.contact.transcription import ALPHA_MIN
 from ...models.impact import (frictional_impact, frictional_impact_plane, sequential_frictional_impact,
                                sequential_impact)
-from .modes import (DOWN, FIX, FREE, IMPACT_SPEED_STEPS, SLIDE, STICK, UP, C, F, H, I, K, N, O, P, R, T, W,
-                    releases, turn_fraction)
+from .modes import (AT_SUB, DOWN, FIX, FREE, GAP_TIMED, IMPACT_SPEED_STEPS, KEPT_OUT, PUSHING, SLIDE, STICK, UP, C, F,
+                    H, I, K, N, O, P, R, T, W, releases, turn_fraction)
 from .step import _Step, restage
 
 #: Mode changes tried per step before the march gives up.
@@ -198,7 +198,7 @@ def _try(step: _Step, q, p, h, modes, x0, x, frac):
         start[:n] = q + frac * (x[n:2 * n] - q)
         start = restage(step.cm, start, q)
     xn, ok = step.solve(start, q, p, h, modes)
-    timed = [j for j, m in enumerate(modes) if m in (I, C)]
+    timed = [j for j, m in enumerate(modes) if m in GAP_TIMED]
     if timed and not (ok and ALPHA_MIN - 0.5 <= xn[2 * n] <= 0.5 - ALPHA_MIN):
         # Newton on the timing row left the step (its rows go like 1/α near α = 0): the time
         # of the impact by a bracketed search on the gap instead
@@ -262,7 +262,7 @@ def _friction(step: _Step, q, p, h, modes, x, mufix=None, rfix=None, mufixl=None
         fm = [FIX if fixed[i] else f for i, f in enumerate(fm)]
         rfix = np.where(np.isfinite(rfix), rfix, 0.0)
     tol = 1e-12 * step.vref
-    slips = np.array([m in (I, C, T, F, K, W) for m in modes], float)
+    slips = np.array([m in AT_SUB for m in modes], float)
     choices = (STICK, UP, DOWN) if d == 1 else (STICK, SLIDE)
 
     def judge(fm, x0):
@@ -426,7 +426,7 @@ def _enumerate(step: _Step, q, p, h, g_q, touch, modes0, crossed, x0, pen, tol, 
     opts = [((N, H, R, O) if modes0[j] == N else (H, R, O)) if touch[j] else (O, I, C) for j in cand]
     combos = []
     for choice in product(*opts):
-        if sum(1 for j, mj in zip(cand, choice) if not touch[j] and mj in (I, C)) > 1:
+        if sum(1 for j, mj in zip(cand, choice) if not touch[j] and mj in GAP_TIMED) > 1:
             continue
         modes = list(modes0)
         for j, mj in zip(cand, choice):
@@ -435,7 +435,7 @@ def _enumerate(step: _Step, q, p, h, g_q, touch, modes0, crossed, x0, pen, tol, 
     combos.sort(key=lambda t: t[0])
     free = _try(step, q, p, h, modes0, x0, x0, None)
     for _, modes in combos[:MAX_COMBINATIONS]:
-        timed = [j for j, mj in enumerate(modes) if mj in (I, C)]
+        timed = [j for j, mj in enumerate(modes) if mj in GAP_TIMED]
         frac = None
         if timed and free is not None:
             j = timed[0]
@@ -498,8 +498,8 @@ def _impact_law(step: _Step, q, p, h, x, modes, cascade: bool):
         involved = [j for j, m in enumerate(modes) if (m == N or m in (H, R)) and nu[j] > 0.0]
         qs, pm = q, p
     else:
-        involved = [j for j, m in enumerate(modes) if m in (I, C, H, R) and mu[j] > 0.0]
-        if not any(modes[j] in (I, C) for j in involved):
+        involved = [j for j, m in enumerate(modes) if m in PUSHING and mu[j] > 0.0]
+        if not any(modes[j] in GAP_TIMED for j in involved):
             return None                  # no impact
         qs, b = x[:n], float(x[2 * n])
         # the momentum before the impact: p̃⁻ and the released contacts' shares (ContactMechanics.release_row)
@@ -560,7 +560,7 @@ def _impact_law(step: _Step, q, p, h, x, modes, cascade: bool):
         new = [P if j in involved else m for j, m in enumerate(modes)]
     else:
         mufix[involved] = Pn
-        timing = next(j for j, m in enumerate(modes) if m in (I, C))
+        timing = next(j for j, m in enumerate(modes) if m in GAP_TIMED)
         new = [T if j == timing else F if j in involved else m for j, m in enumerate(modes)]
     if step.nf:
         xs = _friction(step, q, p, h, new, x, mufix=mufix, rfix=rfix)
@@ -635,7 +635,7 @@ def _next_modes(modes, touch, g0, gs, gn, nu, mu, b, pen, tol, step, finest, cat
             viol = tol - gn[j]
             if viol > worst:
                 worst, pick = viol, (j, C)
-        elif m in (I, C, H, R, W) and gs[j] < -pen:
+        elif m in KEPT_OUT and gs[j] < -pen:
             return "split"
     if pick is not None:
         j, m = pick
@@ -643,7 +643,7 @@ def _next_modes(modes, touch, g0, gs, gn, nu, mu, b, pen, tol, step, finest, cat
         out[j] = m
         return out, None
     if crossing:
-        timed = [j for j, m in enumerate(modes) if m in (I, C)]
+        timed = [j for j, m in enumerate(modes) if m in GAP_TIMED]
         fr = {j: _crossing_fraction(g0[j], gs[j], gn[j], alpha) for j in crossing}
         # a crossing closer to the next node than a sub-node may sit (1 − ALPHA_MIN of the step): the flight
         # lands on the node, whose impact the next step takes (mode N)

@@ -8,7 +8,7 @@ import numpy as np
 
 from ...discretise.contact.elements import ContactMechanics
 from .. import jit
-from .modes import DOWN, FIX, FREE, SLIDE, STICK, UP, C, F, H, I, K, N, P, R, T, W, releases
+from .modes import AT_SUB, CLOSES, DOWN, FIX, FREE, HELD, SLIDE, SLIDING_UP, STICK, TIMES_SUB, UP, F, I, K, N, P, T, W, releases
 
 #: Newton iterations of one step solve, and the largest row residual accepted (each row divided by
 #: its largest derivative, relative to the size of the unknowns).
@@ -27,15 +27,9 @@ class _Step:
         self.cm = cm
         # evaluated once per Newton step of every marched step: compiled once per system (jit's disk
         # cache; CasADi's VM where that is not possible)
-        if not hasattr(cm, "_march_compiled"):
-            cm._march_compiled = jit.compiled(cm.march_step)
-        self.fn = cm._march_compiled
-        if not hasattr(cm, "_march_packed"):
-            cm._march_packed = _packed(self.fn)
-        self.packed = cm._march_packed
-        if not hasattr(cm, "_chunk_fns"):
-            cm._chunk_fns = {}
-        self._chunks = cm._chunk_fns
+        self.fn = cm.derived("march step compiled", lambda: jit.compiled(cm.march_step))
+        self.packed = cm.derived("march step packed", lambda: _packed(self.fn))
+        self._chunks = cm.derived("march chunks", dict)
         self.ell, self.pref, self.vref = scales[0], scales[1], scales[2]
         self.n, self.c, self.m = cm.n, cm.c, cm.m
         # friction: two ratios ρ per contact (node force, sub-node impulse) at the end of the unknowns, and
@@ -89,7 +83,7 @@ class _Step:
         if self.nf:
             fm = fmodes or [FREE] * (2 * self.c)
             fargs = [np.array([f == STICK for f in fm], float),
-                     np.array([1.0 if f in (UP, SLIDE) else -1.0 if f == DOWN else 0.0 for f in fm])]
+                     np.array([1.0 if f in SLIDING_UP else -1.0 if f == DOWN else 0.0 for f in fm])]
         x0 = np.zeros(self.cm.nx) if x0 is None else x0
         # (the controls of the chunk's steps as columns, one per step: a mapped input)
         uargs = [np.asarray(controls, float).reshape(K, -1).T] if self.cm.nu else []
@@ -123,9 +117,9 @@ class _Step:
         t, held, closed, law, node, fixed, nfixed = (np.zeros(c) for _ in range(7))
         for j, m in enumerate(modes):
             nfixed[j] = m == P
-            t[j] = m in (I, C, T, K)
-            held[j] = m in (H, R, W)
-            closed[j] = m in (H, C, K, W)
+            t[j] = m in TIMES_SUB
+            held[j] = m in HELD
+            closed[j] = m in CLOSES
             law[j] = m == I
             node[j] = m == N
             fixed[j] = m in (F, T)
@@ -154,9 +148,9 @@ class _Step:
         if self.nf:
             fm = fmodes or [FREE] * (2 * c)
             args = args + (np.array([f == STICK for f in fm], float),
-                           np.array([1.0 if f in (UP, SLIDE) else -1.0 if f == DOWN else 0.0 for f in fm]),
+                           np.array([1.0 if f in SLIDING_UP else -1.0 if f == DOWN else 0.0 for f in fm]),
                            np.array([f == FIX for f in fm], float), np.zeros(2 * c * self.fd) if rfix is None else rfix,
-                           np.array([m in (I, C, T, F, K, W) for m in modes], float),
+                           np.array([m in AT_SUB for m in modes], float),
                            np.zeros(c * self.fd) if rfixl is None else rfixl)
         small = 0
         size0 = 1.0 + float(np.max(np.abs(x)))
