@@ -2,7 +2,7 @@
 
 Every step of the answer is marched by the contact march from the answer's own node and incoming momentum under its
 control (:func:`_local`), and must land on the answer's next node (relative distance at most
-:data:`CERTIFICATE_TOL`).  Where a step does not, the program is solved again on a branch of the march
+``certificate_tol``).  Where a step does not, the program is solved again on a branch of the march
 (:func:`_branch`: its modes fixed, the controls free) and certified again (:func:`_polish`); a branch's answer is
 marched from the branch's own modes (:func:`.search._started`).  The timing rounds and the answer are
 :mod:`.control`'s.
@@ -17,27 +17,7 @@ from ...discretise.contact.elements import ContactMechanics
 from . import modes as M
 from .march import discrete_march
 from .nlp import CONTACT_IPOPT
-
-#: Ipopt iterations of a branch solve's first try, from its march's motion with a small barrier (see _branch).
-BRANCH_SMALL_ITER = 500
-
-
-#: Solves on the march's branch at most (step 5 of the module docstring) ... and while each one's certificate is
-#: below half the last one's, up to POLISH_CONTRACTING (a branch holds an impact law's impulses at its march's
-#: values, which the answer's motion then moves: the polish is a fixed-point iteration on them)
-POLISH_ROUNDS = 3
-POLISH_CONTRACTING = 6
-
-
-#: The march of the optimal controls must reproduce the optimal nodes to this, relative to their scale.
-CERTIFICATE_TOL = 1e-7
-
-
-#: The program's timed sub-nodes stay this fraction of their step from its nodes (β in [EDGE − ½, ½ − EDGE]), inside
-#: the window where the march times an event (ALPHA_MIN): an event the optimiser pushes onto a node is then a
-#: step the march times as the answer does, not one that it takes at the node (mode N, a different step map)
-EDGE = 1e-3
-
+from .state import Problem
 
 #: A step's unknowns of the program that a one-step march gives (its nodes and stages apart): a restarted round takes
 #: these (:func:`.control._restart`), the branch point (:func:`_local_point`) these and the stages
@@ -59,7 +39,7 @@ def _start_of(prog, V, q0):
     return h, p0, U
 
 
-def _polish(cm, prog, res, q0, N, scales, bounds, opts, verbose, steps):
+def _polish(P: Problem, res):
     """Step 5: certify the answer, each of its steps marched from its own node (:func:`_local`); where a step does not
     reproduce it, solve the program again on a branch of the march (its modes fixed, :meth:`ContactNLP.mode_bounds`;
     the controls free) and certify again.  The first branch is the answer's own steps' (:func:`_local_point`: each
@@ -70,16 +50,17 @@ def _polish(cm, prog, res, q0, N, scales, bounds, opts, verbose, steps):
     side the branch holds.  ``(result, certificate, march distance, solves)``: the
     certificate is the last one-step distance, the march distance that of the whole march from the initial state
     (``inf`` where a march stopped)."""
+    cm, prog, q0, N, scales, o = P.cm, P.prog, P.q0, P.N, P.scales, P.o
     rho = float(np.asarray(prog.nlp.parameter_value("rho")).reshape(-1)[0])
     solves, hint, last = 0, None, math.inf
     while True:
-        cert, local = _local(cm, prog, res.values, q0, N, scales, hint)
+        cert, local = _local(P, res.values, hint)
         # (a frictional impact's law (modes T, K): the branch fixes its impulse at the march's value, and the answer's
         # motion moves the law's; each branch from the last answer's march shrinks that mismatch.  Measured on the
         # battery's seed 1 hopper goal #19: 2.7e-7, then a turn elsewhere 3.3e-5, then 4.7e-8 solved only to Ipopt's
         # acceptable level, where the three solves ran out)
-        if (cert <= CERTIFICATE_TOL and res.success) or solves >= POLISH_CONTRACTING or \
-                (solves >= POLISH_ROUNDS and not cert < 0.5 * last):
+        if (cert <= o.certificate_tol and res.success) or solves >= o.polish_contracting or \
+                (solves >= o.polish_rounds and not cert < 0.5 * last):
             break
         last = cert
         point = _local_point(cm, res.values, local, N) if solves == 0 else None
@@ -89,8 +70,8 @@ def _polish(cm, prog, res, q0, N, scales, bounds, opts, verbose, steps):
             if point is None or point["steps"].size != N:
                 break
         solves += 1
-        got = _branch(cm, prog, q0, point, res.values, bounds, opts, rho, verbose, scales)
-        steps.extend(got.homotopy)
+        got = _branch(P, point, res.values, P.bounds, P.ipopt, rho)
+        P.steps.extend(got.homotopy)
         if not got.continuable:
             if solves == 1:
                 continue          # (the whole march's branch next)
@@ -119,7 +100,7 @@ def _starts(cm, V, N, hint):
     return [(list(M[k]), list(F[k]), X[k]) for k in range(N)]
 
 
-def _local(cm, prog, V, q0, N, scales, hint=None, steps=None):
+def _local(P: Problem, V, hint=None, steps=None):
     """The one-step certificate: every step of the answer marched by the contact march from the answer's own node
     ``q_k`` and incoming momentum ``p_k⁻`` under its control, its end against the answer's ``q_{k+1}``; the largest
     distance relative to ``max(1, max |q|)`` (``inf`` where a step's march fails), and the steps' marches (``None``
@@ -131,14 +112,14 @@ def _local(cm, prog, V, q0, N, scales, hint=None, steps=None):
     # each step's march is kept for the values' next call, which marches only the steps not marched yet)
     key = b"".join(np.ascontiguousarray(V[k], float).tobytes() for k in sorted(V)) + \
         (b"" if hint is None else np.asarray(hint[0]).tobytes() + np.asarray(hint[1]).tobytes())
-    memo = prog.local_memo
+    memo = P.prog.local_memo
     if memo is None or memo[0] != key:
-        memo = prog.local_memo = (key, {})
-    done = memo[1]
-    return _local_marches(cm, prog, V, q0, N, scales, hint, range(N) if steps is None else steps, done)
+        memo = P.prog.local_memo = (key, {})
+    return _local_marches(P, V, hint, range(P.N) if steps is None else steps, memo[1])
 
 
-def _local_marches(cm, prog, V, q0, N, scales, hint, steps, done):
+def _local_marches(P: Problem, V, hint, steps, done):
+    cm, prog, q0, N, scales = P.cm, P.prog, P.q0, P.N, P.scales
     n = cm.n
     h, p0, U = _start_of(prog, V, q0)
     Q, S, B = V["q"].reshape(N + 1, n), V["qs"].reshape(N, n), V["beta"].reshape(N)
@@ -189,13 +170,13 @@ def _local_point(cm, V, marches, N):
     return out
 
 
-def _branch(cm, prog, q0, point, values, bounds, opts, rho, verbose, scales, warm=False):
+def _branch(P: Problem, point, values, bounds, opts, rho, warm=False):
     """The program on the branch of the march ``point`` (its modes fixed, :meth:`ContactNLP.mode_bounds`; the
     controls, a free final time and a free start free), from ``point`` (the rest from ``values``)."""
-    N = prog.L
+    cm, prog, q0, N, verbose, e = P.cm, P.prog, P.q0, P.N, P.verbose, P.o.edge
     branch = prog.mode_bounds(q0, point)
-    # (its timed sub-nodes inside the march's window, as a round's: EDGE)
-    branch["beta"] = tuple(np.clip(b, EDGE - 0.5, 0.5 - EDGE) for b in branch["beta"])
+    # (its timed sub-nodes inside the march's window, as a round's: ``edge``)
+    branch["beta"] = tuple(np.clip(b, e - 0.5, 0.5 - e) for b in branch["beta"])
     branch.update(bounds)
     if cm.friction:
         # a slot without friction force (an open contact: no force, so its ratio is free; the march fixes it at 0)
@@ -206,10 +187,8 @@ def _branch(cm, prog, q0, point, values, bounds, opts, rho, verbose, scales, war
         branch["fratio"] = (np.where(free, -muf, lo_r), np.where(free, muf, hi_r))
     modes = np.asarray(point["modes"]).reshape(N, cm.c)
     arrive = np.isin(modes, M.SUB_IMPACT)
-    prog.nlp.set_parameter("timed", arrive.astype(float).reshape(-1))
-    prog.nlp.set_parameter("bounce", ((modes == M.I) & np.asarray(point["bounced"], bool).reshape(N, cm.c))
-                           .astype(float).reshape(-1))
-    prog.nlp.set_parameter("node_impact", np.isin(modes, M.AT_NODE).astype(float).reshape(-1))
+    prog.hold(timed=arrive, bounce=(modes == M.I) & np.asarray(point["bounced"], bool).reshape(N, cm.c),
+              node_impact=np.isin(modes, M.AT_NODE))
     if warm:       # (a continuation's next step: from the last answer on the same branch)
         init = {k: np.asarray(v, float).copy() for k, v in values.items()}
     else:
@@ -217,13 +196,13 @@ def _branch(cm, prog, q0, point, values, bounds, opts, rho, verbose, scales, war
         for k, v in values.items():
             init.setdefault(k, np.asarray(v, float).copy())
         if cm.friction:
-            init.update(_slips(cm, prog, init, scales[2]))
-    prog.nlp.set_parameter("law_length", prog.law_lengths(point).reshape(-1))
+            init.update(_slips(cm, prog, init, P.scales[2]))
+    prog.set_law_lengths(point)
     # (the branch starts from a motion that satisfies its rows.  Two barriers, measured on the push to a target: the
     # initial-value branch's small start (1e-8, pushes 1e-8) keeps that point and solved the branch of a slip that
     # stops inside a step at N = 320, where the homotopy's (0.1 adaptive, pushes 1e-2) spent 3000 iterations; at
     # N = 80 the other way round.  The small one first, capped, then the homotopy's)
-    got = prog._ladder(init, _small(opts), branch, [rho], verbose, "branch", "the march's branch")
+    got = prog._ladder(init, _small(opts, P.o.branch_small_iter), branch, [rho], verbose, "branch", "the march's branch")
     # (one solved only to Ipopt's acceptable level is the polish's to certify and solve again from: the homotopy's
     # barrier from the march's point instead spent 3000 iterations on the hopper's first branch at N = 40, where
     # the small one reached its acceptable level in 456 and the next branch solved in 106)
@@ -234,12 +213,12 @@ def _branch(cm, prog, q0, point, values, bounds, opts, rho, verbose, scales, war
     return again
 
 
-def _small(opts) -> dict:
+def _small(opts, cap: int) -> dict:
     """``opts`` with the initial-value program's small barrier start (nothing pushed off its bounds), monotone,
-    capped at BRANCH_SMALL_ITER iterations: a solve from a motion that satisfies its rows."""
+    capped at ``cap`` iterations: a solve from a motion that satisfies its rows."""
     return {**opts, **{k: CONTACT_IPOPT[k] for k in ("mu_init", "bound_push", "bound_frac", "slack_bound_push",
                                                      "slack_bound_frac")}, "mu_strategy": "monotone",
-            "max_iter": min(int(opts.get("max_iter", 3000)), BRANCH_SMALL_ITER)}
+            "max_iter": min(int(opts.get("max_iter", 3000)), cap)}
 
 
 def _slips(cm: ContactMechanics, prog, init, vref) -> dict:

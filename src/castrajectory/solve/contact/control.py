@@ -11,15 +11,15 @@ The program is :class:`castrajectory.discretise.contact.control.ContactControlTr
    of lengths ``αh`` and ``(1 − α)h`` are a different step map, and the cost moved ``β`` to its bounds.)  A timed
    step's sub-node is its arrival's, on the surface.  The steps where a held contact's slip stops or turns are timed
    too, as the march times them (its mode W, :func:`slip_turns`): the sub-node at the turn, where the slip velocity
-   vanishes.  A timed sub-node stays :data:`EDGE` of its step from the nodes, inside the window where the march
+   vanishes.  A timed sub-node stays ``edge`` (:class:`.options.ContactControlOptions`) of its step from the nodes, inside the window where the march
    times an event.  Which steps arrive or turn is read from the solution and the program solved again, warm, until
-   it no longer changes (:data:`TIMING_ROUNDS`); the steps whose events changed start the next round from their
+   it no longer changes (``timing_rounds``); the steps whose events changed start the next round from their
    one-step marches, which time those events (:func:`_restart`).
 3. **Penalty ladder**: the exact ℓ1 penalties of the complementarity pairs rise (``PENALTY``), each solve warm
    started from the last, until the scaled complementarity residual is at most ``COMPLEMENTARITY_TOL``.
 4. **Certificate** (:mod:`.certificate`): every step of the answer is marched by the contact march from the answer's own node and
    incoming momentum under its control, and must land on the answer's next node (relative distance at most
-   :data:`CERTIFICATE_TOL`): every step is then a step of the system under its own controls, impacts and friction
+   ``certificate_tol``): every step is then a step of the system under its own controls, impacts and friction
    included (the one-step certificate, as DMOC's).  Where a step does not, the program is solved again on a branch
    of the march (step 5): first the answer's own steps' (each step's modes those of its one-step march), then that
    of the optimal controls marched from the initial state.  An answer not certified is a failure,
@@ -47,71 +47,22 @@ from .. import budget
 from ..nlp import NLP
 from ...result import SUCCESS_STATUSES, ControlResult
 from ...validation import InputError
-from .certificate import (CERTIFICATE_TOL, EDGE, STEP_VALUES, _branch, _local, _polish, _slips,
-                          _start_of, _zparts)
+from .certificate import STEP_VALUES, _branch, _local, _polish, _slips, _start_of, _zparts
 from . import modes as M
 from .march import discrete_march
 from .nlp import CONTACT_IPOPT, ContactNLP
+from .options import ContactControlOptions
+from .policies import STARTS, solve_round
+from .state import Attempt, Branch, Problem, Round
 from .strategy import _length_scale
 from .strategy import _scales as strategy_scales
-
-#: Ipopt options of the contact-implicit solve, on top of CONTACT_IPOPT.  The initial-value program starts its barrier
-#: at 1e-8 (its guess is the answer); here the guess is a motion far from the optimum, and from there a small
-#: barrier let the first iterations throw the block off the floor into a local minimum of the penalties (N = 20:
-#: Ipopt's default barrier start solved it, 253 iterations).  The adaptive barrier: 75 iterations (N = 20), and
-#: on the ladder of grids 15 on N = 80, 23 on N = 160, where the monotone one took 607 there and stopped on
-#: a worse motion (cost +0.41).
-#: The optimality tolerance is Ipopt's default, 1e-8 (the initial-value program's 1e-10 is a feasibility
-#: problem's): the hopper at N = 40 stopped at Ipopt's acceptable level on every branch at 1e-10, its dual
-#: infeasibility about 1e-9, and solved to 1e-8 in 7 s, certified to 7e-12.  (It costs the bounce to a target
-#: four digits of its launch speed, 1.5e-11 against 2e-15.  Accepting the acceptable level with its tolerances
-#: tightened to 1e-8 instead ground the hopper's branches to their iteration limits)
-OCP_CONTACT_IPOPT = {"tol": 1e-8, "max_iter": 3000, "mumps_pivtol": 1e-8, "mu_init": 1e-1, "mu_strategy": "adaptive",
-                     "bound_push": 1e-2, "bound_frac": 1e-2, "slack_bound_push": 1e-2, "slack_bound_frac": 1e-2}
-#: Ipopt's warm start of a timing round from the last round's primal-dual point: a small barrier, nothing pushed
-WARM_IPOPT = {"warm_start_init_point": "yes", "mu_init": 1e-6, "warm_start_bound_push": 1e-9,
-              "warm_start_mult_bound_push": 1e-9, "warm_start_bound_frac": 1e-9, "warm_start_slack_bound_push": 1e-9,
-              "warm_start_slack_bound_frac": 1e-9}
-#: Ipopt's start of the ladder of grids' first round, from a motion near the optimum: a small barrier (adaptive, as
-#: the homotopy's), nothing pushed off its bounds.  (Monotone from 1e-8, as a branch's first try, it stopped with
-#: the block pushes' costs 2.5e-7 off their exact discrete optima, at the barrier's own perturbation)
-NEAR_IPOPT = {"mu_init": 1e-6, "bound_push": 1e-8, "bound_frac": 1e-8, "slack_bound_push": 1e-8,
-              "slack_bound_frac": 1e-8}
-#: The penalty ladder of the contact-implicit solve.
-OCP_PENALTY = (1e3, 1e4, 1e5, 1e6)
-#: Ipopt iterations of one contact-implicit solve in all (its rounds, rungs, branches and coarser grids), where the
-#: run sets no budget of its own.  (Certified answers took at most 6740 over the batteries' seeds 1 and 2 with the
-#: hopper, 44 s; a hopper goal that did not certify ran 9873, 65 s, past the battery's 60, and at 8000 it took 60.4 s
-#: with two batteries sharing the machine's two cores)
-ITERATION_BUDGET = 7000
-#: Solves with the arrivals read from the last answer, at most (step 2 of the module docstring).
-TIMING_ROUNDS = 6
-#: Timing rounds beyond TIMING_ROUNDS while an event pinned at its window's edge moves to the next step
-#: (_move_edge_arrivals).  (The ball off a wall walks its impact 4 steps in 4 rounds)
-MOVE_ROUNDS = 6
-#: Ipopt iterations of a restarted round's warm solve (:func:`_restart`), after which it starts from the last answer
-#: (restarted rounds took at most 451 on the hopper's goals 0.53, 0.7, 0.85 and 0.98)
-RESTART_ITER = 500
-#: Ipopt iterations of one step of the end conditions' continuation (keep_modes).
-CONTINUATION_ITER = 150
-#: A grid of more steps than this starts from the controls of the answer on half as many (see solve_contact_control).
-LADDER_MAX = 32
-#: The contact-implicit ladder's complementarity target (ContactNLP.complementarity_target; it fails above
-#: COMPLEMENTARITY_TOL only)
-COMPLEMENTARITY_TARGET = 1e-11
-#: A node force above this fraction of the largest closes its node (arrivals)
-NODE_FORCE = 1e-6
-#: A biactive pair's multiplier of the descent sign above this (relative to max(1, |cost|)) is a descent found by
-#: flipping the pair's branch (b_stationarity); Ipopt's multipliers hold to its dual tolerance
-B_TOL = 1e-6
-
 
 class _Program(ContactControlTranscription, ContactNLP):
     program = NLP
     #: (the certificate's march takes a contact as touching within TOUCH_TOL ℓ: a held contact's gap, at
     #: a scaled product of 1e-8 with its force, was 2e-9 on the hopper, and the march flew from it.  At 1e-11 the
     #: products leave gaps below the march's tolerance)
-    complementarity_target = COMPLEMENTARITY_TARGET
+    complementarity_target = ContactControlOptions.complementarity_target
     #: the one-step marches of the last values certified (:func:`.certificate._local`): ``(key, {step: march})``
     local_memo = None
 
@@ -129,7 +80,7 @@ class ContactControlResult(ControlResult):
     (``impact_times``, one list per contact: the sub-node times of the steps where the contact arrives with an
     impulse), ``complementarity``: the scaled complementarity residual at the answer (the penalties' pairs, as
     the initial-value program measures it), ``homotopy``: the penalty steps of every timing round, ``certificate``:
-    each step of the optimal controls marched from the answer's own node against its next one (``CERTIFICATE_TOL``),
+    each step of the optimal controls marched from the answer's own node against its next one (``certificate_tol``),
     and ``march_distance``: the whole march from the initial state against the answer."""
 
     qs: Optional[np.ndarray] = None
@@ -147,7 +98,7 @@ class ContactControlResult(ControlResult):
     cost_estimate: float = math.nan
     #: the B-stationarity proxy (:func:`b_stationarity`): the pairs whose both factors vanish, the largest multiplier
     #: there that signals a descent by flipping the pair's branch (relative to max(1, |cost|)), and whether it is at
-    #: most B_TOL (no descent found)
+    #: most ``b_tol`` (no descent found)
     biactive: int = 0
     b_violation: float = math.nan
     b_stationary: bool = False
@@ -181,9 +132,10 @@ def _scales(system, q0, v0, length: float, u, T: float):
     return strategy_scales(system, q0, v0, length, max(acc, length / T ** 2))
 
 
-def arrivals(cm: ContactMechanics, Q, S, tol: float, NU=None, p_ref: float = 0.0) -> np.ndarray:
+def arrivals(cm: ContactMechanics, Q, S, tol: float, NU=None, p_ref: float = 0.0,
+             node_force: float = ContactControlOptions.node_force) -> np.ndarray:
     """Per step and contact: the contact arrives in the step (open at ``q_k``, closed at ``q̃_k`` or ``q_{k+1}``).
-    With the node forces ``NU`` (``(L, c)``), a node whose force is above ``NODE_FORCE`` of the largest (and of the
+    With the node forces ``NU`` (``(L, c)``), a node whose force is above ``node_force`` of the largest (and of the
     momentum scale ``p_ref``) is closed whatever its gap: an interior point leaves a held contact's gap at ``1e-9``
     (its product with the force at Ipopt's tolerance), and read as open, the hopper's stance was an arrival at every
     such node.  (Measured against the largest force alone, a motion with no held contact -- a ball off a wall, every
@@ -197,7 +149,7 @@ def arrivals(cm: ContactMechanics, Q, S, tol: float, NU=None, p_ref: float = 0.0
     opened = gq[:-1] > tol
     if NU is not None:
         NU = np.asarray(NU, float).reshape(L, cm.c)
-        opened &= NU <= NODE_FORCE * max(float(np.max(NU, initial=0.0)), float(p_ref), 1e-300)
+        opened &= NU <= node_force * max(float(np.max(NU, initial=0.0)), float(p_ref), 1e-300)
     return opened & (np.minimum(gs, gq[1:]) <= tol)
 
 
@@ -211,24 +163,32 @@ def bounces(prog, Q, timed: np.ndarray) -> np.ndarray:
 
 def solve_contact_control(system, T, N: int, scheme: str, start, end, running, final, u_bounds,
                           controls, guess: Optional[dict] = None, options: Optional[dict] = None,
-                          verbose: bool = False, keep_modes: bool = False, path=()) -> ContactControlResult:
-    """Solve a contact-implicit optimal-control problem (:func:`_solve_contact_control`) within
-    :data:`ITERATION_BUDGET` Ipopt iterations in all, or a run's own budget (``--max-iter``) where one is set."""
+                          verbose: bool = False, keep_modes: bool = False, path=(),
+                          contact: Optional[ContactControlOptions] = None) -> ContactControlResult:
+    """Solve a contact-implicit optimal-control problem (:func:`_solve_contact_control`) within the settings'
+    ``iteration_budget`` Ipopt iterations in all, or a run's own budget (``--max-iter``) where one is set.
+    ``options``: Ipopt's options on top of the settings' ``ipopt``; ``contact``: the settings
+    (:class:`ContactControlOptions`, the library's by default)."""
+    o = contact if contact is not None else ContactControlOptions()
+    if not isinstance(o, ContactControlOptions):
+        raise InputError(f"contact takes a ContactControlOptions (got {type(o).__name__})")
+    unknown = [name for name in o.starts if name not in STARTS]
+    if unknown:
+        raise InputError(f"unknown start policies {unknown}: the policies are {sorted(STARTS)}")
     args = (system, T, N, scheme, start, end, running, final, u_bounds, controls, guess, options, verbose, keep_modes,
-            path)
+            path, o)
     if budget.remaining() is not None:
         return _solve_contact_control(*args)
-    with budget.iterations(ITERATION_BUDGET):
+    with budget.iterations(o.iteration_budget):
         out = _solve_contact_control(*args)
         if not out.success and budget.remaining() == 0:
-            out.message = f"{out.message} (the solve's budget of {ITERATION_BUDGET} Ipopt iterations is spent)"
+            out.message = f"{out.message} (the solve's budget of {o.iteration_budget} Ipopt iterations is spent)"
     return out
 
 
 def _solve_contact_control(system, T, N: int, scheme: str, start, end, running, final, u_bounds,
-                           controls, guess: Optional[dict] = None, options: Optional[dict] = None,
-                           verbose: bool = False, keep_modes: bool = False, path=(),
-                           elastic: bool = True) -> ContactControlResult:
+                           controls, guess, options, verbose: bool, keep_modes: bool, path,
+                           o: ContactControlOptions, elastic: bool = True) -> ContactControlResult:
     """Solve a contact-implicit optimal-control problem (module docstring).  ``T``: the horizon, or ``(lo, hi)`` for
     a free final time; ``start``, ``end``: ``(q, q̇)`` with NaN for a free entry (``q̇`` ``None``: free; the start's
     ``q`` given in full, NaN entries of its ``q̇`` are unknowns); ``running(q, v, u, t)``, ``final(q, v, T)``: CasADi
@@ -239,24 +199,60 @@ def _solve_contact_control(system, T, N: int, scheme: str, start, end, running, 
     and slides), solved on that branch alone: the number and order of the impacts are the guess's choice (a bounce
     to a target after k bounces), and no homotopy runs."""
     t_all = _time.perf_counter()
-    free_time = tuple(T) if isinstance(T, (tuple, list)) else None
-    rungs: List[int] = []
-    prior = None
-    if guess is None and N > LADDER_MAX:
+    problem = (system, T, scheme, start, end, running, final, u_bounds, controls)
+    prior, rungs = None, []
+    if guess is None and N > o.ladder_max and not keep_modes:
         # the ladder of grids (as for the smooth problem, OptimalControl.solve): the answer on half the steps, its
         # controls interpolated at this grid's steps (and its horizon and start), is the guess here
-        prior = solve_contact_control(system, T, (N + 1) // 2, scheme, start, end, running, final, u_bounds, controls,
-                                      None, options, verbose, keep_modes, path) if not keep_modes else None
-        if prior is not None and prior.success:
-            tu = prior.T / N * (np.arange(N) + 0.5)
-            guess = {"T": prior.T, "qd0": prior.v[0]}
-            if prior.u is not None and np.size(prior.u):      # (a system without controls has none to interpolate)
-                guess["u"] = np.column_stack([np.interp(tu, prior.t_u, prior.u[:, j]) for j in range(prior.u.shape[1])])
-            rungs = prior.grids
+        prior = _solve_contact_control(system, T, (N + 1) // 2, scheme, start, end, running, final, u_bounds, controls,
+                                       None, options, verbose, keep_modes, path, o)
+        if prior.success:
+            guess, rungs = _interpolated(prior, N), prior.grids
+    P, init, marched, guess_time = _setup(problem, N, guess, options, verbose, keep_modes, path, o)
+    (qN, vN) = end
+    if keep_modes:
+        res, rounds, answers = _continued(P, marched, init, qN, vN), 1, []
+    else:
+        res, rounds, answers = _timing_rounds(P, init, near=bool(rungs))
+    res, cert, marched, rounds = _certified(P, res, answers, rounds, keep_modes)
+    on_node = []
+    if not keep_modes and cert <= o.certificate_tol and res.success:
+        res, cert, marched, moved, on_node = _across(P, res, cert, marched)
+        rounds += moved
+    out = _answer(system, P, res, rounds, controls, cert, _time.perf_counter() - t_all, guess_time, keep_modes,
+                  on_node)
+    out.march_distance = marched
+    out.grids = rungs + [N]
+    if prior is not None and prior.success and out.success:
+        out.cost_estimate = abs(out.cost - prior.cost) / 3.0
+    if elastic and not out.success and not keep_modes and (bool(np.any(~np.isnan(qN))) or vN is not None):
+        alt = _elastic(problem, N, dict(guess or {}), options, verbose, path, o, _length_scale(system, start[0]))
+        if alt is not None:
+            alt.iterations += out.iterations
+            alt.solve_time_s = _time.perf_counter() - t_all - alt.build_time_s
+            alt.timing_rounds += out.timing_rounds
+            return alt
+    return out
+
+
+def _interpolated(prior: ContactControlResult, N: int) -> dict:
+    """The guess of an ``N``-step grid from the answer ``prior`` on a coarser one: its horizon, its start's velocity,
+    and its controls interpolated at this grid's steps (the ladder of grids)."""
+    tu = prior.T / N * (np.arange(N) + 0.5)
+    guess = {"T": prior.T, "qd0": prior.v[0]}
+    if prior.u is not None and np.size(prior.u):      # (a system without controls has none to interpolate)
+        guess["u"] = np.column_stack([np.interp(tu, prior.t_u, prior.u[:, j]) for j in range(prior.u.shape[1])])
+    return guess
+
+
+def _setup(problem, N: int, guess, options, verbose: bool, keep_modes: bool, path, o: ContactControlOptions):
+    """The program of one grid and its start: ``(Problem, the start point, the guess's march or None, the guess's
+    time)``.  The controls' guess (the user's, else zero clipped to the bounds) is marched from the initial state by
+    the contact march; where that fails (or halves a step), the straight line from the start to the end."""
+    system, T, scheme, (q0, v0), (qN, vN), running, final, (lo, hi), _ = problem
+    free_time = tuple(T) if isinstance(T, (tuple, list)) else None
     cm = mechanics(system, scheme)
-    (q0, v0), (qN, vN) = start, end
     n, nu = cm.n, cm.nu
-    lo, hi = u_bounds
     guess = dict(guess or {})
     unknown = sorted(set(guess) - {"u", "T", "qd0"})
     if unknown:
@@ -273,25 +269,23 @@ def _solve_contact_control(system, T, N: int, scheme: str, start, end, running, 
         U0 = np.clip(np.asarray(guess["u"], float).reshape(N, nu), lo, hi)
     length = _length_scale(system, q0)
     scales = _scales(system, q0, v0g, length, U0[0] if nu else np.zeros(0), Tg)
-    tol = TOUCH_TOL * length
     p0 = np.asarray(system.momentum(q0, v0g)).reshape(-1)
     t_guess = _time.perf_counter()
     point = discrete_march(cm, q0, p0, N, h, scales, controls=U0 if nu else None)
     if point is not None and point["steps"].size != N:
         point = None          # the march halved a step (two impacts in it): its grid is not the program's
-    marched = point
-    if point is None:
-        if keep_modes:
-            raise InputError("keep_modes needs the guess's march on the program's grid (it stopped, or halved a "
-                             "step for two impacts in it): give another guess or more steps")
-        point = _straight(cm, q0, qN, N)
+    if point is None and keep_modes:
+        raise InputError("keep_modes needs the guess's march on the program's grid (it stopped, or halved a "
+                         "step for two impacts in it): give another guess or more steps")
     guess_time = _time.perf_counter() - t_guess
     prog = _Program(cm, N, Tg, scales, vN is not None, running, final, (lo, hi), free_time=free_time,
                     start_velocity=bool(np.any(free_v)), path=path)
-    prog.nlp.set_parameter("split", 0.0)
+    prog.complementarity_target = o.complementarity_target
+    prog.set_split_weight(0.0)
     if vN is not None:
-        prog.nlp.set_parameter("pN", np.asarray(system.momentum(qN, vN)).reshape(-1))
-    init = prog._start(q0, p0, {k: v for k, v in point.items() if k in prog.nlp.variable_names})
+        prog.set_end_momentum(system.momentum(qN, vN))
+    start_point = point if point is not None else _straight(cm, q0, qN, N)
+    init = prog._start(q0, p0, {k: v for k, v in start_point.items() if k in prog.nlp.variable_names})
     if nu:
         init["u"] = U0.reshape(-1)
     bounds = {"q": _q_bounds(prog, q0, qN)}
@@ -304,181 +298,129 @@ def _solve_contact_control(system, T, N: int, scheme: str, start, end, running, 
         init.update(_slips(cm, prog, init, scales[2]))
     if vN is not None and cm.friction:
         bounds["fratio_end"] = _end_ratio_bounds(cm, qN, vN, scales[2])
-    opts = {**CONTACT_IPOPT, **OCP_CONTACT_IPOPT, **(options or {})}
-    steps, res, rounds, seen, answers = [], None, 0, set(), []
-    if keep_modes:
-        res = _continued(cm, prog, q0, marched, init, bounds, opts, verbose, scales, qN, vN, steps)
-        rounds = TIMING_ROUNDS + 1          # (no timing rounds)
-    # each round's bounces (arrivals that leave again: Newton's law) are read from the point it starts from.  (Freeing
-    # the split of the arrivals' neighbours too, so that an impact could move by a step within a round, took 188
-    # iterations where 42 did on the push to a target at N = 40, and is not needed where the impacts' steps are kept)
-    if not keep_modes:
-        timed, bounce, turn, fturn = _events(cm, prog, init, q0, tol, scales)
-    held, restarted, moves, before = None, False, [], None
-    limit = TIMING_ROUNDS
-    while rounds < limit and not keep_modes:
+    ipopt = {**CONTACT_IPOPT, **o.ipopt, **(options or {})}
+    P = Problem(cm, prog, q0, N, scales, bounds, ipopt, o, verbose, TOUCH_TOL * length)
+    return P, init, point, guess_time
+
+
+def _timing_rounds(P: Problem, init: dict, near: bool):
+    """Step 2 of the module docstring: rounds of the program, each on the branch read from the last answer
+    (:func:`read_branch`), until the branch settles; then the rounds that move events pinned at their windows' edges
+    (:func:`pinned`, :func:`_move_edge_arrivals`), one step per round.  ``(result, rounds, converged attempts)``."""
+    prog, o = P.prog, P.o
+    # (each round's bounces -- arrivals that leave again: Newton's law -- are read from the point it starts from)
+    branch = read_branch(P, init)
+    res, held, moves, before, seen, answers = None, None, [], None, set(), []
+    rounds, limit = 0, o.timing_rounds
+    while rounds < limit:
         rounds += 1
-        seen.add((timed.tobytes(), bounce.tobytes(), turn.tobytes()))
-        prog.nlp.set_parameter("timed", timed.astype(float).reshape(-1))
-        prog.nlp.set_parameter("bounce", bounce.astype(float).reshape(-1))
-        free = np.any(timed | turn, axis=1)
-        if res is not None:
-            init = {k: v.copy() for k, v in res.values.items()}
-            last = {k: v.copy() for k, v in init.items()}
-            changed = np.any((timed | turn) != held, axis=1)
-            # (an event moved across a node starts there, the rest of the answer kept: _shift)
-            for k, to in moves:
-                _shift(cm, init, k, to, N)
-                changed[[k, to]] = False
-            restarted = _restart(cm, prog, init, q0, scales, changed)
-        held = timed | turn
-        round_bounds = {**bounds, "beta": (np.where(free, EDGE - 0.5, 0.0), np.where(free, 0.5 - EDGE, 0.0)),
-                        **_event_bounds(cm, prog, turn, fturn, timed, init)}
-        for start in (init, last) if restarted else (init,):
-            start["beta"] = np.where(free, np.clip(start["beta"], EDGE - 0.5, 0.5 - EDGE), 0.0)
-            _event_start(cm, turn, fturn, start)
-        if restarted and cm.friction:
-            init.update(_slips(cm, prog, init, scales[2]))
-        # (a later round starts from the last one's primal-dual point with a small barrier; where that fails,
-        # cold.  Measured on the hopper at N = 40: goal 0.5's second round, cold, stopped at 3000 iterations, and
-        # warm it solved in 835 (certified, 12 s; capped at 500 it did not); goal 0.7 certified in 5.2 s where
-        # it took 7.0)
-        if res is not None:
-            # (a restarted round that does not converge within RESTART_ITER starts again from the last answer
-            # itself.  Measured on the hopper to goal 0.9 at N = 40: its second round, restarted, ran to Ipopt's
-            # limit, and cold again, spending the budget; from the answer it solved)
-            warm = prog._ladder(init, {**opts, **WARM_IPOPT,
-                                       **({"max_iter": RESTART_ITER} if restarted or before is not None else {})},
-                                round_bounds, OCP_PENALTY, verbose, "rho", "Ipopt", warm=res)
-            if before is not None and not warm.continuable:
-                steps.extend(warm.homotopy)
-                break                       # (a moved round that does not converge warm ends the moves)
-            if restarted and not warm.continuable:
-                steps.extend(warm.homotopy)
-                warm = prog._ladder(last, {**opts, **WARM_IPOPT}, round_bounds, OCP_PENALTY, verbose, "rho", "Ipopt",
-                                    warm=res)
-        elif rungs:
-            # (the ladder of grids' first round starts from the march of the coarser answer's controls, near the
-            # optimum: with a small barrier, nothing pushed off its bounds, which keeps its complementarity; where
-            # that fails, as any first round.  Measured on the battery's pushes to a target at N = 80: the default
-            # start, its barrier at 0.1, lost the march's contacts and stopped at penalty minima with residuals
-            # of 0.3 to 1.5)
-            warm = prog._ladder(init, {**opts, **NEAR_IPOPT}, round_bounds, OCP_PENALTY, verbose, "rho", "Ipopt")
-        else:
-            warm = None
-        if warm is not None and warm.continuable:
-            res = warm
-        else:
-            steps.extend(warm.homotopy if warm is not None else [])
-            res = prog._ladder(last if restarted else init, opts, round_bounds, OCP_PENALTY, verbose, "rho", "Ipopt")
-        steps.extend(res.homotopy)
+        seen.add(branch.key)
+        R = _prepare(P, branch, init, res, held, moves, moving=before is not None, near=near)
+        held = branch.events
+        got = solve_round(P, R, ("warm",) if R.moving else o.starts)
+        if R.moving and not got.continuable:
+            break                       # (a moved round that does not converge warm ends the moves)
+        res = got
         if res.continuable and before is None:
-            answers.append((res, {name: prog.nlp.parameter_value(name) for name in prog.nlp.parameter_names}))
-        # (a round Ipopt solved only to its acceptable level is read as the others are: the next round starts from
-        # it with its arrivals.  Measured on the hopper at N = 40: its third round stopped so with its landing untimed,
-        # and the fourth and fifth settled it, cost 10.346 where the answer of the third was 10.478)
+            answers.append(Attempt(res, prog.parameters()))
         if not res.continuable:
-            # (a later rung of the ladder failed -- restoration, or its iteration limit -- after an earlier one
-            # converged short of complementarity: that one's controls are the polish's to march and solve on their
-            # branch, as for any answer short of complementarity.  Measured on the battery's seed 1 with the hopper:
-            # a push whose second rung failed in restoration, at a residual of 1.5)
+            # (a later rung of the ladder failed after an earlier one converged short of complementarity: that one's
+            # controls are the polish's to march and solve on their branch)
             if prog.last_good is not None and res.solver_status not in SUCCESS_STATUSES:
                 res = prog.last_good[1]
             break
         # the events read from the answer; once they settle with an event pinned against its window's edge, the
-        # moves (_move_edge_arrivals): each round then moves such an event one step, up to MOVE_ROUNDS rounds
-        edges = pinned(prog, res) if before is not None else []
-        now, bnow, tnow, fnow = _events(cm, prog, res.values, q0, tol, scales, edges)
-        if np.array_equal(now, timed) and np.array_equal(bnow, bounce) and np.array_equal(tnow, turn):
-            edges = pinned(prog, res) if before is None else []
+        # moves: each round then moves such an event one step, up to move_rounds rounds
+        edges = pinned(P, res) if before is not None else []
+        now = read_branch(P, res.values, edges)
+        if now.same(branch):
+            edges = pinned(P, res) if before is None else []
             if not edges:
                 break
-            now, bnow, tnow, fnow = _events(cm, prog, res.values, q0, tol, scales, edges)
-            if np.array_equal(now, timed):
+            now = read_branch(P, res.values, edges)
+            if np.array_equal(now.timed, branch.timed):
                 break                       # (nowhere to move)
-            before = (res, {name: prog.nlp.parameter_value(name) for name in prog.nlp.parameter_names})
-            limit = rounds + MOVE_ROUNDS
-        moves = [(k, k + side) for k, side in edges if 0 <= k + side < N and np.any(now[k + side] & ~now[k])
-                 and not np.any(timed[k + side])]
-        if (now.tobytes(), bnow.tobytes(), tnow.tobytes()) in seen:
+            before = Attempt(res, prog.parameters())
+            limit = rounds + o.move_rounds
+        moves = [(k, k + side) for k, side in edges if 0 <= k + side < P.N and np.any(now.timed[k + side] &
+                                                                                     ~now.timed[k])
+                 and not np.any(branch.timed[k + side])]
+        if now.key in seen:
             res.fail("Timing_Cycles", "the steps that hold an impact or a slip's turn changed back to an earlier set: "
                      "the events' steps did not settle")
             break
-        timed, bounce, turn, fturn = now, bnow, tnow, fnow
+        branch = now
     else:
-        if not keep_modes:
-            res.fail("Timing_Not_Settled", f"the steps that hold an impact still changed after {limit} solves")
+        res.fail("Timing_Not_Settled", f"the steps that hold an impact still changed after {limit} solves")
     if before is not None:
-        res = _kept_moves(prog, res, *before)
+        res = _kept_moves(P, res, before)
+    return res, rounds, answers
+
+
+def _prepare(P: Problem, branch: Branch, init: dict, res, held, moves, moving: bool, near: bool) -> Round:
+    """A round's start on ``branch``: the program holds it (its parameters and bounds, :func:`_event_bounds`), and a
+    later round starts from the last answer ``res`` with the events ``moves`` shifted across their nodes
+    (:func:`_shift`) and the steps whose events changed since ``held`` restarted from their one-step marches
+    (:func:`_restart`)."""
+    cm, prog = P.cm, P.prog
+    prog.hold(timed=branch.timed, bounce=branch.bounce)
+    last, restarted = None, False
+    if res is not None:
+        init = {k: v.copy() for k, v in res.values.items()}
+        last = {k: v.copy() for k, v in init.items()}
+        changed = np.any(branch.events != held, axis=1)
+        # (an event moved across a node starts there, the rest of the answer kept: _shift)
+        for k, to in moves:
+            _shift(P, init, k, to)
+            changed[[k, to]] = False
+        restarted = _restart(P, init, changed)
+    bounds = {**P.bounds, "beta": P.window(branch.free), **_event_bounds(P, branch, init)}
+    for start in (init, last) if restarted else (init,):
+        P.clip(start, branch.free)
+        _event_start(cm, branch.turn, branch.ratio, start)
+    if restarted and cm.friction:
+        init.update(_slips(cm, prog, init, P.scales[2]))
+    return Round(branch, bounds, init, last, res, restarted, moving, near)
+
+
+def _certified(P: Problem, res, answers: List[Attempt], rounds: int, keep_modes: bool):
+    """Steps 4 and 5 of the module docstring: the answer polished and certified (:func:`.certificate._polish`); where
+    it does not certify, the earlier rounds' converged answers in turn, the latest first, each with its own events
+    timed, and the first certified one is the answer.  ``(result, certificate, march distance, rounds)``."""
+    prog, tol = P.prog, P.o.certificate_tol
     cert = marched = math.nan
     if res.continuable or res.solver_status in SUCCESS_STATUSES:
         # (also where the homotopy converged short of complementarity, a local minimum of the penalties: its
-        # controls, marched, are a motion, and the program on that motion's branch is solved from it; measured on
-        # the battery, 2 of 30 pushes to a target stopped so, at residuals 5.8e-3 and 0.45)
-        answers = [a for a in answers if a[0] is not res]
-        res, cert, marched, polished = _polish(cm, prog, res, q0, N, scales, bounds, opts, verbose, steps)
+        # controls, marched, are a motion, and the program on that motion's branch is solved from it)
+        answers = [a for a in answers if a.res is not res]
+        res, cert, marched, polished = _polish(P, res)
         rounds = (1 if keep_modes else rounds) + polished
-    # where the last round's answer does not certify (or the rounds did not settle), the other rounds' answers are
-    # polished in turn, the latest first: each is a converged point of the program with its own events timed, and
-    # the first certified one is the answer.  (Measured on the battery's seed 2 with the hopper: goals 0.53 and
-    # 0.98, whose last rounds' branches did not certify, certified from earlier rounds.  Polished after every round
-    # instead, the rounds stopping at the first certified answer, the hopper's answers cost up to 5 % more (goal
-    # 0.46: 11.78 against 11.18), and the B-stationarity proxy failed on 7 of 57 answers against 3 of 55)
-    kept = {name: prog.nlp.parameter_value(name) for name in prog.nlp.parameter_names}
-    for earlier, params in reversed(answers):
-        if cert <= CERTIFICATE_TOL and res.success:
+    kept = prog.parameters()
+    for earlier in reversed(answers):
+        if cert <= tol and res.success:
             break
-        for name, val in params.items():
-            prog.nlp.set_parameter(name, val)
-        got = _polish(cm, prog, earlier, q0, N, scales, bounds, opts, verbose, steps)
+        prog.restore(earlier.params)
+        got = _polish(P, earlier.res)
         rounds += got[3]
-        if got[1] <= CERTIFICATE_TOL and got[0].success:
+        if got[1] <= tol and got[0].success:
             res, cert, marched = got[:3]
             kept = {}
-    for name, val in kept.items():          # (none certified: the program as the answer reported left it)
-        prog.nlp.set_parameter(name, val)
-    on_node = []
-    if not keep_modes and cert <= CERTIFICATE_TOL and res.success:
-        res, cert, marched, moved, on_node = _across(cm, prog, res, cert, marched, q0, N, scales, bounds, opts,
-                                                     verbose, steps)
-        rounds += moved
-    out = _answer(system, cm, prog, res, steps, rounds, q0, N, controls, cert,
-                  _time.perf_counter() - t_all, guess_time, keep_modes, on_node)
-    out.march_distance = marched
-    out.grids = rungs + [N]
-    if prior is not None and prior.success and out.success:
-        out.cost_estimate = abs(out.cost - prior.cost) / 3.0
-    if elastic and not out.success and not keep_modes and (bool(np.any(~np.isnan(qN))) or vN is not None):
-        alt = _elastic(system, T, N, scheme, (q0, v0), (qN, vN), running, final, u_bounds, controls, guess, options,
-                       verbose, path, length)
-        if alt is not None:
-            alt.iterations += out.iterations
-            alt.solve_time_s = _time.perf_counter() - t_all - alt.build_time_s
-            alt.timing_rounds += out.timing_rounds
-            return alt
-    return out
+    prog.restore(kept)          # (none certified: the program as the answer reported left it)
+    return res, cert, marched, rounds
 
 
-#: The weight of the end conditions in the elastic mode's cost (:func:`_elastic`), per squared length (of the scene's
-#: length scale) and squared velocity (of its velocity scale), relative to the cost's scale
-ELASTIC_WEIGHT = 1.0
-
-
-def _elastic(system, T, N, scheme, start, end, running, final, u_bounds, controls, guess, options, verbose, path,
+def _elastic(problem, N, guess, options, verbose, path, o: ContactControlOptions,
              length) -> Optional[ContactControlResult]:
     """The end conditions' elastic mode (as an SQP solver's, SNOPT's): the problem solved with its given end state
-    moved into the cost (``ELASTIC_WEIGHT`` times its squared distance, on top of the cost), then solved again with
+    moved into the cost (``elastic_weight`` times its squared distance, on top of the cost), then solved again with
     the end conditions from that answer (its controls, horizon and free start).
 
     The timing rounds hold each event in a step read from a motion.  With the end state given, a round whose events
     sit in the wrong steps has no feasible point (a launch whose impact the end needs several steps later), and it
     stops at a penalty minimum; with the end state in the cost every round is feasible, and an event held against its
     window's edge moves to the next step (:func:`_move_edge_arrivals`) until the events sit where the end needs them.
-    (Measured on a ball launched with a free velocity to bounce off a wall to (0.2, 0) at T = 1.2, e = 0.8, N = 45,
-    from a guess that hits the wall 4 steps early: the rounds stopped at a complementarity residual of 0.06, the
-    launch 0.42 m/s off; the elastic mode's rounds walk the impact to its step, and the end-conditions solve from
-    there meets the closed form.)  ``None`` where either solve fails."""
-    (q0, v0), (qN, vN) = start, end
+    ``None`` where either solve fails."""
+    system, T, scheme, (q0, v0), (qN, vN), running, final, u_bounds, controls = problem
     n = system.nq
     q, v, Ts = ca.SX.sym("q", n), ca.SX.sym("v", n), ca.SX.sym("T")
     given = np.where(~np.isnan(qN))[0]
@@ -487,15 +429,15 @@ def _elastic(system, T, N, scheme, start, end, running, final, u_bounds, control
     if vN is not None:
         miss = miss + ca.sumsqr(v - ca.DM(np.asarray(vN, float))) / max(vref, length / np.mean(np.atleast_1d(T))) ** 2
     cost = final(q, v, Ts) if final is not None else 0
-    soft = ca.Function("phi_elastic", [q, v, Ts], [cost + ELASTIC_WEIGHT * miss])
+    soft = ca.Function("phi_elastic", [q, v, Ts], [cost + o.elastic_weight * miss])
     free_end = (np.full(n, np.nan), None)
-    first = _solve_contact_control(system, T, N, scheme, start, free_end, running, soft, u_bounds, controls, guess,
-                                   options, verbose, False, path, elastic=False)
+    first = _solve_contact_control(system, T, N, scheme, (q0, v0), free_end, running, soft, u_bounds, controls, guess,
+                                   options, verbose, False, path, o, elastic=False)
     if not first.success:
         return None
     g = {"T": first.T, "qd0": first.v[0], **({"u": first.u} if first.u is not None and np.size(first.u) else {})}
-    out = _solve_contact_control(system, T, N, scheme, start, end, running, final, u_bounds, controls, g, options,
-                                 verbose, False, path, elastic=False)
+    out = _solve_contact_control(system, T, N, scheme, (q0, v0), (qN, vN), running, final, u_bounds, controls, g,
+                                 options, verbose, False, path, o, elastic=False)
     if not out.success:
         return None
     out.iterations += first.iterations
@@ -503,53 +445,45 @@ def _elastic(system, T, N, scheme, start, end, running, final, u_bounds, control
     return out
 
 
-    return None
-
-
-def _events(cm: ContactMechanics, prog, V, q0, tol: float, scales, edges=()):
-    """The events a timing round holds, read from the values ``V``: ``(arrivals, bounces, slip turns, the turns'
-    node ratios)`` (:func:`arrivals`, :func:`bounces`, :func:`slip_turns`); the arrivals pinned at an edge of their
-    window (``edges``, :func:`pinned`) moved to the neighbouring step (:func:`_move_edge_arrivals`)."""
-    N, n = prog.L, cm.n
+def read_branch(P: Problem, V, edges=()) -> Branch:
+    """The branch a timing round holds, read from the values ``V``: the arrivals, their bounces, the slips' turns and
+    the turns' node ratios (:func:`arrivals`, :func:`bounces`, :func:`slip_turns`); the arrivals pinned at an edge of
+    their window (``edges``, :func:`pinned`) moved to the neighbouring step (:func:`_move_edge_arrivals`)."""
+    cm, prog, N, n = P.cm, P.prog, P.N, P.cm.n
     Q = np.asarray(V["q"], float).reshape(N + 1, n)
-    timed = arrivals(cm, Q, np.asarray(V["qs"], float).reshape(N, n), tol, V.get("nu"), scales[1])
-    turn, ratio = slip_turns(cm, prog, V, q0, timed, scales)
-    _move_edge_turns(prog, V, timed, turn, ratio)
+    timed = arrivals(cm, Q, np.asarray(V["qs"], float).reshape(N, n), P.tol, V.get("nu"), P.scales[1], P.o.node_force)
+    turn, ratio = slip_turns(P, V, timed)
+    _move_edge_turns(P, V, timed, turn, ratio)
     _move_edge_arrivals(prog, edges, timed, turn)
-    return timed, bounces(prog, Q, timed), turn, ratio
+    return Branch(timed, bounces(prog, Q, timed), turn, ratio)
 
 
-def at_edge(B) -> np.ndarray:
+def at_edge(B, edge: float) -> np.ndarray:
     """``-1``, ``+1`` or ``0`` per step: its sub-node sits at the start or the end of its timing window
-    (``β = ±(½ − EDGE)``, to 1e-6), or inside it."""
+    (``β = ±(½ − edge)``, to 1e-6), or inside it."""
     B = np.asarray(B, float)
-    return np.where(B >= 0.5 - EDGE - 1e-6, 1, np.where(B <= EDGE - 0.5 + 1e-6, -1, 0))
+    return np.where(B >= 0.5 - edge - 1e-6, 1, np.where(B <= edge - 0.5 + 1e-6, -1, 0))
 
 
-#: A sub-node this close to its step's edge whose bound multiplier is above B_TOL counts as held there (:func:`pinned`):
-#: an interior point stops short of an active bound (by 1.2e-3 and 3.9e-3 measured), and a multiplier of the
-#: penalty homotopy can be far from zero where no bound is near (β = 0.34)
-NEAR_EDGE = 1e-2
-
-
-def pinned(prog, res: NLPResult) -> List[tuple]:
+def pinned(P: Problem, res: NLPResult) -> List[tuple]:
     """The events the answer ``res`` holds against an edge of their step's window: ``(step, +1 or -1)`` for every step
     whose sub-node the last round timed (an arrival or a slip's turn) and whose ``β`` sits at an edge of its bounds
-    (:func:`at_edge`) or carries a bound multiplier of Ipopt's above :data:`B_TOL` of the cost's scale (an interior
+    (:func:`at_edge`), or lies within ``near_edge`` of it with a bound multiplier of Ipopt's above ``b_tol`` of the
+    cost's scale (an interior
     point stops short of an active bound: 1.2e-3 from the step's end, its multiplier 0.05, on a ball launched at a
     wall whose impact the optimum wants one step later).  The window is the transcription's, not the problem's: such
     an answer is no solution of the continuous problem, whose optimum wants the event beyond the edge."""
-    N = prog.L
+    prog, N, o = P.prog, P.N, P.o
     V = res.values
     timed = np.asarray(prog.nlp.parameter_value("timed"), float).reshape(N, -1) > 0
     turn = np.asarray(prog.nlp.parameter_value("release"), float).reshape(N, -1) > 0
     B = np.asarray(V["beta"], float).reshape(N)
-    side = at_edge(B)
+    side = at_edge(B, o.edge)
     lam = np.asarray((res.bound_multipliers or {}).get("beta", np.zeros(N)), float).reshape(-1)
     if lam.size == N:
         scale = max(1.0, abs(float(prog.cost(V))))
-        near = np.abs(B) >= 0.5 - NEAR_EDGE
-        side = np.where((side == 0) & near & (np.abs(lam) > B_TOL * scale), np.sign(B).astype(int), side)
+        near = np.abs(B) >= 0.5 - o.near_edge
+        side = np.where((side == 0) & near & (np.abs(lam) > o.b_tol * scale), np.sign(B).astype(int), side)
     return [(int(k), int(side[k])) for k in np.where(np.any(timed | turn, axis=1) & (side != 0))[0]]
 
 
@@ -573,116 +507,107 @@ def _move_edge_arrivals(prog, edges, timed, turn) -> None:
             timed[k, j], timed[to, j] = False, True
 
 
-def _kept_moves(prog, res: NLPResult, start: NLPResult, params: dict) -> NLPResult:
+def _kept_moves(P: Problem, res: NLPResult, before: Attempt) -> NLPResult:
     """The answer of the rounds that moved pinned events (:func:`_move_edge_arrivals`) where it is converged,
-    complementary, off its windows' edges and no costlier than the answer ``start`` they moved from; else ``start``,
-    with the program's parameters ``params`` set back (its pinned events then say so in the answer's warnings).
+    complementary, off its windows' edges and no costlier than the answer ``before`` they moved from; else that one,
+    with the program's parameters set back (its pinned events then say so in the answer's warnings).
     (Measured on the hopper at N = 40, goal 0.7: moved round by round, its pinned landing and lift-off ran away from
     each other, the rounds spent the budget and ended uncertified at a cost of 14.8 against 11.22)"""
-    c0 = prog.cost(start.values)
-    if (res.continuable and res.success and not pinned(prog, res)
-            and float(prog.residual(res.values)) <= COMPLEMENTARITY_TARGET
+    prog = P.prog
+    c0 = prog.cost(before.res.values)
+    if (res.continuable and res.success and not pinned(P, res)
+            and float(prog.residual(res.values)) <= P.o.complementarity_target
             and prog.cost(res.values) <= c0 + 1e-9 * max(1.0, abs(c0))):
         return res
-    for name, val in params.items():
-        prog.nlp.set_parameter(name, val)
-    return start
+    prog.restore(before.params)
+    return before.res
 
 
-#: Certified answers with a pinned event that :func:`_across` moves across its node, one after another, at most.
-#: (Each round tries every pinned event and keeps the cheapest move.  Keeping the first certified improvement
-#: instead, up to 16 rounds, cost fewer iterations per round but walked the hopper's events on another path: goal
-#: 0.7 at N = 40 reached 10.721 and was still walking after 16 rounds (4980 iterations), where this rule ends
-#: unpinned at 10.826 after 6; goal 0.98 reached the same 9.504 in 4300 iterations against 7000)
-ACROSS_ROUNDS = 8
-
-
-def _across(cm, prog, res: NLPResult, cert, marched, q0, N: int, scales, bounds, opts, verbose, steps):
+def _across(P: Problem, res: NLPResult, cert, marched):
     """A certified answer whose events are pinned at their windows' edges (:func:`pinned`), each event moved across
-    its node in turn: the program solved warm with that event held in the neighbouring step (:func:`_shift`), its
-    answer polished and certified (:func:`_polish`).  The cheapest certified answer below the answer's cost is taken
-    and its own pinned events moved, up to :data:`ACROSS_ROUNDS` times.  ``(result, certificate, march distance,
-    solves, on the node)``: where no move lowers the cost the answer is kept, and its pinned events whose move
-    converged to a costlier answer are held on their node (``on the node``, as ``(step, side)``): from either side
-    the program's optimum wants the event at the node they share, a local optimum over the event's step.  The
-    others, not moved (the horizon's end, a neighbour already holding an event) or whose moved solve failed, stay
-    pinned, and :func:`_answer` fails the answer.  (Measured on the hopper at N = 40: its landing pinned at the end
-    of step 1, moved to step 2, settles inside it at a cost of 10.969 against 11.220; six rounds later no event is
-    pinned, cost 10.826, in 2313 iterations against 878 without the moves)"""
+    its node in turn (:func:`_move_across`).  The cheapest certified answer below the answer's cost is taken and its
+    own pinned events moved, up to ``across_rounds`` times.  ``(result, certificate, march distance, solves, on the
+    node)``: where no move lowers the cost the answer is kept, and its pinned events whose move converged to a
+    costlier answer are held on their node (``on the node``, as ``(step, side)``): from either side the program's
+    optimum wants the event at the node they share, a local optimum over the event's step.  The others, not moved
+    (the horizon's end, a neighbour already holding an event) or whose moved solve failed, stay pinned, and
+    :func:`_answer` fails the answer."""
+    prog = P.prog
     solves, on_node = 0, []
-    for _ in range(ACROSS_ROUNDS):
-        edges = pinned(prog, res)
+    for _ in range(P.o.across_rounds):
+        edges = pinned(P, res)
         on_node = []
         if not edges:
             break
         c0 = prog.cost(res.values)
-        params = {name: prog.nlp.parameter_value(name) for name in prog.nlp.parameter_names}
+        params = prog.parameters()
         best = None
         for edge in edges:
-            for name, val in params.items():
-                prog.nlp.set_parameter(name, val)
-            k, side = edge
-            to = k + side
-            timed, bounce, turn, fturn = _held(cm, prog, res.values)
-            if not 0 <= to < N or np.any(timed[to] | turn[to]):
-                continue                                    # (nowhere to move: the horizon's end, or a held step)
-            for flags in (timed, bounce, turn):             # (the event moved, the answer's other events kept)
-                flags[to], flags[k] = flags[k].copy(), False
-            fturn[to], fturn[k] = fturn[k].copy(), 0.0
-            prog.nlp.set_parameter("timed", timed.astype(float).reshape(-1))
-            prog.nlp.set_parameter("bounce", bounce.astype(float).reshape(-1))
-            prog.nlp.set_parameter("node_impact", np.zeros(N * cm.c))
-            init = {key: v.copy() for key, v in res.values.items()}
-            _shift(cm, init, k, k + side, N)
-            free = np.any(timed | turn, axis=1)
-            window = {**bounds, "beta": (np.where(free, EDGE - 0.5, 0.0), np.where(free, 0.5 - EDGE, 0.0)),
-                      **_event_bounds(cm, prog, turn, fturn, timed, init)}
-            init["beta"] = np.where(free, np.clip(init["beta"], EDGE - 0.5, 0.5 - EDGE), 0.0)
-            _event_start(cm, turn, fturn, init)
-            # (from the shifted answer's primal values alone, with a small barrier: its multipliers, the other
-            # branch's, cost the hopper's first move at N = 40 1879 iterations where without them it took 96, to the
-            # same answer)
-            got = prog._ladder(init, {**opts, **WARM_IPOPT, "max_iter": RESTART_ITER}, window, OCP_PENALTY, verbose,
-                               "rho", "Ipopt")
-            steps.extend(got.homotopy)
-            solves += 1
-            if got.success and prog.cost(got.values) >= c0 - 1e-9 * max(1.0, abs(c0)):
+            prog.restore(params)
+            got, spent, held = _move_across(P, res, edge, c0)
+            solves += spent
+            if held:
                 on_node.append(edge)          # (converged across the node, and no cheaper there)
-            if not (got.continuable and prog.cost(got.values) < c0 - 1e-9 * max(1.0, abs(c0))):
-                continue
-            got, c, m, polished = _polish(cm, prog, got, q0, N, scales, bounds, opts, verbose, steps)
-            solves += polished
-            cost = prog.cost(got.values)
-            if got.success and c <= CERTIFICATE_TOL and cost < c0 - 1e-9 * max(1.0, abs(c0)) and \
-                    (best is None or cost < best[0]):
-                best = (cost, got, c, m, {name: prog.nlp.parameter_value(name) for name in prog.nlp.parameter_names})
-        chosen = params if best is None else best[4]
-        for name, val in chosen.items():
-            prog.nlp.set_parameter(name, val)
+            if got is not None and (best is None or prog.cost(got.res.values) < prog.cost(best.res.values)):
+                best = got
+        prog.restore(params if best is None else best.params)
         if best is None:
             break
-        _, res, cert, marched, _ = best
+        res, cert, marched = best.res, best.cert, best.marched
     else:
         on_node = []                          # (the rounds ran out: the last answer's events not tried)
     return res, cert, marched, solves, on_node
 
 
-def _held(cm: ContactMechanics, prog, V):
-    """The events the program holds now (its last solve's branch or round), as :func:`_events` reads them from an
-    answer: ``(arrivals, bounces, slip turns, the turns' ratios)``, the ratios those of the values ``V``."""
-    N, c = prog.L, cm.c
-    flag = lambda name: np.asarray(prog.nlp.parameter_value(name), float).reshape(N, c) > 0  # noqa: E731
+def _move_across(P: Problem, res: NLPResult, edge, c0: float):
+    """The certified answer ``res`` with its event pinned at ``edge`` (``(step, side)``) held in the neighbouring step
+    instead (:meth:`.state.Branch.moved`), the answer's other events kept: the program solved from the shifted answer's
+    primal values (:func:`_shift`) with a small barrier, then polished and certified (:func:`_polish`).  (From its
+    multipliers too, the other branch's, the hopper's first move at N = 40 took 1879 iterations where without them it
+    took 96, to the same answer.)  ``(a certified Attempt cheaper than c0 or None, solves, held on its node: the moved
+    solve converged no cheaper)``."""
+    cm, prog, N, o = P.cm, P.prog, P.N, P.o
+    k, side = edge
+    to = k + side
+    branch = held_branch(P, res.values)
+    if not 0 <= to < N or np.any(branch.events[to]):
+        return None, 0, False                 # (nowhere to move: the horizon's end, or a held step)
+    branch = branch.moved(k, to)
+    prog.hold(timed=branch.timed, bounce=branch.bounce, node_impact=np.zeros(N * cm.c))
+    init = {key: v.copy() for key, v in res.values.items()}
+    _shift(P, init, k, to)
+    window = {**P.bounds, "beta": P.window(branch.free), **_event_bounds(P, branch, init)}
+    P.clip(init, branch.free)
+    _event_start(cm, branch.turn, branch.ratio, init)
+    got = P.ladder(init, {**o.warm_ipopt, "max_iter": o.restart_iter}, window)
+    P.steps.extend(got.homotopy)
+    drop = c0 - 1e-9 * max(1.0, abs(c0))
+    held = bool(got.success and prog.cost(got.values) >= drop)
+    if not (got.continuable and prog.cost(got.values) < drop):
+        return None, 1, held
+    got, c, m, polished = _polish(P, got)
+    if got.success and c <= o.certificate_tol and prog.cost(got.values) < drop:
+        return Attempt(got, prog.parameters(), c, m), 1 + polished, held
+    return None, 1 + polished, held
+
+
+def held_branch(P: Problem, V) -> Branch:
+    """The branch the program holds now (its last solve's round or branch), as :func:`read_branch` reads one from an
+    answer; the turns' ratios those of the values ``V``."""
+    N, c = P.N, P.cm.c
+    flag = lambda name: np.asarray(P.prog.nlp.parameter_value(name), float).reshape(N, c) > 0  # noqa: E731
     turn = flag("release")
-    ratio = np.where(turn, np.asarray(V["fleft"], float).reshape(N, c), 0.0) if cm.friction else np.zeros((N, c))
-    return flag("timed"), flag("bounce"), turn, ratio
+    ratio = np.where(turn, np.asarray(V["fleft"], float).reshape(N, c), 0.0) if P.cm.friction else np.zeros((N, c))
+    return Branch(flag("timed"), flag("bounce"), turn, ratio)
 
 
-def _shift(cm: ContactMechanics, init, k: int, to: int, N: int) -> None:
+def _shift(P: Problem, init, k: int, to: int) -> None:
     """A round's start, in place, where the event timed at an edge of step ``k`` moves to the neighbouring step ``to``
     (:func:`_move_edge_arrivals`): its sub-node moves across the node they share, to the same edge of ``to``'s window
-    (the event at the same time, to ``2 EDGE h``), with its impulses; ``k``'s sub-node goes to its middle, untimed.
+    (the event at the same time, to ``2 edge h``), with its impulses; ``k``'s sub-node goes to its middle, untimed.
     The nodes stay the last answer's, a motion with the event at that node.  (Started from the one-step marches of
     :func:`_restart` instead, the ball off a wall held its impact at a grazing sub-node a step away)"""
+    cm, N, e = P.cm, P.N, P.o.edge
     n = cm.n
     Q = np.asarray(init["q"], float).reshape(N + 1, n)
     S = init["qs"].reshape(N, n)
@@ -690,7 +615,7 @@ def _shift(cm: ContactMechanics, init, k: int, to: int, N: int) -> None:
     shared = max(k, to)                         # the node the two steps share
     S[to] = Q[shared]
     S[k] = 0.5 * (Q[k] + Q[k + 1])
-    B[to] = (EDGE - 0.5) if to > k else (0.5 - EDGE)
+    B[to] = (e - 0.5) if to > k else (0.5 - e)
     B[k] = 0.0
     for key in ("mu", "mul"):
         if key in init:
@@ -701,7 +626,7 @@ def _shift(cm: ContactMechanics, init, k: int, to: int, N: int) -> None:
         r[to, cm.c:], r[k, cm.c:] = r[k, cm.c:].copy(), 0.0
 
 
-def _restart(cm: ContactMechanics, prog, init, q0, scales, changed) -> bool:
+def _restart(P: Problem, init, changed) -> bool:
     """A later round's start, in place: the steps whose held events ``changed`` take their unknowns
     (:data:`.certificate.STEP_VALUES`: sub-node, split, forces, impulses, ratios) from their one-step marches
     from the last answer's nodes (those :func:`slip_turns` ran to read its events are not run again), which time those
@@ -709,11 +634,11 @@ def _restart(cm: ContactMechanics, prog, init, q0, scales, changed) -> bool:
     held at a sub-node that sat elsewhere, an event no longer held whose step keeps its timed ``β``.  Measured on the
     hopper at N = 20: from the answer the rounds started at a primal infeasibility of 13.9 and took 54 to 135
     iterations each.)  Whether any step was restarted."""
-    N, ks = prog.L, np.where(changed)[0]
+    N, ks = P.N, np.where(changed)[0]
     if not ks.size:
         return False
     # (the steps slip_turns did not march, the arrivals' among them, marched here)
-    _, marches = _local(cm, prog, init, q0, N, scales, steps=ks)
+    _, marches = _local(P, init, steps=ks)
     for k in ks:
         pt = marches[k]
         if pt is None or np.asarray(pt["steps"]).size != 1:
@@ -725,20 +650,22 @@ def _restart(cm: ContactMechanics, prog, init, q0, scales, changed) -> bool:
     return True
 
 
-def _move_edge_turns(prog, V, timed, turn, ratio) -> None:
+def _move_edge_turns(P: Problem, V, timed, turn, ratio) -> None:
     """A turn the round held (its step's sub-node timing it) whose sub-node sits at an edge of the step's window
-    (``β = ±(½ − EDGE)``): the optimum wants it beyond, in the next step (or the one before), which one round cannot
+    (``β = ±(½ − edge)``): the optimum wants it beyond, in the next step (or the one before), which one round cannot
     give, since a round holds each event in its step.  The next round holds it there instead (``turn`` and ``ratio``
     moved in place), one step per round.  (Measured on the battery's seed 2: a block pushed over the whole horizon
     stopped at the end of step 74 of 80 and stuck, its stop at the window's edge in two rounds, and cost 18 % above
     the exact discrete optimum of sliding to the end)"""
     if not np.any(turn):
         return
+    prog = P.prog
     N, c = turn.shape
     held = np.asarray(prog.nlp.parameter_value("release"), float).reshape(N, c) > 0
     B = np.asarray(V["beta"], float).reshape(N)
+    side = at_edge(B, P.o.edge)
     for k, j in zip(*np.where(turn & held)):
-        step = 1 if B[k] >= 0.5 - EDGE - 1e-6 else -1 if B[k] <= EDGE - 0.5 + 1e-6 else 0
+        step = int(side[k])
         to = k + step
         if not step or not 0 <= to < N or np.any(timed[to]) or turn[to, j]:
             continue
@@ -747,7 +674,7 @@ def _move_edge_turns(prog, V, timed, turn, ratio) -> None:
             turn[to, j], ratio[to, j] = True, ratio[k, j]
 
 
-def slip_turns(cm: ContactMechanics, prog, V, q0, timed, scales):
+def slip_turns(P: Problem, V, timed):
     """Per step and contact: a held contact whose slip stops or turns inside the step, where the march times it
     (mode W): each step of ``V`` marched from its own node (:func:`_local`), in the steps without an arrival
     (``timed``).  ``(turns, the sliding node slots' ratios)``: the program's round times such a step's sub-node at
@@ -755,14 +682,14 @@ def slip_turns(cm: ContactMechanics, prog, V, q0, timed, scales):
     first does, the sliding block's stop was a turn where the march's timed step has no valid modes and it keeps
     the untimed one: the round then held a timed stop, and the block push that sticks cost 16.83 against the
     untimed answer's 16.49, at N = 40)"""
-    N, c = prog.L, cm.c
+    cm, prog, N, c = P.cm, P.prog, P.N, P.cm.c
     out, ratio = np.zeros((N, c), bool), np.zeros((N, c))
     if not cm.friction or cm.fd != 1:
         return out, ratio
     # (a slip turns only at a contact that touches at the step's start, q_k: the other steps are not marched)
     Q = np.asarray(V["q"], float).reshape(N + 1, cm.n)
-    touch = np.any(cm.gaps(Q[:-1]) <= TOUCH_TOL * scales[0], axis=1) & ~np.any(timed, axis=1)
-    _, marches = _local(cm, prog, V, q0, N, scales, steps=np.where(touch)[0])
+    touch = np.any(cm.gaps(Q[:-1]) <= TOUCH_TOL * P.scales[0], axis=1) & ~np.any(timed, axis=1)
+    _, marches = _local(P, V, steps=np.where(touch)[0])
     for k, pt in enumerate(marches):
         if pt is None or np.asarray(pt["steps"]).size != 1:          # (not marched: no touch, or an arrival)
             continue
@@ -778,7 +705,7 @@ def slip_turns(cm: ContactMechanics, prog, V, q0, timed, scales):
     return out, ratio
 
 
-def _event_bounds(cm: ContactMechanics, prog, turn, ratio, timed, init) -> dict:
+def _event_bounds(P: Problem, branch: Branch, init) -> dict:
     """A round's rows of its events: a timed step's arriving contact on the surface at its sub-node, and the slips
     that turn (:func:`slip_turns`) as the march's mode W
     (:meth:`ContactNLP.mode_bounds`): the step's sub-node at the turn, where the slip velocity after the contact's
@@ -786,13 +713,13 @@ def _event_bounds(cm: ContactMechanics, prog, turn, ratio, timed, init) -> dict:
     share's ratio the node slot's, and the sub-node slot's slip the second part's (``arrive``).  Sets the round's
     ``release`` and ``arrive`` parameters (``init``'s sub-nodes pick each timed step's arriving contact; a start is
     moved into these bounds by :func:`_event_start`)."""
-    L, c = prog.L, cm.c
+    cm, prog, L, c = P.cm, P.prog, P.N, P.cm.c
+    timed, turn, ratio = branch.timed, branch.turn, branch.ratio
     t = turn.reshape(-1)
-    prog.nlp.set_parameter("release", turn.astype(float).reshape(-1))
+    prog.hold(release=turn, arrive=(timed | turn) if cm.friction else None)
     out = {"mul": (np.zeros(L * c), np.where(t, np.inf, 0.0)),
            "release": (np.where(t, 0.0, -np.inf), np.where(t, 0.0, np.inf))}
     if cm.friction:
-        prog.nlp.set_parameter("arrive", (timed | turn).astype(float).reshape(-1))
         fl = np.where(t, ratio.reshape(-1), 0.0)
         out["fleft"] = (fl, fl)
         out["left_slip"] = (np.where(t, 0.0, -np.inf), np.where(t, 0.0, np.inf))
@@ -829,28 +756,28 @@ def _march_end(cm, prog, point, values):
     return Qg[-1], pg
 
 
-def _continued(cm, prog, q0, point, init, bounds, opts, verbose, scales, qN, vN, steps):
+def _continued(P: Problem, point, init, qN, vN):
     """The branch of the guess's march (``keep_modes``), its end moved from the march's own end state to the asked
     one: a continuation in the end conditions (the step doubled after a success, halved after a failure, down to
     1/1024), each solve warm from the last.  The guess's march ends where it ends, not where it is asked to: the bounce
     to a target from a launch at √(2gp) with k = 5, e = 0.7 needs a launch 6 times faster, which the branch solved
     directly did not find (Ipopt: infeasible after 1175 iterations)."""
-    N, n = prog.L, cm.n
+    cm, prog, N, n, bounds = P.cm, P.prog, P.N, P.cm.n, P.bounds
     end, pg = _march_end(cm, prog, point, init)
     given = ~np.isnan(qN)
     qlo, qhi = (b.reshape(N + 1, n).copy() for b in bounds["q"])
     pN = np.asarray(cm.system.momentum(qN, vN)).reshape(-1) if vN is not None else None
     s, ds, values, res = 0.0, 1.0, init, None
     # (each step's Ipopt capped: a step too long fails fast and is halved; an uncapped one ran 3000 iterations)
-    opts = dict(opts, max_iter=min(int(opts.get("max_iter", 3000)), CONTINUATION_ITER))
+    opts = dict(P.ipopt, max_iter=min(int(P.ipopt.get("max_iter", 3000)), P.o.continuation_iter))
     while s < 1.0:
         t = min(1.0, s + ds)
         qlo[N, given] = qhi[N, given] = (1 - t) * end[given] + t * qN[given]
         stage = dict(bounds, q=(qlo.reshape(-1), qhi.reshape(-1)))
         if pN is not None:
-            prog.nlp.set_parameter("pN", (1 - t) * pg + t * pN)
-        got = _branch(cm, prog, q0, point, values, stage, opts, OCP_PENALTY[0], verbose, scales, warm=res is not None)
-        steps.extend(got.homotopy)
+            prog.set_end_momentum((1 - t) * pg + t * pN)
+        got = _branch(P, point, values, stage, opts, P.o.penalties[0], warm=res is not None)
+        P.steps.extend(got.homotopy)
         if got.success:
             s, values, res = t, got.values, got
             ds = min(2 * ds, 1.0)
@@ -936,8 +863,9 @@ def _end_ratio_bounds(cm: ContactMechanics, qN, vN, vref):
     return lo, hi
 
 
-def _answer(system, cm, prog, res: NLPResult, steps, rounds, q0, N, controls, cert, wall,
+def _answer(system, P: Problem, res: NLPResult, rounds, controls, cert, wall,
             guess_time, keep_modes: bool = False, on_node=()) -> ContactControlResult:
+    cm, prog, q0, N, o, steps = P.cm, P.prog, P.q0, P.N, P.o, P.steps
     n, c, nu = cm.n, cm.c, cm.nu
     V = res.values
     h, p0, U = _start_of(prog, V, q0)
@@ -948,7 +876,7 @@ def _answer(system, cm, prog, res: NLPResult, steps, rounds, q0, N, controls, ce
     t_sub = times[:-1] + (0.5 + B) * h
     # the cost: the running and final terms at the answer (the objective also holds the penalties)
     cost = prog.cost(V)
-    arr = arrivals(cm, Q, S, TOUCH_TOL * max(1.0, float(np.max(np.abs(q0)))), NU, prog.scales_pref)
+    arr = arrivals(cm, Q, S, TOUCH_TOL * max(1.0, float(np.max(np.abs(q0)))), NU, prog.scales_pref, o.node_force)
     # (and the impacts at a node: a flight that landed on it, its node force an impulse, the march's mode N)
     node = np.asarray(prog.nlp.parameter_value("node_impact"), float).reshape(N, c) > 0
     impact_times = [sorted([float(t_sub[k]) for k in range(N) if arr[k, j] and MU[k, j] > 0.0]
@@ -969,26 +897,26 @@ def _answer(system, cm, prog, res: NLPResult, steps, rounds, q0, N, controls, ce
         fratio=V["fratio"].reshape(N, -1) if cm.friction else None, impact_times=impact_times,
         complementarity=float(prog.residual(V)), homotopy=steps, timing_rounds=rounds)
     out.biactive, out.b_violation = b_stationarity(prog, res, abs(cost))
-    edges = pinned(prog, res)
+    edges = pinned(P, res)
     node = [e for e in edges if e in on_node]
     held = [e for e in edges if e not in on_node]
     out.pinned = [{"step": k, "t": float(t_sub[k]), "edge": "end" if side > 0 else "start",
                    "held": "node" if (k, side) in on_node else "window"} for k, side in edges]
     # (an event the window holds is a multiplier the proxy does not see: no B-stationary point.  One held on its
     # node from both sides is a local optimum over its step: _across)
-    out.b_stationary = bool(out.b_violation <= B_TOL) and not held
+    out.b_stationary = bool(out.b_violation <= o.b_tol) and not held
     for k, side in node:
         t_node = times[k + (1 if side > 0 else 0)]
         out.warnings.append(
             f"the event timed in step {k} sits on the node at t = {t_node:.6g} s: moved across it into step "
             f"{k + side} the optimum costs more, so the program holds it on the node from both sides; its time "
             f"is resolved to the step, h = {h:.3g} s (refine N to resolve it further)")
-    if held and not (res.success and cert <= CERTIFICATE_TOL):
+    if held and not (res.success and cert <= o.certificate_tol):
         # (an answer that failed otherwise: where its events stopped, for the next attempt's guess)
         out.warnings.extend(f"the event timed in step {k} sits at the {'end' if side > 0 else 'start'} of its step's "
                             f"window (t = {t_sub[k]:.6g} s, β = {B[k]:+.4f}), held by a bound of the transcription"
                             for k, side in held)
-    if res.success and held and cert <= CERTIFICATE_TOL:
+    if res.success and held and cert <= o.certificate_tol:
         where = "; ".join(f"step {k}'s at the {'end' if side > 0 else 'start'} of its window (t = {t_sub[k]:.6g} s, "
                           f"β = {B[k]:+.4f})" for k, side in held)
         out.fail("Event_Pinned",
@@ -998,7 +926,7 @@ def _answer(system, cm, prog, res: NLPResult, steps, rounds, q0, N, controls, ce
                            "whose events lie nearer the optimum's" if keep_modes else
                            "moved across its node it did not converge, or could not move: start from a guess whose "
                            "events lie nearer the optimum's, or refine N"))
-    if res.success and not (cert <= CERTIFICATE_TOL):
+    if res.success and not (cert <= o.certificate_tol):
         out.fail("Certificate_Failed", f"a step of the optimal controls, marched by the contact march from the answer's "
                                        f"own node, departs from the answer by {cert:.3g} (relative): not a motion of "
                                        f"the system")

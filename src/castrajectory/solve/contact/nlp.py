@@ -62,7 +62,7 @@ class ContactNLP(ContactTranscription):
         # every pair decided with exact zero products and every β fixed or timed: a square feasibility
         # problem, no penalty and no selection term (its point is then a KKT point with zero multipliers)
         self.nlp.set_parameter("rho", 0.0)
-        self.nlp.set_parameter("split", 0.0)
+        self.set_split_weight(0.0)
         # a few evaluations only (Ipopt, if it runs, evaluates the VM's kernels): nothing to compile
         self.nlp.compile_elements = False
         self.nlp.build(opts, verbose)
@@ -76,7 +76,7 @@ class ContactNLP(ContactTranscription):
         try:
             return self._ladder(init, opts, bounds, [0.0], verbose, "modes", "the march's branch")
         finally:
-            self.nlp.set_parameter("split", SPLIT_WEIGHT)
+            self.set_split_weight(SPLIT_WEIGHT)
 
     def mode_bounds(self, q0, point: Dict[str, np.ndarray]) -> Dict[str, tuple]:
         """The bounds that hold the program on the branch of the march's modes (:meth:`solve_modes`), and the
@@ -103,7 +103,7 @@ class ContactNLP(ContactTranscription):
         release = (modes == M.R) & np.any(np.isin(modes, M.SUB_IMPACT), axis=1, keepdims=True) | turns
         leftfix = modes == M.K
         self.release = release.astype(float)
-        self.nlp.set_parameter("release", self.release.reshape(-1))
+        self.hold(release=self.release)
         self.law_exempt = np.isin(modes, M.LAW_FIXED)
         mul_march = np.asarray(point["mul"], float).reshape(-1)
         mu_march = np.asarray(point["mu"], float).reshape(-1)
@@ -144,7 +144,7 @@ class ContactNLP(ContactTranscription):
             bounds["fratio"] = (rlo.reshape(-1), rhi.reshape(-1))
             # the contacts that arrive at their sub-node (an impact, caught or fixed by a law): slip after it
             self.arrive = np.isin(modes, M.AT_SUB).astype(float)
-            self.nlp.set_parameter("arrive", self.arrive.reshape(-1))
+            self.hold(arrive=self.arrive)
             bounds["slip"] = (slo.reshape(-1), shi.reshape(-1))
             # a released contact's share: its ratio and the slip before the impact as its node slot's mode (stick, or
             # slide with the node's ratio); a K arrival's ratio Stronge's (the march's)
@@ -257,6 +257,41 @@ class ContactNLP(ContactTranscription):
                      f"{who} converged but the complementarity residual {resid:.2e} exceeds {COMPLEMENTARITY_TOL:g}")
         return res
 
+    # ------------------------------------------------------------------ the program's parameters, set here only
+    def hold(self, timed=None, bounce=None, node_impact=None, release=None, arrive=None) -> None:
+        """Set the branch parameters given (per step and contact, 0/1): the contacts whose arrival times the sub-node
+        (``timed``), Newton's law there (``bounce``), the impacts at a node (``node_impact``), the first part's closing
+        impulses free (``release``: a contact released at the step's impact, or a slip's turn), the slips counted after
+        the sub-node (``arrive``).  Every strategy sets them through this method (or :meth:`mode_bounds`)."""
+        for name, v in (("timed", timed), ("bounce", bounce), ("node_impact", node_impact), ("release", release),
+                        ("arrive", arrive)):
+            if v is not None:
+                self.nlp.set_parameter(name, np.asarray(v, float).reshape(-1))
+
+    def set_end_momentum(self, pN) -> None:
+        """The given final momentum (the end conditions' ``pN``)."""
+        self.nlp.set_parameter("pN", np.asarray(pN, float).reshape(-1))
+
+    def set_split_weight(self, w: float) -> None:
+        """The weight of Σβ² (the selection term of the impact-free steps' splits)."""
+        self.nlp.set_parameter("split", float(w))
+
+    def set_law_lengths(self, point) -> np.ndarray:
+        """The impact law rows' lengths from the march ``point`` (:meth:`law_lengths`), returned.  (The residual
+        keeps the start's lengths, :meth:`_start`.)"""
+        lengths = self.law_lengths(point)
+        self.nlp.set_parameter("law_length", lengths.reshape(-1))
+        return lengths
+
+    def parameters(self) -> dict:
+        """Every parameter's value now, by name (a branch's snapshot, :meth:`restore`)."""
+        return {name: self.nlp.parameter_value(name) for name in self.nlp.parameter_names}
+
+    def restore(self, values: dict) -> None:
+        """Set the parameters of a snapshot (:meth:`parameters`)."""
+        for name, val in values.items():
+            self.nlp.set_parameter(name, val)
+
     def _q_bounds(self, q0):
         n = self.cm.n
         qlo = np.full((self.L + 1, n), -np.inf)
@@ -268,8 +303,7 @@ class ContactNLP(ContactTranscription):
         """Set ``p0`` and the law lengths from ``guess``; the initial point by name."""
         n, c = self.cm.n, self.cm.c
         self.nlp.set_parameter("p0", p0)
-        self._law_length = self.law_lengths(guess)
-        self.nlp.set_parameter("law_length", self._law_length.reshape(-1))
+        self._law_length = self.set_law_lengths(guess)
         init = {k: np.asarray(v, float).reshape(-1).copy() for k, v in guess.items()
                 if k in self.nlp.variable_names}
         init["q"][:n] = q0

@@ -1,7 +1,7 @@
 """The contact solve's settings in one object (instead of module constants)."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Tuple
 
 from ...discretise.contact.transcription import PENALTY
@@ -38,3 +38,119 @@ class ContactOptions:
         if not pen or any(not p > 0.0 or p != p or p == float("inf") for p in pen) or list(pen) != sorted(pen):
             raise InputError(f"penalties must be finite, positive and increasing (got {self.penalties!r})")
         object.__setattr__(self, "penalties", pen)
+
+
+def _ipopt_base() -> dict:
+    return {"tol": 1e-8, "max_iter": 3000, "mumps_pivtol": 1e-8, "mu_init": 1e-1, "mu_strategy": "adaptive",
+            "bound_push": 1e-2, "bound_frac": 1e-2, "slack_bound_push": 1e-2, "slack_bound_frac": 1e-2}
+
+
+def _ipopt_warm() -> dict:
+    return {"warm_start_init_point": "yes", "mu_init": 1e-6, "warm_start_bound_push": 1e-9,
+            "warm_start_mult_bound_push": 1e-9, "warm_start_bound_frac": 1e-9, "warm_start_slack_bound_push": 1e-9,
+            "warm_start_slack_bound_frac": 1e-9}
+
+
+def _ipopt_near() -> dict:
+    return {"mu_init": 1e-6, "bound_push": 1e-8, "bound_frac": 1e-8, "slack_bound_push": 1e-8,
+            "slack_bound_frac": 1e-8}
+
+
+@dataclass(frozen=True)
+class ContactControlOptions:
+    """Settings of the contact-implicit optimal control (:func:`~castrajectory.solve.contact.control.solve_contact_control`,
+    ``OptimalControl.solve(contact=...)``); the defaults are the library's.  Each field says what it controls; why each
+    default sits where it does, with the measurements and the commands that reproduce them, is in ``docs/notes.md``
+    ("Contact-implicit optimal control: the settings").
+
+    The solve is one loop (:mod:`.control`): a round solves the program on a :class:`~.branch.Branch` from the first
+    of its start policies that converges, the next branch is read from the answer, and every answer is certified.
+
+    Ipopt (each on top of the contact program's own options, ``CONTACT_IPOPT``):
+
+    * ``ipopt``: every solve's options; an adaptive barrier from 0.1 with bounds pushed by 1e-2, since the first
+      guess is a motion far from the optimum; ``tol`` 1e-8;
+    * ``warm_ipopt``: a round started from the last round's primal-dual point: a small barrier, nothing pushed;
+    * ``near_ipopt``: the first round on a finer grid of the ladder, from the coarser answer's march: a small barrier,
+      nothing pushed off its bounds.
+
+    The loop:
+
+    * ``starts``: the start policies of a round, tried in this order until one converges (:data:`.policies.STARTS`
+      names them: ``"near"`` the first round on a finer grid of the ladder, from the coarser answer's march;
+      ``"warm"`` a later round from the last answer's primal-dual point; ``"from_last"`` the last answer itself where
+      the round restarted steps; ``"cold"`` the homotopy's barrier, always last);
+    * ``penalties``: the rungs ρ of the penalty ladder, each warm-started from the last;
+    * ``complementarity_target``: the ladder climbs until the scaled complementarity residual is at most this (a held
+      contact's gap is then below the certificate march's touch tolerance);
+    * ``iteration_budget``: Ipopt iterations of one solve in all (rounds, rungs, branches, coarser grids), where the run
+      sets no budget of its own (``--max-iter``);
+    * ``timing_rounds``: rounds whose events are read from the last answer, at most; ``move_rounds``: rounds beyond
+      them while an event pinned at its window's edge moves one step per round;
+    * ``restart_iter``: iterations of a round's warm solve after steps were restarted from their one-step marches,
+      before it starts again from the last answer; ``continuation_iter``: iterations of one step of ``keep_modes``'
+      continuation of the end conditions;
+    * ``ladder_max``: a grid of more steps starts from the answer on half as many (the ladder of grids);
+    * ``node_force``: a node force above this fraction of the largest closes its node when events are read;
+    * ``edge``: a timed sub-node stays this fraction of its step from the step's nodes (inside the march's window);
+      ``near_edge``, ``b_tol``: a sub-node this close to its window's edge whose bound multiplier exceeds ``b_tol``
+      (relative to the cost's scale) is held there (pinned); ``b_tol`` is also the B-stationarity proxy's tolerance;
+    * ``across_rounds``: certified answers with a pinned event moved across its node, one after another, at most;
+    * ``elastic_weight``: the end conditions' weight in the elastic mode's cost (a failed solve with a given end state
+      is solved again with the end in the cost, then from that answer);
+
+    The certificate and its polish:
+
+    * ``certificate_tol``: every step of the controls, marched from the answer's own node, lands on the next node to
+      this (relative);
+    * ``polish_rounds``, ``polish_contracting``: branch re-solves of an answer that does not certify: at most
+      ``polish_rounds``, and up to ``polish_contracting`` while each certificate halves the last;
+    * ``branch_small_iter``: iterations of a branch solve's first try, from its march with a small barrier.
+    """
+
+    ipopt: dict = field(default_factory=_ipopt_base)
+    warm_ipopt: dict = field(default_factory=_ipopt_warm)
+    near_ipopt: dict = field(default_factory=_ipopt_near)
+    starts: Tuple[str, ...] = ("near", "warm", "from_last", "cold")
+    penalties: Tuple[float, ...] = (1e3, 1e4, 1e5, 1e6)
+    complementarity_target: float = 1e-11
+    iteration_budget: int = 7000
+    timing_rounds: int = 6
+    move_rounds: int = 6
+    restart_iter: int = 500
+    continuation_iter: int = 150
+    ladder_max: int = 32
+    node_force: float = 1e-6
+    edge: float = 1e-3
+    near_edge: float = 1e-2
+    b_tol: float = 1e-6
+    across_rounds: int = 8
+    elastic_weight: float = 1.0
+    certificate_tol: float = 1e-7
+    polish_rounds: int = 3
+    polish_contracting: int = 6
+    branch_small_iter: int = 500
+
+    def __post_init__(self):
+        # (the names themselves are checked against the registry, .policies.STARTS, when a solve starts)
+        if not self.starts or not all(isinstance(x, str) for x in self.starts) or self.starts[-1] != "cold":
+            raise InputError(f"starts must name start policies, the last one 'cold' (got {self.starts!r})")
+        object.__setattr__(self, "starts", tuple(self.starts))
+        pen = tuple(float(p) for p in self.penalties)
+        if not pen or any(not 0.0 < p < float("inf") for p in pen) or list(pen) != sorted(pen):
+            raise InputError(f"penalties must be finite, positive and increasing (got {self.penalties!r})")
+        object.__setattr__(self, "penalties", pen)
+        if not isinstance(self.timing_rounds, int) or self.timing_rounds < 1:
+            raise InputError(f"timing_rounds must be a positive integer (got {self.timing_rounds!r})")
+        for name in ("iteration_budget", "timing_rounds", "move_rounds", "restart_iter", "continuation_iter",
+                     "ladder_max", "across_rounds", "polish_rounds", "polish_contracting", "branch_small_iter"):
+            v = getattr(self, name)
+            if not isinstance(v, int) or isinstance(v, bool) or v < 0:
+                raise InputError(f"{name} must be a non-negative integer (got {v!r})")
+        for name in ("complementarity_target", "node_force", "b_tol", "certificate_tol", "elastic_weight"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and 0.0 < float(v) < float("inf")):
+                raise InputError(f"{name} must be positive and finite (got {v!r})")
+        if not 0.0 < float(self.edge) < float(self.near_edge) < 0.5:
+            raise InputError(f"edge and near_edge must satisfy 0 < edge < near_edge < 0.5 (got {self.edge!r}, "
+                             f"{self.near_edge!r})")
