@@ -168,7 +168,10 @@ def test_matplotlib_only_in_inspect():
 def test_old_module_names_still_import(name):
     """The flat names of earlier versions are aliases of the modules that hold their contents now."""
     import importlib
+    import sys
 
-    old = importlib.import_module(f"castrajectory.{name}")
+    sys.modules.pop(f"castrajectory.{name}", None)
+    with pytest.warns(DeprecationWarning, match=f"castrajectory.{name} is deprecated and goes at castrajectory 1.0"):
+        old = importlib.import_module(f"castrajectory.{name}")
     assert old.__name__.startswith("castrajectory.") and old.__name__.count(".") == 2
     assert importlib.import_module(old.__name__) is old

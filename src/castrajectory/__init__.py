@@ -29,10 +29,13 @@ quaternion, ``rotation``, ``body_point``, ``unit_norm``, ``quaternion_rate``, ``
 and ``angular_velocity`` / ``angular_momentum`` of a solution (its ``q``, ``v``, ``p``); ``schemes()`` lists the
 discrete Lagrangians with their orders; ``simulate`` solves (one whole-trajectory stationary-action
 problem) and returns the result contract with ``t``, ``q``, ``energy``, ``error_estimate`` and
-``warnings``.  Everything else is internal.
+``warnings``; ``OptimalControl`` poses a problem of optimal control on the discrete action, and
+``ContactControlOptions`` holds the settings of its solve through contact.  Everything else is internal.
 
 The flat module names of earlier versions (``castrajectory.droplet``, ``castrajectory.nlp``, ...)
-still import: they are aliases of the modules that now hold their contents (see ``_MOVED``).
+still import: they are aliases of the modules that now hold their contents (see ``_MOVED``).  Policy: they are
+deprecated (importing one warns with ``DeprecationWarning`` and names the new home), kept through the 0.x
+releases, and removed at 1.0.
 """
 from __future__ import annotations
 
@@ -41,6 +44,7 @@ import importlib.abc
 import importlib.util
 import sys
 import types
+import warnings
 
 #: Old flat module name -> the module that holds its contents now.
 _MOVED = {
@@ -72,7 +76,10 @@ class _Alias(importlib.abc.MetaPathFinder, importlib.abc.Loader):
         return None
 
     def create_module(self, spec):
-        module = importlib.import_module(_MOVED[spec.name.partition(".")[2]])
+        new = _MOVED[spec.name.partition(".")[2]]
+        warnings.warn(f"{spec.name} is deprecated and goes at castrajectory 1.0: import {new}", DeprecationWarning,
+                      stacklevel=2)
+        module = importlib.import_module(new)
         self._spec = module.__spec__
         return module
 
@@ -90,12 +97,13 @@ from .models.rigidbody import (  # noqa: E402
     Inertia, RigidBody, angular_momentum, angular_velocity, body_point, quaternion_rate, rotation, unit_norm)
 from .models.control import Control  # noqa: E402
 from .solve.optimal_control import OptimalControl  # noqa: E402
+from .solve.contact.options import ContactControlOptions  # noqa: E402
 from .solve.simulate import simulate  # noqa: E402
 
 __all__ = ["LagrangianSystem", "Atoms", "MassMatrix", "Gravity", "Spring", "Potential", "Contact", "RigidBody",
            "Inertia", "Force", "Dissipation", "Damping", "time", "velocity", "schemes", "simulate",
            "rotation", "body_point", "unit_norm", "quaternion_rate", "angular_velocity", "angular_momentum",
-           "Control", "OptimalControl"]
+           "Control", "OptimalControl", "ContactControlOptions"]
 
 
 def schemes() -> dict:

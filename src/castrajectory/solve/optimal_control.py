@@ -235,7 +235,7 @@ class OptimalControl:
 
     # -------------------------------------------------------------- the solve
     def solve(self, guess: Optional[Dict[str, np.ndarray]] = None, options: Optional[dict] = None,
-              verbose: bool = False, keep_modes: bool = False) -> ControlResult:
+              verbose: bool = False, keep_modes: bool = False, contact=None) -> ControlResult:
         """Solve the whole DMOC program with Ipopt from ``guess`` (``{"q": (N+1, n), "u": (N, nu), "T": …}``,
         any part; the rest: the boundary conditions interpolated, zero controls clipped to their bounds),
         then certify the answer (see the module docstring).
@@ -246,13 +246,19 @@ class OptimalControl:
         study follows one optimum (the cart-pole from the straight-line guess lands on two different local
         optima at N = 100 and N = 200 without it), and the fine grid needs a few iterations (7-9 instead of
         39-289 on the cart-pole).  A rung that fails is dropped: the grid then starts from the boundary
-        conditions.  ``grids`` lists the grids solved."""
+        conditions.  ``grids`` lists the grids solved.
+
+        A system with contact is solved whole through its contacts (:mod:`castrajectory.solve.contact.control`);
+        ``contact`` takes that solve's settings, a :class:`~castrajectory.solve.contact.options.ContactControlOptions`
+        (its start policies, penalties, rounds, certificate tolerance; the library's by default)."""
         why = self._inconsistency()
         if why:
             raise InputError(f"the problem is inconsistent: {why}; nothing was solved")
         memory.check_control(self)  # a grid this process cannot hold: refused before anything is built
         if self.system.contact is not None:
-            return self._solve_contact(guess, options, verbose, keep_modes)
+            return self._solve_contact(guess, options, verbose, keep_modes, contact)
+        if contact is not None:
+            raise InputError("contact= takes the settings of a contact-implicit solve: this system has no contact")
         if keep_modes:
             raise InputError("keep_modes is for a system with contact (the contact modes of the guess's march)")
         rungs: List[int] = []
@@ -270,7 +276,7 @@ class OptimalControl:
             out.solve_time_s += spent
         return out
 
-    def _solve_contact(self, guess, options, verbose, keep_modes=False) -> "ControlResult":
+    def _solve_contact(self, guess, options, verbose, keep_modes=False, contact=None) -> "ControlResult":
         """Contact-implicit optimal control (:mod:`castrajectory.solve.contact.control`): the whole MPCC in one
         program, its guess the contact march of the controls' guess, its answer certified by the march."""
         from .contact.control import solve_contact_control
@@ -295,7 +301,7 @@ class OptimalControl:
         hi = np.concatenate([c.upper for c in self._controls]) if self._controls else np.zeros(0)
         path = [(ca.Function(f"g{j}", [q, u, s.t], [g]), lb, ub) for j, (g, lb, ub) in enumerate(self._path)]
         return solve_contact_control(s, self.T, self.N, self.scheme, (q0, v0), (qN, vN), running, final, (lo, hi),
-                                     self._controls, guess, options, verbose, keep_modes, path)
+                                     self._controls, guess, options, verbose, keep_modes, path, contact)
 
     def _inconsistency(self) -> Optional[str]:
         """What the inputs prove inconsistent before any solve (``None``: nothing proved; Ipopt's

@@ -37,6 +37,6 @@ from .guess import GUESS_CHUNK, SIMULTANEOUS_TOL, event_guess  # noqa: F401
 from .march import MAX_SPLITS, discrete_march  # noqa: F401
 from .search import MAX_COMBINATIONS, SIMULTANEOUS_GAP  # noqa: F401
 from .nlp import BRANCH_IPOPT, CONTACT_IPOPT, ContactNLP  # noqa: F401
-from .options import ContactOptions  # noqa: F401
+from .options import ContactControlOptions, ContactOptions  # noqa: F401
 from .solution import IMPACT_SPEED_STEPS, IMPULSE_TOL, ContactTrajectory, SubNodeImpact  # noqa: F401
 from .strategy import solve_contact  # noqa: F401

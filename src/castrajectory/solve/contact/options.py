@@ -106,6 +106,15 @@ class ContactControlOptions:
     * ``polish_rounds``, ``polish_contracting``: branch re-solves of an answer that does not certify: at most
       ``polish_rounds``, and up to ``polish_contracting`` while each certificate halves the last;
     * ``branch_small_iter``: iterations of a branch solve's first try, from its march with a small barrier.
+
+    >>> import castrajectory as ct
+    >>> o = ct.ContactControlOptions(starts=("warm", "cold"), certificate_tol=1e-8)
+    >>> o.starts, o.penalties[-1], o.timing_rounds
+    (('warm', 'cold'), 1000000.0, 6)
+    >>> ct.ContactControlOptions(starts=("warm",))
+    Traceback (most recent call last):
+        ...
+    castrajectory.validation.InputError: starts must name start policies, the last one 'cold' (got ('warm',))
     """
 
     ipopt: dict = field(default_factory=_ipopt_base)
