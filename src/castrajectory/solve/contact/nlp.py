@@ -129,45 +129,53 @@ class ContactNLP(ContactTranscription):
             "impact_law": (np.where(law.reshape(-1), 0.0, -np.inf), np.where(law.reshape(-1), 0.0, np.inf)),
         }
         if self.cm.friction:
-            # the friction's modes: sticking, the slip row vanishes (ρ within the cone); sliding, ρ = ∓μ_f and
-            # the slip has the matching sign; no friction force, ρ = 0
-            d = self.cm.fd
-            fm = np.asarray(point["fmodes"]).reshape(L, 2 * c)
-            muf = np.tile(np.concatenate([self.cm.mu_f, self.cm.mu_f]), L).reshape(L, 2 * c)
-            # (an impact's ratio, mode X, is the frictional impact law's: fixed at the march's value)
-            rx = np.asarray(point["fratio"], float).reshape(L, 2 * c, d)
-            fmd, mud = np.repeat(fm[..., None], d, axis=2), np.repeat(muf[..., None], d, axis=2)
-            rlo = np.select([fmd == M.STICK, fmd == M.UP, fmd == M.DOWN, fmd == M.FIX, fmd == M.SLIDE], [-mud, -mud, mud, rx, -mud], 0.0)
-            rhi = np.select([fmd == M.STICK, fmd == M.UP, fmd == M.DOWN, fmd == M.FIX, fmd == M.SLIDE], [mud, -mud, mud, rx, mud], 0.0)
-            slo = np.select([fmd == M.STICK, fmd == M.UP], [0.0, 0.0], -np.inf)
-            shi = np.select([fmd == M.STICK, fmd == M.DOWN], [0.0, 0.0], np.inf)
-            bounds["fratio"] = (rlo.reshape(-1), rhi.reshape(-1))
-            # the contacts that arrive at their sub-node (an impact, caught or fixed by a law): slip after it
-            self.arrive = np.isin(modes, M.AT_SUB).astype(float)
-            self.hold(arrive=self.arrive)
-            bounds["slip"] = (slo.reshape(-1), shi.reshape(-1))
-            # a released contact's share: its ratio and the slip before the impact as its node slot's mode (stick, or
-            # slide with the node's ratio); a K arrival's ratio Stronge's (the march's)
-            fn = np.repeat(fm[:, :c, None], d, axis=2)
-            rel_d = np.repeat(release[..., None], d, axis=2)
-            fl_march = np.asarray(point["fleft"], float).reshape(L, c, d)
-            kd = np.repeat(leftfix[..., None], d, axis=2)
-            flo = np.where(kd, fl_march, np.where(rel_d, np.select([fn == M.STICK, fn == M.UP, fn == M.DOWN, fn == M.SLIDE],
-                                                                   [-mud[:, :c], -mud[:, :c], mud[:, :c], fl_march],
-                                                                   0.0), 0.0))
-            fhi = np.where(kd, fl_march, np.where(rel_d, np.select([fn == M.STICK, fn == M.UP, fn == M.DOWN, fn == M.SLIDE],
-                                                                   [mud[:, :c], -mud[:, :c], mud[:, :c], fl_march],
-                                                                   0.0), 0.0))
-            bounds["fleft"] = (flo.reshape(-1), fhi.reshape(-1))
-            turn_d = np.repeat(turns[..., None], d, axis=2)
-            bounds["left_slip"] = (np.where(turn_d | rel_d & np.isin(fn, (M.STICK, M.UP)), 0.0, -np.inf).reshape(-1),
-                                   np.where(turn_d | rel_d & np.isin(fn, (M.STICK, M.DOWN)), 0.0, np.inf).reshape(-1))
-            if d == 2:
-                # the circular cone: |ρ| ≤ μ_f sticking or sliding; sliding, ρ|s| + μ_f s = 0
-                on = np.isin(fm, (M.STICK, M.SLIDE))
-                bounds["cone"] = (np.where(on, 0.0, -np.inf).reshape(-1), np.full(L * 2 * c, np.inf))
-                sl = np.repeat((fm == M.SLIDE)[..., None], d, axis=2).reshape(-1)
-                bounds["slide"] = (np.where(sl, 0.0, -np.inf), np.where(sl, 0.0, np.inf))
+            bounds.update(self._friction_bounds(point, modes, release, leftfix, turns))
+        return bounds
+
+    def _friction_bounds(self, point, modes, release, leftfix, turns) -> Dict[str, tuple]:
+        """The friction's part of :meth:`mode_bounds` (and its ``arrive`` parameter): each slot's ratio and slip by
+        its friction mode, a released contact's share, and on a tangent plane the circular cone's rows."""
+        c, L = self.cm.c, self.L
+        bounds = {}
+        # the friction's modes: sticking, the slip row vanishes (ρ within the cone); sliding, ρ = ∓μ_f and
+        # the slip has the matching sign; no friction force, ρ = 0
+        d = self.cm.fd
+        fm = np.asarray(point["fmodes"]).reshape(L, 2 * c)
+        muf = np.tile(np.concatenate([self.cm.mu_f, self.cm.mu_f]), L).reshape(L, 2 * c)
+        # (an impact's ratio, mode X, is the frictional impact law's: fixed at the march's value)
+        rx = np.asarray(point["fratio"], float).reshape(L, 2 * c, d)
+        fmd, mud = np.repeat(fm[..., None], d, axis=2), np.repeat(muf[..., None], d, axis=2)
+        rlo = np.select([fmd == M.STICK, fmd == M.UP, fmd == M.DOWN, fmd == M.FIX, fmd == M.SLIDE], [-mud, -mud, mud, rx, -mud], 0.0)
+        rhi = np.select([fmd == M.STICK, fmd == M.UP, fmd == M.DOWN, fmd == M.FIX, fmd == M.SLIDE], [mud, -mud, mud, rx, mud], 0.0)
+        slo = np.select([fmd == M.STICK, fmd == M.UP], [0.0, 0.0], -np.inf)
+        shi = np.select([fmd == M.STICK, fmd == M.DOWN], [0.0, 0.0], np.inf)
+        bounds["fratio"] = (rlo.reshape(-1), rhi.reshape(-1))
+        # the contacts that arrive at their sub-node (an impact, caught or fixed by a law): slip after it
+        self.arrive = np.isin(modes, M.AT_SUB).astype(float)
+        self.hold(arrive=self.arrive)
+        bounds["slip"] = (slo.reshape(-1), shi.reshape(-1))
+        # a released contact's share: its ratio and the slip before the impact as its node slot's mode (stick, or
+        # slide with the node's ratio); a K arrival's ratio Stronge's (the march's)
+        fn = np.repeat(fm[:, :c, None], d, axis=2)
+        rel_d = np.repeat(release[..., None], d, axis=2)
+        fl_march = np.asarray(point["fleft"], float).reshape(L, c, d)
+        kd = np.repeat(leftfix[..., None], d, axis=2)
+        flo = np.where(kd, fl_march, np.where(rel_d, np.select([fn == M.STICK, fn == M.UP, fn == M.DOWN, fn == M.SLIDE],
+                                                               [-mud[:, :c], -mud[:, :c], mud[:, :c], fl_march],
+                                                               0.0), 0.0))
+        fhi = np.where(kd, fl_march, np.where(rel_d, np.select([fn == M.STICK, fn == M.UP, fn == M.DOWN, fn == M.SLIDE],
+                                                               [mud[:, :c], -mud[:, :c], mud[:, :c], fl_march],
+                                                               0.0), 0.0))
+        bounds["fleft"] = (flo.reshape(-1), fhi.reshape(-1))
+        turn_d = np.repeat(turns[..., None], d, axis=2)
+        bounds["left_slip"] = (np.where(turn_d | rel_d & np.isin(fn, (M.STICK, M.UP)), 0.0, -np.inf).reshape(-1),
+                               np.where(turn_d | rel_d & np.isin(fn, (M.STICK, M.DOWN)), 0.0, np.inf).reshape(-1))
+        if d == 2:
+            # the circular cone: |ρ| ≤ μ_f sticking or sliding; sliding, ρ|s| + μ_f s = 0
+            on = np.isin(fm, (M.STICK, M.SLIDE))
+            bounds["cone"] = (np.where(on, 0.0, -np.inf).reshape(-1), np.full(L * 2 * c, np.inf))
+            sl = np.repeat((fm == M.SLIDE)[..., None], d, axis=2).reshape(-1)
+            bounds["slide"] = (np.where(sl, 0.0, -np.inf), np.where(sl, 0.0, np.inf))
         return bounds
 
     def solve_branch(self, q0, p0, guess: Dict[str, np.ndarray], options=None, verbose=False,

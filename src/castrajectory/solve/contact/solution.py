@@ -277,6 +277,50 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     t_sub = t[:-1] + (0.5 + B) * H[:N]
     # Impacts (_impacts_at): at the sub-nodes, and at interior nodes where a flight landed on the node (the
     # march's mode N: the node's impulse h ν); the node's momentum is then the one after it, not the mean
+    impacts = _impacts(cm, tn, res, N, q, S, B, MU, ZM, ZP, H, t, t_sub, gap, closed, force, half, pp, p)
+    simultaneous = _simultaneous_warnings(cm, impacts)
+    # velocities M⁻¹p, tangent to the holonomic constraints where there are any
+    v = cm.dm.velocities(q, p)
+    energy = sysm.energies(q, v)
+    gap_sub = np.asarray(sysm.gap.map(N)(S.T)[0]).reshape(c, N).T
+    # Impulse per node: Λ_k = h ν_k + (1 − α_k) μ_k + α_{k−1} μ_{k−1}, each sub-node impulse shared
+    # between its two nodes by linear (hat-function) interpolation of its time; node N takes the
+    # look-ahead step's node force and sub-node share (its dual cell reaches past T).  For a body
+    # resting on the ground Λ_k = m g h exactly whatever the sub-nodes do (derivation, "Resting
+    # contact"); Λ_0 covers the half cell [0, h/2].
+    alpha_full = 0.5 + res.values["beta"][:NL]
+    mu_full = res.values["mu"][:NL * c].reshape(NL, c)
+    lam = nu_full[:N + 1] + (1.0 - alpha_full[:N + 1, None]) * mu_full[:N + 1]
+    lam[1:] += alpha_full[:N, None] * mu_full[:N]
+    nu = nu_full[:N + 1].copy()
+    total_iter = sum(a["iterations"] for a in attempts)
+    fratio, slip, fimp = _friction_parts(cm, tn, res, N, NL, nu_full, alpha_full, mu_full, q, S, B, hv)
+    warnings = simultaneous + _elastic_loss_warning(cm, energy, impacts, H[:N])
+    # the nodes' dual cells: node 0's is half a step; node N's reaches past T into the look-ahead step, as its Λ does
+    cell = 0.5 * (np.concatenate([[0.0], H[:N]]) + H[:N + 1])
+    contact_force = lam / cell[:, None]
+    releases = _releases(t, closed, contact_force, impacts)
+    return ContactTrajectory(
+        warnings=warnings,
+        t=t, q=q, p=p, v=v, energy=energy, t_sub=t_sub, q_sub=S, mu=MU, nu=nu, gap=gap, gap_sub=gap_sub,
+        node_impulse=lam, impacts=impacts, complementarity_residual=float(res.complementarity_residual),
+        releases=releases, contact_force=contact_force,
+        status=res.status, success=res.success, message=res.message, solver_status=res.solver_status,
+        iterations=int(total_iter),
+        build_time_s=float(sum(a["build_time_s"] for a in attempts)),
+        solve_time_s=float(guess_time + sum(a["solve_time_s"] for a in attempts)),
+        scheme=cm.dm.scheme.name, homotopy=list(res.homotopy), attempts=attempts, n=int(round(float(t[-1]) / h)),
+        friction_ratio=fratio, slip=slip, friction_impulse=fimp,
+        friction_coefficients=cm.mu_f.copy() if cm.friction else None,
+        slip_turns=[(float(t_sub[k]), j, kind) for k, j, kind in getattr(tn, "turns", []) if k < N] if cm.friction else None,
+        program={"terms": sysm.terms(), "steps": int(tn.L), **tn.nlp.anatomy()})
+
+
+def _impacts(cm, tn, res, N, q, S, B, MU, ZM, ZP, H, t, t_sub, gap, closed, force, half, pp, p) -> list:
+    """The answer's impacts (:func:`_impacts_at`), sorted by time: at the sub-nodes, and at interior nodes where a
+    flight landed on the node (the march's mode N: the node's impulse h ν), whose momentum ``p`` is then set, in
+    place, to the one after it, not the mean."""
+    c, sysm = cm.c, cm.system
     tol = IMPULSE_TOL * tn.scales_p / tn.scales_ell
     impacts = []
     # (friction: the ratios of the sub-node impulses and of the node forces, for the tangential impulses)
@@ -321,22 +365,12 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
             impacts += at
             p[k] = pp[k]
     impacts.sort(key=lambda i: (i.t, i.contact))
-    simultaneous = _simultaneous_warnings(cm, impacts)
-    # velocities M⁻¹p, tangent to the holonomic constraints where there are any
-    v = cm.dm.velocities(q, p)
-    energy = sysm.energies(q, v)
-    gap_sub = np.asarray(sysm.gap.map(N)(S.T)[0]).reshape(c, N).T
-    # Impulse per node: Λ_k = h ν_k + (1 − α_k) μ_k + α_{k−1} μ_{k−1}, each sub-node impulse shared
-    # between its two nodes by linear (hat-function) interpolation of its time; node N takes the
-    # look-ahead step's node force and sub-node share (its dual cell reaches past T).  For a body
-    # resting on the ground Λ_k = m g h exactly whatever the sub-nodes do (derivation, "Resting
-    # contact"); Λ_0 covers the half cell [0, h/2].
-    alpha_full = 0.5 + res.values["beta"][:NL]
-    mu_full = res.values["mu"][:NL * c].reshape(NL, c)
-    lam = nu_full[:N + 1] + (1.0 - alpha_full[:N + 1, None]) * mu_full[:N + 1]
-    lam[1:] += alpha_full[:N, None] * mu_full[:N]
-    nu = nu_full[:N + 1].copy()
-    total_iter = sum(a["iterations"] for a in attempts)
+    return impacts
+
+
+def _friction_parts(cm, tn, res, N, NL, nu_full, alpha_full, mu_full, q, S, B, hv):
+    """``(friction ratios, slips, friction impulses per node)`` of the answer, ``None`` each without friction."""
+    c = cm.c
     fratio = slip = fimp = None
     if cm.friction:
         # the friction impulses per node, lumped like Λ: the node's ρ h ν and the hat-function shares of ρ μ
@@ -358,25 +392,7 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
         slip = slip.reshape(N, 2, c, fd).transpose(0, 2, 1, 3)
         if fd == 1:       # planar: (N, contacts, 2) for [node force, sub-node impulse]
             fratio, slip = fratio[..., 0], slip[..., 0]
-    warnings = simultaneous + _elastic_loss_warning(cm, energy, impacts, H[:N])
-    # the nodes' dual cells: node 0's is half a step; node N's reaches past T into the look-ahead step, as its Λ does
-    cell = 0.5 * (np.concatenate([[0.0], H[:N]]) + H[:N + 1])
-    contact_force = lam / cell[:, None]
-    releases = _releases(t, closed, contact_force, impacts)
-    return ContactTrajectory(
-        warnings=warnings,
-        t=t, q=q, p=p, v=v, energy=energy, t_sub=t_sub, q_sub=S, mu=MU, nu=nu, gap=gap, gap_sub=gap_sub,
-        node_impulse=lam, impacts=impacts, complementarity_residual=float(res.complementarity_residual),
-        releases=releases, contact_force=contact_force,
-        status=res.status, success=res.success, message=res.message, solver_status=res.solver_status,
-        iterations=int(total_iter),
-        build_time_s=float(sum(a["build_time_s"] for a in attempts)),
-        solve_time_s=float(guess_time + sum(a["solve_time_s"] for a in attempts)),
-        scheme=cm.dm.scheme.name, homotopy=list(res.homotopy), attempts=attempts, n=int(round(float(t[-1]) / h)),
-        friction_ratio=fratio, slip=slip, friction_impulse=fimp,
-        friction_coefficients=cm.mu_f.copy() if cm.friction else None,
-        slip_turns=[(float(t_sub[k]), j, kind) for k, j, kind in getattr(tn, "turns", []) if k < N] if cm.friction else None,
-        program={"terms": sysm.terms(), "steps": int(tn.L), **tn.nlp.anatomy()})
+    return fratio, slip, fimp
 
 
 def _releases(t: np.ndarray, closed: np.ndarray, force: np.ndarray, impacts) -> List[Release]:
