@@ -35,7 +35,7 @@ import numpy as np
 from ...discretise.contact.elements import ContactMechanics
 from ...discretise.contact.transcription import TOUCH_TOL
 from . import modes as _modes
-from .modes import FIX, FREE, STICK, C, H, I, O
+from .modes import FIX, FREE, STICK, H, I, O
 from .search import _march_step
 from .step import _Step
 
@@ -61,17 +61,15 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
     halved step keeps its base step's).  ``starts``: each step's ``(modes, friction modes, unknowns)``, tried
     before its search (:func:`.search._started`; a halved step searches its own), the steps marched one by one."""
     step = _Step(cm, scales)
+    U = None
     if cm.nu:
         U = np.asarray(controls, float).reshape(L, cm.nu)
         # (a chunk's function has a fixed length: its steps past L take the last control, unused)
         U = np.vstack([U, np.repeat(U[-1:], CHUNK_STEPS, axis=0)])
-    c = cm.c
-    ell = scales[0]
-    tol = TOUCH_TOL * ell          # touching: gap within this
-    gapf = cm.system.gap
+    tol = TOUCH_TOL * scales[0]          # touching: gap within this
     rows = {key: [] for key in _ROWS}
     q, p = np.asarray(q0, float).copy(), np.asarray(p0, float).copy()
-    g_q = np.asarray(gapf(q)[0]).reshape(-1)
+    g_q = np.asarray(cm.system.gap(q)[0]).reshape(-1)
     held_prev = g_q <= tol
     rows["q"].append(q)
     k, span = 0, 8
@@ -79,85 +77,105 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_s
         touch = g_q <= tol
         # (with friction the held contacts' slots keep the modes they ended the previous step in: sticking or
         # sliding, each step checked)
-        held_now = touch & held_prev
+        held = touch & held_prev
         fm = [FREE] * (2 * cm.c)
         if cm.friction:
-            act = [bool(held_now[j % cm.c]) and cm.mu_f[j % cm.c] > 0 for j in range(2 * cm.c)]
+            act = [bool(held[j % cm.c]) and cm.mu_f[j % cm.c] > 0 for j in range(2 * cm.c)]
             fm = [(step.fprev[i] if step.fprev[i] not in (FREE, FIX) else STICK) if act[i] else FREE
                   for i in range(2 * cm.c)]
-        Qn = None
         if cm.nu:
             step.uarg = [U[k]]
         if L - k >= 2 and np.all(~touch | held_prev) and starts is None:
-            # steps that keep their modes (open contacts stay open, held ones held: free flight, a body
-            # resting or sliding), many in one call: the march's step with those modes (the same rows,
-            # Newton to rounding), accepted up to the first step that touches or crosses with an open
-            # contact, pulls on a held one, or does not converge
-            held = touch & held_prev
-            # (chunks of 8 to CHUNK_STEPS steps: doubled after a chunk accepted whole, back to 8 after a
-            # break; one function per length and system, the steps past L not used)
-            K = min(span, L - k)
-            x0 = np.zeros(cm.nx)
-            for name, sl in cm.layout.items():       # the last step's values start the chunk's first Newton
-                if rows.get(name) and name not in ("q", "qs", "beta", "zs"):
-                    x0[sl] = np.asarray(rows[name][-1], float).reshape(-1)[:sl.stop - sl.start]
-            try:
-                Qn, Pn, X, Gs, Gn, Rr, SL = (a[:, :K] if a.ndim == 2 else a[:K]
-                                             for a in step.chunk(span, q, p, h, held, fm, x0,
-                                                                 U[k:k + span] if cm.nu else None))
-            except RuntimeError:
-                # a singular Newton system (friction rows at zero force: no step before the chunk yet)
-                Qn = None
-        if Qn is not None:
-            held = touch & held_prev
-            K = min(span, L - k)
-            c = cm.c
-            lay = cm.layout
-            NU, MU = X[lay["nu"]], X[lay["mu"]]
-            NU[~held], MU[~held] = 0.0, 0.0          # open: their rows ν = μ = 0, exactly
-            ok = (Rr <= CHUNK_TOL * (1.0 + np.max(np.abs(X), axis=0)))
-            ok &= np.all((Gs > tol) & (Gn > tol) | held[:, None], axis=0)
-            ok &= np.all((NU >= 0.0) & (MU >= 0.0) | ~held[:, None], axis=0)
-            if cm.friction:
-                ok &= step.friction_holds(fm, X[lay["fratio"]], SL)
-                # a sliding contact whose slip turns inside a step (planar): that step is marched alone, where its
-                # sub-node times the turn (mode W, search._slip_turn)
-                ok &= ~_turns(cm, fm, held, np.column_stack([q, Qn]), np.column_stack([p, Pn]))
-            i = int(np.argmin(ok)) if not np.all(ok) else K
-            span = min(2 * span, CHUNK_STEPS) if i == K else 8
-            if i:
-                modes = [H if hj else O for hj in held]
-                for j in range(i):
-                    vals = {name: X[sl, j] for name, sl in lay.items()}
-                    vals.update(q=Qn[:, j], beta=0.0, nu=NU[:, j], mu=MU[:, j],
-                                fratio=X[lay["fratio"], j] if cm.friction else np.zeros(2 * c))
-                    _record(rows, vals, np.zeros(c, bool), h, k + j, modes, list(fm))
-                step.fprev = list(fm)
-                q, p, g_q = Qn[:, i - 1].copy(), Pn[:, i - 1].copy(), Gn[:, i - 1].copy()
-                held_prev = held.copy()
-                k += i
-                continue
-        pending = [h]
-        while pending:
-            hk = pending.pop(0)
-            out = _march_step(step, q, p, hk, g_q, held_prev, tol, finest=hk < h / 2 ** max_splits * 1.5,
-                              start=starts[k] if starts is not None and hk == h else None)
-            if out == "split":
-                pending[:0] = [0.5 * hk, 0.5 * hk]
-                continue
-            if isinstance(out, tuple) and len(out) == 2:
-                if trace is not None:
-                    trace.append((k, hk) + out + (q, p, g_q, held_prev))
-                return None
-            modes, gn, fmodes = out["modes"], out["gn"], out["fmodes"]
-            _record(rows, out, np.array([m == I for m in modes]) & (gn > tol), hk, k, modes, fmodes)
-            step.fprev = list(fmodes)
-            qn = out["q"]
-            p = np.asarray(cm.p_node_minus(out["qs"], out["beta"], qn, hk,
-                                           *cm.stage_parts(out["zs"])[1], *step.uarg)).reshape(-1)
-            held_prev = np.array([m in (H, C, _modes.K, _modes.W) for m in modes])
-            q, g_q = qn, gn
+            got = _chunk(step, rows, q, p, h, held, fm, k, min(span, L - k), span, U, tol)
+            if got is not None:
+                i, span, after = got
+                if i:
+                    q, p, g_q = after
+                    held_prev = held.copy()
+                    k += i
+                    continue
+        got = _one_step(step, rows, q, p, h, k, g_q, held_prev, tol, max_splits,
+                        starts[k] if starts is not None else None, trace)
+        if got is None:
+            return None
+        q, p, g_q, held_prev = got
         k += 1
+    return _arrays(cm, rows)
+
+
+def _chunk(step: _Step, rows, q, p, h, held, fm, k: int, K: int, span: int, U, tol: float):
+    """Steps that keep their modes (open contacts stay open, held ones held: free flight, a body resting or sliding),
+    many in one call (:meth:`_Step.chunk` with those modes: the same rows, Newton to rounding), accepted up to the
+    first step that touches or crosses with an open contact, pulls on a held one, or does not converge; the accepted
+    ones recorded in ``rows``.  Chunks run 8 to CHUNK_STEPS steps: ``span`` doubles after a chunk accepted whole
+    (``K`` of its steps used), and goes back to 8 after a break; one function per length and system.  ``None`` where
+    the chunk's Newton system was singular, else ``(steps accepted, the next span, (q, p, gaps) after them)``."""
+    cm = step.cm
+    c, lay = cm.c, cm.layout
+    x0 = np.zeros(cm.nx)
+    for name, sl in lay.items():       # the last step's values start the chunk's first Newton
+        if rows.get(name) and name not in ("q", "qs", "beta", "zs"):
+            x0[sl] = np.asarray(rows[name][-1], float).reshape(-1)[:sl.stop - sl.start]
+    try:
+        Qn, Pn, X, Gs, Gn, Rr, SL = (a[:, :K] if a.ndim == 2 else a[:K]
+                                     for a in step.chunk(span, q, p, h, held, fm, x0,
+                                                         U[k:k + span] if cm.nu else None))
+    except RuntimeError:
+        return None      # (a singular Newton system: friction rows at zero force, no step before the chunk yet)
+    NU, MU = X[lay["nu"]], X[lay["mu"]]
+    NU[~held], MU[~held] = 0.0, 0.0          # open: their rows ν = μ = 0, exactly
+    ok = (Rr <= CHUNK_TOL * (1.0 + np.max(np.abs(X), axis=0)))
+    ok &= np.all((Gs > tol) & (Gn > tol) | held[:, None], axis=0)
+    ok &= np.all((NU >= 0.0) & (MU >= 0.0) | ~held[:, None], axis=0)
+    if cm.friction:
+        ok &= step.friction_holds(fm, X[lay["fratio"]], SL)
+        # a sliding contact whose slip turns inside a step (planar): that step is marched alone, where its
+        # sub-node times the turn (mode W, search._slip_turn)
+        ok &= ~_turns(cm, fm, held, np.column_stack([q, Qn]), np.column_stack([p, Pn]))
+    i = int(np.argmin(ok)) if not np.all(ok) else K
+    span = min(2 * span, CHUNK_STEPS) if i == K else 8
+    if not i:
+        return 0, span, None
+    modes = [H if hj else O for hj in held]
+    for j in range(i):
+        vals = {name: X[sl, j] for name, sl in lay.items()}
+        vals.update(q=Qn[:, j], beta=0.0, nu=NU[:, j], mu=MU[:, j],
+                    fratio=X[lay["fratio"], j] if cm.friction else np.zeros(2 * c))
+        _record(rows, vals, np.zeros(c, bool), h, k + j, modes, list(fm))
+    step.fprev = list(fm)
+    return i, span, (Qn[:, i - 1].copy(), Pn[:, i - 1].copy(), Gn[:, i - 1].copy())
+
+
+def _one_step(step: _Step, rows, q, p, h, k: int, g_q, held_prev, tol: float, max_splits: int, start, trace):
+    """Step ``k`` marched alone (:func:`_march_step`), halved where it would hold two impacts, its parts recorded in
+    ``rows``: ``(q, p, gaps, held)`` at its end, or ``None`` where a part's mode search fails (``trace`` told why).
+    ``start``: the step's ``(modes, friction modes, unknowns)`` to try first (a halved part searches its own)."""
+    cm = step.cm
+    pending = [h]
+    while pending:
+        hk = pending.pop(0)
+        out = _march_step(step, q, p, hk, g_q, held_prev, tol, finest=hk < h / 2 ** max_splits * 1.5,
+                          start=start if hk == h else None)
+        if out == "split":
+            pending[:0] = [0.5 * hk, 0.5 * hk]
+            continue
+        if isinstance(out, tuple) and len(out) == 2:
+            if trace is not None:
+                trace.append((k, hk) + out + (q, p, g_q, held_prev))
+            return None
+        modes, gn, fmodes = out["modes"], out["gn"], out["fmodes"]
+        _record(rows, out, np.array([m == I for m in modes]) & (gn > tol), hk, k, modes, fmodes)
+        step.fprev = list(fmodes)
+        qn = out["q"]
+        p = np.asarray(cm.p_node_minus(out["qs"], out["beta"], qn, hk,
+                                       *cm.stage_parts(out["zs"])[1], *step.uarg)).reshape(-1)
+        held_prev = np.array([m in _modes.CLOSES for m in modes])
+        q, g_q = qn, gn
+    return q, p, g_q, held_prev
+
+
+def _arrays(cm: ContactMechanics, rows) -> Dict[str, np.ndarray]:
+    """The march's rows as the program's point: flat arrays, without the entries the system does not have."""
     out = {key: np.asarray(val) for key, val in rows.items()}
     for key in _VALUES:
         if key != "beta":
