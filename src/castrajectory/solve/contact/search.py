@@ -3,6 +3,8 @@ condition), then every combination of the involved contacts' modes; the impact l
 cascade, Stronge's with friction) and the slip that stops or turns inside a step (:mod:`.march`'s docstring)."""
 from __future__ import annotations
 
+import functools
+
 from itertools import product
 
 import numpy as np
@@ -10,8 +12,8 @@ import numpy as np
 from ...discretise.contact.transcription import ALPHA_MIN
 from ...models.impact import (frictional_impact, frictional_impact_plane, sequential_frictional_impact,
                                sequential_impact)
-from .modes import (AT_SUB, DOWN, FIX, FREE, GAP_TIMED, IMPACT_SPEED_STEPS, KEPT_OUT, PUSHING, SLIDE, STICK, UP, C, F,
-                    H, I, K, N, O, P, R, T, W, releases, turn_fraction)
+from .modes import (AT_SUB, CLOSES, DOWN, FIX, FREE, GAP_TIMED, HELD, IMPACT_SPEED_STEPS, KEPT_OUT, PUSHING, SLIDE,
+                    STICK, UP, C, F, H, I, K, N, O, P, R, T, W, releases, turn_fraction)
 from .step import _Step, restage
 
 #: Mode changes tried per step before the march gives up.
@@ -242,7 +244,6 @@ def _friction(step: _Step, q, p, h, modes, x, mufix=None, rfix=None, mufixl=None
     if not step.nf:
         return x
     cm = step.cm
-    n = step.n
     # slots: the node's force of each contact (held or released: ν free), then its sub-node impulse (held)
     # (a caught arrival, C, holds its contact from the sub-node on: its impulse has friction like a held one's,
     # against the slip after the sub-node)
@@ -251,8 +252,8 @@ def _friction(step: _Step, q, p, h, modes, x, mufix=None, rfix=None, mufixl=None
     # (a contact released at the step's impact: its share of the first part's force slides or sticks as its node slot,
     # ContactMechanics.left_velocity; a K arrival's friction after its sub-node is a held one's, like C's)
     slow = _slow_arrivals(step, q, p, h) if any(mj == I for mj in modes) else np.zeros(c, bool)
-    active = [mj in (H, R, W) and cm.mu_f[j] > 0 for j, mj in enumerate(modes)] + \
-        [(mj in (H, C, K, W) or (mj == I and slow[j])) and cm.mu_f[j] > 0 for j, mj in enumerate(modes)]
+    active = [mj in HELD and cm.mu_f[j] > 0 for j, mj in enumerate(modes)] + \
+        [(mj in CLOSES or (mj == I and slow[j])) and cm.mu_f[j] > 0 for j, mj in enumerate(modes)]
     muf = np.concatenate([cm.mu_f, cm.mu_f])
     d = step.fd
     # (a slot starts as it ended the previous step; free, or fixed there by an impact's law, it starts sticking)
@@ -261,46 +262,9 @@ def _friction(step: _Step, q, p, h, modes, x, mufix=None, rfix=None, mufixl=None
         fixed = np.isfinite(np.asarray(rfix, float).reshape(2 * c, d)[:, 0])
         fm = [FIX if fixed[i] else f for i, f in enumerate(fm)]
         rfix = np.where(np.isfinite(rfix), rfix, 0.0)
-    tol = 1e-12 * step.vref
     slips = np.array([m in AT_SUB for m in modes], float)
-    choices = (STICK, UP, DOWN) if d == 1 else (STICK, SLIDE)
-
-    def judge(fm, x0):
-        """Solve in the friction modes ``fm``: ``(x, the most violated slot and its new mode)``; ``None`` if
-        Newton fails; the pick is None where every slot holds."""
-        xf, ok = step.solve(x0, q, p, h, modes, mufix=mufix, fmodes=fm, rfix=rfix, mufixl=mufixl, rfixl=rfixl)
-        if not ok:
-            return None
-        rho = xf[cm.layout["fratio"]]
-        slip = np.asarray(cm.slip_row(q, xf[:n], xf[n:2 * n], xf[2 * n], h, slips)).reshape(-1)
-        worst, pick = 0.0, None
-        if d == 2:
-            # the circular cone: sticking fails outside it (it then slides), sliding where the slip has vanished
-            rn = np.linalg.norm(rho.reshape(2 * c, d), axis=1)
-            sn = np.linalg.norm(slip.reshape(2 * c, d), axis=1)
-            for j, f in enumerate(fm):
-                if f == STICK and rn[j] > muf[j] * (1 + 1e-10):
-                    viol, new = rn[j] - muf[j], SLIDE
-                elif f == SLIDE and sn[j] <= 1e-10 * step.vref:     # the slip has (all but) vanished: sticks
-                    viol, new = muf[j], STICK
-                else:
-                    continue
-                if viol > worst:
-                    worst, pick = viol, (j, new)
-            return xf, pick
-        for j, f in enumerate(fm):
-            if f == STICK and abs(rho[j]) > muf[j] * (1 + 1e-10):
-                viol, new = abs(rho[j]) - muf[j], (DOWN if rho[j] > 0 else UP)
-            elif f == UP and slip[j] < -tol:
-                viol, new = -slip[j] / step.vref, STICK
-            elif f == DOWN and slip[j] > tol:
-                viol, new = slip[j] / step.vref, STICK
-            else:
-                continue
-            if viol > worst:
-                worst, pick = viol, (j, new)
-        return xf, pick
-
+    judge = functools.partial(_friction_judged, step, q, p, h, modes, slips, muf,
+                              dict(mufix=mufix, rfix=rfix, mufixl=mufixl, rfixl=rfixl))
     seen = set()
     start = x
     for _ in range(FRICTION_ROUNDS):
@@ -321,11 +285,10 @@ def _friction(step: _Step, q, p, h, modes, x, mufix=None, rfix=None, mufixl=None
     # the greedy search cycled or stalled (a slip that stops or turns within the step, where the slots of the
     # node and the sub-node interact): every combination of the free slots' modes, fewest changes first
     slots = [i for i in range(2 * c) if active[i] and fm[i] != FIX]
-    base = [f for f in fm]
-    combos = sorted(product(choices, repeat=len(slots)),
-                    key=lambda ch: sum(a != base[i] for a, i in zip(ch, slots)))
+    choices = (STICK, UP, DOWN) if d == 1 else (STICK, SLIDE)
+    combos = sorted(product(choices, repeat=len(slots)), key=lambda ch: sum(a != fm[i] for a, i in zip(ch, slots)))
     for ch in combos[:MAX_COMBINATIONS]:
-        trial = list(base)
+        trial = list(fm)
         for i, f in zip(slots, ch):
             trial[i] = f
         if tuple(trial) in seen:
@@ -335,6 +298,47 @@ def _friction(step: _Step, q, p, h, modes, x, mufix=None, rfix=None, mufixl=None
             step.last_fmodes = trial
             return got[0]
     return None
+
+
+def _friction_judged(step: _Step, q, p, h, modes, slips, muf, fixed: dict, fm, x0):
+    """The step solved in the friction modes ``fm`` from ``x0`` (:func:`_friction`): ``(x, the most violated slot and
+    its new mode)``, the pick ``None`` where every slot holds; ``None`` where Newton fails.  Sticking fails where the
+    ratio leaves the cone (it then slides against it), sliding where the slip has the wrong sign or, on a tangent
+    plane, has vanished (it then sticks)."""
+    cm, n, c, d = step.cm, step.n, step.c, step.fd
+    xf, ok = step.solve(x0, q, p, h, modes, fmodes=fm, **fixed)
+    if not ok:
+        return None
+    rho = xf[cm.layout["fratio"]]
+    slip = np.asarray(cm.slip_row(q, xf[:n], xf[n:2 * n], xf[2 * n], h, slips)).reshape(-1)
+    tol = 1e-12 * step.vref
+    worst, pick = 0.0, None
+    if d == 2:
+        # the circular cone: sticking fails outside it (it then slides), sliding where the slip has vanished
+        rn = np.linalg.norm(rho.reshape(2 * c, d), axis=1)
+        sn = np.linalg.norm(slip.reshape(2 * c, d), axis=1)
+        for j, f in enumerate(fm):
+            if f == STICK and rn[j] > muf[j] * (1 + 1e-10):
+                viol, new = rn[j] - muf[j], SLIDE
+            elif f == SLIDE and sn[j] <= 1e-10 * step.vref:     # the slip has (all but) vanished: sticks
+                viol, new = muf[j], STICK
+            else:
+                continue
+            if viol > worst:
+                worst, pick = viol, (j, new)
+        return xf, pick
+    for j, f in enumerate(fm):
+        if f == STICK and abs(rho[j]) > muf[j] * (1 + 1e-10):
+            viol, new = abs(rho[j]) - muf[j], (DOWN if rho[j] > 0 else UP)
+        elif f == UP and slip[j] < -tol:
+            viol, new = -slip[j] / step.vref, STICK
+        elif f == DOWN and slip[j] > tol:
+            viol, new = slip[j] / step.vref, STICK
+        else:
+            continue
+        if viol > worst:
+            worst, pick = viol, (j, new)
+    return xf, pick
 
 
 def _slip_turn(step: _Step, q, p, h, modes, x, fmodes):
@@ -489,26 +493,11 @@ def _impact_law(step: _Step, q, p, h, x, modes, cascade: bool):
     seq = cm.system.contact.law == "sequential"
     if not (seq or step.nf):
         return None
-    n, c = step.n, step.c
-    o = 2 * n + 1
-    nu, mu = x[o:o + c], x[o + c:o + 2 * c]
-    at_node = any(m == N for m in modes)
-    if at_node:
-        # an impact at the node q_k: its impulses h ν, the momentum before it the incoming p
-        involved = [j for j, m in enumerate(modes) if (m == N or m in (H, R)) and nu[j] > 0.0]
-        qs, pm = q, p
-    else:
-        involved = [j for j, m in enumerate(modes) if m in PUSHING and mu[j] > 0.0]
-        if not any(modes[j] in GAP_TIMED for j in involved):
-            return None                  # no impact
-        qs, b = x[:n], float(x[2 * n])
-        # the momentum before the impact: p̃⁻ and the released contacts' shares (ContactMechanics.release_row)
-        pm = np.asarray(cm.p_minus(q, qs, b, h, *cm.stage_parts(x[cm.layout["zs"]])[0], *step.uarg)).reshape(-1)
-        sh = x[cm.layout["mul"]] * releases(modes)
-        if np.any(sh):
-            pm = pm + np.asarray(cm.system.gap(qs)[1]).T @ sh
-            if step.nf:
-                pm = pm + np.asarray(cm.system.tangent(qs)).T @ (x[cm.layout["fleft"]] * np.repeat(sh, step.fd))
+    c = step.c
+    got = _before_impact(step, q, p, h, x, modes)
+    if got is None:
+        return None                  # no impact
+    involved, qs, pm, at_node = got
     # (an arrival too slow to be an impact is persistent contact: no law; a caught one with friction and e = 0 takes
     # Stronge's law as the first part's closing impulse, mode K, and stays closed after it; with e > 0 a caught
     # arrival is the end of an accumulation, whose law is waived)
@@ -520,27 +509,11 @@ def _impact_law(step: _Step, q, p, h, x, modes, cascade: bool):
         not (not cascade and not at_node and not caught and np.all(slow[[j for j in involved if modes[j] == I]]))
     if not involved or (len(involved) >= 2) != cascade or (cascade and not seq) or (not cascade and not fric):
         return None
-    # the law in the contacts' velocities: Π = M⁻¹ on the constraints' tangent space (velocities)
-    Jx = np.asarray(cm.system.gap(qs)[1])[involved]
-    v = cm.dm.velocities(qs[None, :], pm[None, :])[0]
+    got = _law_impulses(step, qs, pm, involved, fric)
+    if got is None:
+        return "failed"          # a cascade on tangent planes: not modelled (the step fails, and says so)
+    Pn, Pt = got
     d = step.fd
-    if fric:
-        Dall = np.asarray(cm.system.tangent(qs)).reshape(c, d, -1)
-        Wr = np.vstack([Jx] + [Dall[involved, a] for a in range(d)])     # normals, then each tangent component
-        G = Wr @ cm.dm.velocities(np.repeat(qs[None, :], Wr.shape[0], axis=0), Wr).T
-        if len(involved) == 1:
-            law = frictional_impact if d == 1 else frictional_impact_plane
-            imp = law(G, Wr @ v, cm.mu_f[involved[0]], cm.e)
-            Pn, Pt = imp.P[:1], imp.P[1:].reshape(1, d)
-        elif d == 1:
-            Pn, Pt = sequential_frictional_impact(G, Wr @ v, cm.mu_f[involved], cm.e)
-            Pt = Pt.reshape(-1, 1)
-        else:
-            return "failed"          # a cascade on tangent planes: not modelled (the step fails, and says so)
-    else:
-        PiJt = cm.dm.velocities(np.repeat(qs[None, :], len(involved), axis=0), Jx)
-        Pn, _ = sequential_impact(Jx @ PiJt.T, Jx @ v, cm.e)
-        Pt = np.zeros((Pn.size, d))
     if caught:
         j = involved[0]
         mufixl, rfixl = np.zeros(c), np.zeros((c, d))
@@ -571,6 +544,64 @@ def _impact_law(step: _Step, q, p, h, x, modes, cascade: bool):
         if not ok:
             return "failed"
     return xs, new
+
+
+def _before_impact(step: _Step, q, p, h, x, modes):
+    """The state just before the step's impact (:func:`_impact_law`): ``(the contacts involved, the configuration,
+    the momentum before it, whether it is at the node)``, or ``None`` where the step has no impact.  At the node
+    ``q_k`` the impulses are h ν and the momentum before is the incoming p; at the sub-node, p̃⁻ with the released
+    contacts' shares (ContactMechanics.release_row)."""
+    cm = step.cm
+    n, c = step.n, step.c
+    o = 2 * n + 1
+    nu, mu = x[o:o + c], x[o + c:o + 2 * c]
+    at_node = any(m == N for m in modes)
+    if at_node:
+        # an impact at the node q_k: its impulses h ν, the momentum before it the incoming p
+        involved = [j for j, m in enumerate(modes) if (m == N or m in (H, R)) and nu[j] > 0.0]
+        qs, pm = q, p
+    else:
+        involved = [j for j, m in enumerate(modes) if m in PUSHING and mu[j] > 0.0]
+        if not any(modes[j] in GAP_TIMED for j in involved):
+            return None
+        qs, b = x[:n], float(x[2 * n])
+        # the momentum before the impact: p̃⁻ and the released contacts' shares (ContactMechanics.release_row)
+        pm = np.asarray(cm.p_minus(q, qs, b, h, *cm.stage_parts(x[cm.layout["zs"]])[0], *step.uarg)).reshape(-1)
+        sh = x[cm.layout["mul"]] * releases(modes)
+        if np.any(sh):
+            pm = pm + np.asarray(cm.system.gap(qs)[1]).T @ sh
+            if step.nf:
+                pm = pm + np.asarray(cm.system.tangent(qs)).T @ (x[cm.layout["fleft"]] * np.repeat(sh, step.fd))
+    return involved, qs, pm, at_node
+
+
+def _law_impulses(step: _Step, qs, pm, involved, fric: bool):
+    """The impact law's normal and tangential impulses ``(Pn, Pt)`` of the contacts ``involved`` at ``qs`` from the
+    momentum ``pm``: with friction Stronge's frictional law (one contact) or its sequential cascade (planar), else the
+    sequential law; ``None`` for a frictional cascade on tangent planes (not modelled)."""
+    cm, c = step.cm, step.c
+    # the law in the contacts' velocities: Π = M⁻¹ on the constraints' tangent space (velocities)
+    Jx = np.asarray(cm.system.gap(qs)[1])[involved]
+    v = cm.dm.velocities(qs[None, :], pm[None, :])[0]
+    d = step.fd
+    if fric:
+        Dall = np.asarray(cm.system.tangent(qs)).reshape(c, d, -1)
+        Wr = np.vstack([Jx] + [Dall[involved, a] for a in range(d)])     # normals, then each tangent component
+        G = Wr @ cm.dm.velocities(np.repeat(qs[None, :], Wr.shape[0], axis=0), Wr).T
+        if len(involved) == 1:
+            law = frictional_impact if d == 1 else frictional_impact_plane
+            imp = law(G, Wr @ v, cm.mu_f[involved[0]], cm.e)
+            Pn, Pt = imp.P[:1], imp.P[1:].reshape(1, d)
+        elif d == 1:
+            Pn, Pt = sequential_frictional_impact(G, Wr @ v, cm.mu_f[involved], cm.e)
+            Pt = Pt.reshape(-1, 1)
+        else:
+            return None
+    else:
+        PiJt = cm.dm.velocities(np.repeat(qs[None, :], len(involved), axis=0), Jx)
+        Pn, _ = sequential_impact(Jx @ PiJt.T, Jx @ v, cm.e)
+        Pt = np.zeros((Pn.size, d))
+    return Pn, Pt
 
 
 def _next_modes(modes, touch, g0, gs, gn, nu, mu, b, pen, tol, step, finest, catch=True):
