@@ -93,13 +93,13 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
     One impact per step: a second crossing in the same step is not looked for (the flight continues
     through it).
     """
-    n, c, e = cm.n, cm.c, cm.e
+    n, c = cm.n, cm.c
     # (holonomic constraints: the guess leaves their multipliers at 0; the branch solve forms them)
     lam0 = [np.zeros(cm.m)] if cm.m else []
     # (friction: the guess's rows carry no friction force; the march resolves friction)
     lam0 += [np.zeros(2 * cm.c * cm.fd)] if cm.friction else []
     p0 = np.asarray(cm.system.mass_matrix(q0)) @ np.asarray(v0, float)
-    Mf, gapf = cm.system.mass_matrix, cm.system.gap
+    gapf = cm.system.gap
     Q = np.zeros((L + 1, n))
     S = np.zeros((L, n))
     B = np.zeros(L)
@@ -117,43 +117,7 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
     p_held = None  # discrete momentum at the node, while the guess marches the held contacts
     while k < L:
         if np.any(active):
-            pk = p_held if p_held is not None else np.asarray(Mf(q)) @ v
-            step = _held_step(cm, q, pk, active, h, v)
-            if step is not None:
-                phn = np.asarray(gapf(step[1])[0]).reshape(-1)
-                closing = ~active & (phn < -tol)
-                if np.any(closing):
-                    # another contact closes during the held step: caught too, held from the step's middle
-                    step = _held_step(cm, q, pk, active | closing, h, v)
-                    if step is not None:
-                        phn = np.asarray(gapf(step[1])[0]).reshape(-1)
-                        active = active | closing
-            if step is not None:
-                qs_k, qn, nu_k, mu_k, p_next = step
-                if np.all(phn[~active] >= -tol):
-                    # the discrete motion with the held contacts (it keeps pressing on them)
-                    S[k], B[k], event[k] = qs_k, 0.0, True
-                    MU[k] = mu_k
-                    q, p_held = qn, p_next
-                    v = np.linalg.solve(np.asarray(Mf(q)), p_next)
-                    Q[k + 1] = q
-                    k += 1
-                    continue
-            p_held = None
-            qn, vn, ph = (np.asarray(x).reshape(-1) for x in cm.flow(q, v, h))
-            active &= ~(ph > tol)                        # the free flight lifts it off: released
-            closing = ~active & (ph < -tol)              # crossings while held: caught too (a guess)
-            if np.any(closing):
-                active |= closing
-                S[k] = 0.5 * (q + qn)
-                B[k] = 0.0
-                event[k] = True
-                Jc = np.asarray(gapf(S[k])[1])[closing]
-                vc = 0.5 * (v + vn)
-                MU[k, closing] = simultaneous_impact(np.asarray(Mf(S[k])), Jc, vc, 0.0)[0]
-            if np.any(active):
-                qn, vn = _hold(cm, qn, vn, active)
-            q, v = qn, vn
+            q, v, p_held, active = _while_held(cm, q, v, p_held, active, h, k, (S, B, MU, event), tol)
             Q[k + 1] = q
             k += 1
             continue
@@ -185,57 +149,81 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
         # contacts that start touching and separate are not crossings
         crossing = ~((phi0 <= tol) & (ph >= -tol))
         if np.any(ph[crossing] < -tol):
-            # the sub-node's time fraction is bounded: an earlier or later crossing is placed at the bound
-            tc = min(max(_bisect_crossing(cm, q, v, h, crossing), ALPHA_MIN * h), (1 - ALPHA_MIN) * h)
-            qc, vc, phc = (np.asarray(x).reshape(-1) for x in cm.flow(q, v, tc))
-            j = int(np.argmin(np.where(crossing, phc, np.inf)))
-            Jall = np.asarray(gapf(qc)[1])
-            Jc = Jall[j]
-            Mc = np.asarray(Mf(qc))
-            event[k] = True
-            B[k] = tc / h - 0.5
-            S[k] = qc
-            an = float(np.asarray(cm.acc_normal(qc, vc)).reshape(-1)[j])
-            # slow: an arrival the grid does not resolve (below v_z) of a contact that is pressed on
-            # (a_n < 0: a bounce would come back, the accumulation of Zeno bouncing or of a pivoting
-            # corner).  The rest of the body may move fast (a block pivoting on this corner).
-            slow = an < 0 and -float(Jc @ vc) <= v_zeno
-            if not slow and e < 1.0:
-                # a rocking accumulation: the bounce would barely lift the contact (below v_z h) before
-                # another contact closes within LOOKAHEAD_CATCH steps
-                bounce = impact_law(Mc, Jc, vc, e)
-                _, _, Pf = (np.asarray(x) for x in cm.flights(LOOKAHEAD_CATCH)(qc, bounce.v_after, h))
-                others = np.arange(c) != j
-                slow = bool(np.any(Pf[others] < -tol)) and float(np.max(Pf[j])) <= v_zeno * h
-            if slow:
-                # Zeno accumulation: a slow arrival (below v_zeno, where the NLP may waive the
-                # impact law, see ContactNLP) while every contact of the body moves slowly along
-                # the normal (sliding along the ground does not count).  It is caught, together
-                # with every contact within a slow step's travel: held closed from here on.
-                near = crossing & (phc <= phc[j] + v_zeno * h)
-                mus, v_after = simultaneous_impact(Mc, Jall[near], vc, 0.0)
-                MU[k, near] = mus
-                active = near.copy()
-                qn, vn, _ = (np.asarray(x).reshape(-1) for x in cm.flow(qc, v_after, h - tc))
-                qn, vn = _hold(cm, qn, vn, active)
-                q, v = qn, vn
-                Q[k + 1] = q
-                k += 1
-                continue
-            imp = impact_law(Mc, Jc, vc, e)
-            MU[k, j] = imp.mu
-            BOUNCED[k, j] = True
-            together = np.where(crossing & (phc <= phc[j] + SIMULTANEOUS_TOL * length))[0]
-            if together.size > 1:
-                # contacts that close together (a flat landing): one simultaneous impact
-                mus, v_after = simultaneous_impact(Mc, Jall[together], vc, e)
-                MU[k, together] = mus
-                BOUNCED[k, together] = mus > 0
-                imp.v_after = v_after
-            qn, vn, ph = (np.asarray(x).reshape(-1) for x in cm.flow(qc, imp.v_after, h - tc))
+            caught, qn, vn = _arrival(cm, q, v, h, k, crossing, (S, B, MU, event, BOUNCED), tol, length, v_zeno)
+            if caught is not None:
+                active = caught
         q, v = qn, vn
         Q[k + 1] = q
         k += 1
+    NU = _rest(cm, Q, S, B, MU, event, h, p0, tol, lam0)
+    out = {"q": Q.reshape(-1), "qs": S.reshape(-1), "beta": B, "mu": MU.reshape(-1), "nu": NU.reshape(-1),
+           "bounced": BOUNCED}
+    return out
+
+
+def _arrival(cm: ContactMechanics, q, v, h: float, k: int, crossing, rows, tol: float, length: float, v_zeno: float):
+    """Step ``k`` of the guess, where an open contact crosses the surface: the crossing located (its sub-node, at
+    most ALPHA_MIN of the step from its nodes), and the impact there recorded in ``rows`` (``S, B, MU, event,
+    BOUNCED``, in place).  ``(the contacts caught and held from here on, or None for a bounce, the end node and
+    velocity)``: a slow arrival (a Zeno accumulation, or a rocking one) is caught together with every contact
+    within a slow step's travel; a bounce takes the impact law (one simultaneous impact for contacts that close
+    together)."""
+    S, B, MU, event, BOUNCED = rows
+    c, e = cm.c, cm.e
+    Mf, gapf = cm.system.mass_matrix, cm.system.gap
+    # the sub-node's time fraction is bounded: an earlier or later crossing is placed at the bound
+    tc = min(max(_bisect_crossing(cm, q, v, h, crossing), ALPHA_MIN * h), (1 - ALPHA_MIN) * h)
+    qc, vc, phc = (np.asarray(x).reshape(-1) for x in cm.flow(q, v, tc))
+    j = int(np.argmin(np.where(crossing, phc, np.inf)))
+    Jall = np.asarray(gapf(qc)[1])
+    Jc = Jall[j]
+    Mc = np.asarray(Mf(qc))
+    event[k] = True
+    B[k] = tc / h - 0.5
+    S[k] = qc
+    an = float(np.asarray(cm.acc_normal(qc, vc)).reshape(-1)[j])
+    # slow: an arrival the grid does not resolve (below v_z) of a contact that is pressed on
+    # (a_n < 0: a bounce would come back, the accumulation of Zeno bouncing or of a pivoting
+    # corner).  The rest of the body may move fast (a block pivoting on this corner).
+    slow = an < 0 and -float(Jc @ vc) <= v_zeno
+    if not slow and e < 1.0:
+        # a rocking accumulation: the bounce would barely lift the contact (below v_z h) before
+        # another contact closes within LOOKAHEAD_CATCH steps
+        bounce = impact_law(Mc, Jc, vc, e)
+        _, _, Pf = (np.asarray(x) for x in cm.flights(LOOKAHEAD_CATCH)(qc, bounce.v_after, h))
+        others = np.arange(c) != j
+        slow = bool(np.any(Pf[others] < -tol)) and float(np.max(Pf[j])) <= v_zeno * h
+    if slow:
+        # Zeno accumulation: a slow arrival (below v_zeno, where the NLP may waive the
+        # impact law, see ContactNLP) while every contact of the body moves slowly along
+        # the normal (sliding along the ground does not count).  It is caught, together
+        # with every contact within a slow step's travel: held closed from here on.
+        near = crossing & (phc <= phc[j] + v_zeno * h)
+        mus, v_after = simultaneous_impact(Mc, Jall[near], vc, 0.0)
+        MU[k, near] = mus
+        qn, vn, _ = (np.asarray(x).reshape(-1) for x in cm.flow(qc, v_after, h - tc))
+        qn, vn = _hold(cm, qn, vn, near)
+        return near.copy(), qn, vn
+    imp = impact_law(Mc, Jc, vc, e)
+    MU[k, j] = imp.mu
+    BOUNCED[k, j] = True
+    together = np.where(crossing & (phc <= phc[j] + SIMULTANEOUS_TOL * length))[0]
+    if together.size > 1:
+        # contacts that close together (a flat landing): one simultaneous impact
+        mus, v_after = simultaneous_impact(Mc, Jall[together], vc, e)
+        MU[k, together] = mus
+        BOUNCED[k, together] = mus > 0
+        imp.v_after = v_after
+    qn, vn, ph = (np.asarray(x).reshape(-1) for x in cm.flow(qc, imp.v_after, h - tc))
+    return None, qn, vn
+
+
+def _rest(cm: ContactMechanics, Q, S, B, MU, event, h: float, p0, tol: float, lam0) -> np.ndarray:
+    """The guess's sub-nodes off the events and its node forces, ``S`` and ``MU`` in place: free sub-nodes (α = ½)
+    by a few Newton steps; a resting step's sub-node resting too, with its share of the weight; the node forces
+    where the guess touches, by least squares on the node equations, clipped at 0 (returned, ``(L, c)``)."""
+    n, c, L = cm.n, cm.c, B.size
+    gapf = cm.system.gap
     # free sub-nodes (α = ½) from the nodes: a few Newton steps, all steps at once
     free = ~event
     if np.any(free):
@@ -273,6 +261,46 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
         act = gq[k] <= tol
         sol = np.linalg.lstsq(J[act].T, -r, rcond=None)[0]
         NU[k, act] = np.maximum(sol, 0.0)
-    out = {"q": Q.reshape(-1), "qs": S.reshape(-1), "beta": B, "mu": MU.reshape(-1), "nu": NU.reshape(-1),
-           "bounced": BOUNCED}
-    return out
+    return NU
+
+
+def _while_held(cm: ContactMechanics, q, v, p_held, active, h: float, k: int, rows, tol: float):
+    """Step ``k`` of the guess while contacts are held closed (``active``; caught, or resting from the start): the
+    discrete motion with the held contacts as constraints (:func:`_held_step`) while it keeps pressing on them and no
+    other contact crosses; else a free flight that releases the contacts it lifts off and catches those it crosses.
+    Records the step in ``rows`` (``S, B, MU, event``, in place).  ``(q, v, the discrete momentum at the node while
+    held or None, the contacts held)``."""
+    S, B, MU, event = rows
+    Mf, gapf = cm.system.mass_matrix, cm.system.gap
+    pk = p_held if p_held is not None else np.asarray(Mf(q)) @ v
+    step = _held_step(cm, q, pk, active, h, v)
+    if step is not None:
+        phn = np.asarray(gapf(step[1])[0]).reshape(-1)
+        closing = ~active & (phn < -tol)
+        if np.any(closing):
+            # another contact closes during the held step: caught too, held from the step's middle
+            step = _held_step(cm, q, pk, active | closing, h, v)
+            if step is not None:
+                phn = np.asarray(gapf(step[1])[0]).reshape(-1)
+                active = active | closing
+    if step is not None:
+        qs_k, qn, nu_k, mu_k, p_next = step
+        if np.all(phn[~active] >= -tol):
+            # the discrete motion with the held contacts (it keeps pressing on them)
+            S[k], B[k], event[k] = qs_k, 0.0, True
+            MU[k] = mu_k
+            return qn, np.linalg.solve(np.asarray(Mf(qn)), p_next), p_next, active
+    qn, vn, ph = (np.asarray(x).reshape(-1) for x in cm.flow(q, v, h))
+    active &= ~(ph > tol)                        # the free flight lifts it off: released
+    closing = ~active & (ph < -tol)              # crossings while held: caught too (a guess)
+    if np.any(closing):
+        active |= closing
+        S[k] = 0.5 * (q + qn)
+        B[k] = 0.0
+        event[k] = True
+        Jc = np.asarray(gapf(S[k])[1])[closing]
+        vc = 0.5 * (v + vn)
+        MU[k, closing] = simultaneous_impact(np.asarray(Mf(S[k])), Jc, vc, 0.0)[0]
+    if np.any(active):
+        qn, vn = _hold(cm, qn, vn, active)
+    return qn, vn, None, active

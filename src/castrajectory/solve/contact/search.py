@@ -609,9 +609,31 @@ def _next_modes(modes, touch, g0, gs, gn, nu, mu, b, pen, tol, step, finest, cat
     ``"split"`` if it needs two impacts at different times.  ``catch``: an impact whose bounce ends within the
     touching tolerance of the surface is caught there (mode C; the search's choice where the grid does not resolve
     the flight); without it, such a step is solved as it is (its gap is not negative)."""
-    alpha = 0.5 + b
+    pick = _multiplier_pick(modes, nu, mu, step)
+    if pick is not None:
+        return _changed(modes, pick), None
+    if b < ALPHA_MIN - 0.5 - 1e-12 or b > 0.5 - ALPHA_MIN + 1e-12:
+        return "split"
+    got = _gap_pick(modes, touch, gs, gn, pen, tol, catch)
+    if got == "split":
+        return "split"
+    pick, crossing = got
+    if pick is not None:
+        return _changed(modes, pick), None
+    return _crossing_change(modes, crossing, g0, gs, gn, 0.5 + b, step, finest)
+
+
+def _changed(modes, pick):
+    j, m = pick
+    out = list(modes)
+    out[j] = m
+    return out
+
+
+def _multiplier_pick(modes, nu, mu, step):
+    """The most violated sign of a contact's force or impulse (scaled), as ``(contact, its new mode)``; ``None`` where
+    none is violated beyond 1e-12."""
     worst, pick = 0.0, None
-    # multipliers of free contacts (scaled)
     for j, m in enumerate(modes):
         if m in (H, R, N) and nu[j] < 0.0:
             viol = -nu[j] / step.snu
@@ -632,14 +654,12 @@ def _next_modes(modes, touch, g0, gs, gn, nu, mu, b, pen, tol, step, finest, cat
             viol = -step.last_mul[j] / step.smu
             if viol > worst:
                 worst, pick = viol, (j, O)
-    if worst > 1e-12:
-        j, m = pick
-        out = list(modes)
-        out[j] = m
-        return out, None
-    if b < ALPHA_MIN - 0.5 - 1e-12 or b > 0.5 - ALPHA_MIN + 1e-12:
-        return "split"
-    # gaps
+    return pick if worst > 1e-12 else None
+
+
+def _gap_pick(modes, touch, gs, gn, pen, tol, catch):
+    """The most violated gap, as ``((contact, its new mode) or None, the open contacts that cross the surface in the
+    step)``; ``"split"`` where a contact that must stay out penetrates at the sub-node."""
     worst, pick = pen, None
     crossing = []
     for j, m in enumerate(modes):
@@ -668,11 +688,13 @@ def _next_modes(modes, touch, g0, gs, gn, nu, mu, b, pen, tol, step, finest, cat
                 worst, pick = viol, (j, C)
         elif m in KEPT_OUT and gs[j] < -pen:
             return "split"
-    if pick is not None:
-        j, m = pick
-        out = list(modes)
-        out[j] = m
-        return out, None
+    return pick, crossing
+
+
+def _crossing_change(modes, crossing, g0, gs, gn, alpha, step, finest):
+    """The first open contact that crosses the surface in the step arrives (mode I, with its crossing's fraction of
+    the step), or is simultaneous with the step's impact, or the step splits for a second impact; ``None`` where none
+    crosses."""
     if crossing:
         timed = [j for j, m in enumerate(modes) if m in GAP_TIMED]
         fr = {j: _crossing_fraction(g0[j], gs[j], gn[j], alpha) for j in crossing}
