@@ -12,7 +12,7 @@ Solution strategy (chosen by the library)
    one complementarity pair per contact) by Newton, each contact in a mode (open, held, released,
    impact with Newton's law, caught) found by an active-set search on the most violated gap or
    multiplier.  A step that would need two impacts at different times is halved (the grid adapts to
-   the impacts; at most :data:`.march.MAX_SPLITS` halvings), and contacts whose gaps agree to
+   the impacts; at most ``ContactOptions.max_splits`` halvings), and contacts whose gaps agree to
    ``1e-9 ℓ`` at an impact take one simultaneous impact.  A bounce that does not clear the next
    node is caught there: the end of an accumulation that the grid does not resolve.
 2. **The certificate** (:meth:`ContactNLP.solve_modes`, :meth:`castrajectory.solve.nlp.NLP.certify`).
@@ -33,10 +33,9 @@ contact=ContactOptions(...))``).  The reported status is that of the last solve;
 from ...discretise.contact.elements import ContactMechanics  # noqa: F401
 from ...discretise.contact.transcription import COMPLEMENTARITY_TOL, PENALTY, TOUCH_TOL  # noqa: F401
 from ...models.impact import simultaneous_impact  # noqa: F401
-from .guess import GUESS_CHUNK, SIMULTANEOUS_TOL, event_guess  # noqa: F401
-from .march import MAX_SPLITS, discrete_march  # noqa: F401
-from .search import MAX_COMBINATIONS, SIMULTANEOUS_GAP  # noqa: F401
-from .nlp import BRANCH_IPOPT, CONTACT_IPOPT, ContactNLP  # noqa: F401
-from .options import ContactControlOptions, ContactOptions  # noqa: F401
-from .solution import IMPACT_SPEED_STEPS, IMPULSE_TOL, ContactTrajectory, SubNodeImpact  # noqa: F401
+from .guess import event_guess  # noqa: F401
+from .march import discrete_march  # noqa: F401
+from .nlp import ContactNLP  # noqa: F401
+from .options import ContactControlOptions, ContactOptions, MarchOptions  # noqa: F401
+from .solution import IMPACT_SPEED_STEPS, ContactTrajectory, SubNodeImpact  # noqa: F401
 from .strategy import solve_contact  # noqa: F401

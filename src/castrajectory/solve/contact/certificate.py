@@ -16,7 +16,6 @@ import numpy as np
 from ...discretise.contact.elements import ContactMechanics
 from . import modes as M
 from .march import discrete_march
-from .nlp import CONTACT_IPOPT
 from .state import Problem
 
 #: A step's unknowns of the program that a one-step march gives (its nodes and stages apart): a restarted round takes
@@ -66,7 +65,7 @@ def _polish(P: Problem, res):
         point = _local_point(cm, res.values, local, N) if solves == 0 else None
         if point is None:
             h, p0, U = _start_of(prog, res.values, q0)
-            point = discrete_march(cm, q0, p0, N, h, scales, controls=U if cm.nu else None)
+            point = discrete_march(cm, q0, p0, N, h, scales, controls=U if cm.nu else None, options=o.march_options)
             if point is None or point["steps"].size != N:
                 break
         solves += 1
@@ -85,7 +84,7 @@ def _polish(P: Problem, res):
                 np.full((N, 2 * cm.c), M.FREE))
     h, p0, U = _start_of(prog, res.values, q0)
     marched = _distance(discrete_march(cm, q0, p0, N, h, scales, controls=U if cm.nu else None,
-                                       starts=_starts(cm, res.values, N, hint)),
+                                       options=o.march_options, starts=_starts(cm, res.values, N, hint)),
                         res.values["q"].reshape(N + 1, cm.n), N, h)
     return res, cert, marched, solves
 
@@ -131,6 +130,7 @@ def _local_marches(P: Problem, V, hint, steps, done):
         if k not in done:
             p = p0 if k == 0 else pin[k - 1]
             done[k] = discrete_march(cm, Q[k], p, 1, h, scales, controls=U[k:k + 1] if cm.nu else None,
+                                     options=P.o.march_options,
                                      starts=None if starts is None else starts[k:k + 1])
         pt = marches[k] = done[k]
         if pt is None:
@@ -202,7 +202,8 @@ def _branch(P: Problem, point, values, bounds, opts, rho, warm=False):
     # initial-value branch's small start (1e-8, pushes 1e-8) keeps that point and solved the branch of a slip that
     # stops inside a step at N = 320, where the homotopy's (0.1 adaptive, pushes 1e-2) spent 3000 iterations; at
     # N = 80 the other way round.  The small one first, capped, then the homotopy's)
-    got = prog._ladder(init, _small(opts, P.o.branch_small_iter), branch, [rho], verbose, "branch", "the march's branch")
+    got = prog._ladder(init, _small(opts, prog.settings.ipopt, P.o.branch_small_iter), branch, [rho], verbose, "branch",
+                       "the march's branch")
     # (one solved only to Ipopt's acceptable level is the polish's to certify and solve again from: the homotopy's
     # barrier from the march's point instead spent 3000 iterations on the hopper's first branch at N = 40, where
     # the small one reached its acceptable level in 456 and the next branch solved in 106)
@@ -213,10 +214,10 @@ def _branch(P: Problem, point, values, bounds, opts, rho, warm=False):
     return again
 
 
-def _small(opts, cap: int) -> dict:
-    """``opts`` with the initial-value program's small barrier start (nothing pushed off its bounds), monotone,
-    capped at ``cap`` iterations: a solve from a motion that satisfies its rows."""
-    return {**opts, **{k: CONTACT_IPOPT[k] for k in ("mu_init", "bound_push", "bound_frac", "slack_bound_push",
+def _small(opts, base: dict, cap: int) -> dict:
+    """``opts`` with the initial-value program's small barrier start (``base``: nothing pushed off its bounds),
+    monotone, capped at ``cap`` iterations: a solve from a motion that satisfies its rows."""
+    return {**opts, **{k: base[k] for k in ("mu_init", "bound_push", "bound_frac", "slack_bound_push",
                                                      "slack_bound_frac")}, "mu_strategy": "monotone",
             "max_iter": min(int(opts.get("max_iter", 3000)), cap)}
 

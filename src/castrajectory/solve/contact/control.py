@@ -50,7 +50,7 @@ from ...validation import InputError
 from .certificate import STEP_VALUES, _branch, _local, _polish, _slips, _start_of, _zparts
 from . import modes as M
 from .march import discrete_march
-from .nlp import CONTACT_IPOPT, ContactNLP
+from .nlp import ContactNLP
 from .options import ContactControlOptions
 from .policies import STARTS, solve_round
 from .state import Attempt, Branch, Problem, Round
@@ -271,7 +271,7 @@ def _setup(problem, N: int, guess, options, verbose: bool, keep_modes: bool, pat
     scales = _scales(system, q0, v0g, length, U0[0] if nu else np.zeros(0), Tg)
     p0 = np.asarray(system.momentum(q0, v0g)).reshape(-1)
     t_guess = _time.perf_counter()
-    point = discrete_march(cm, q0, p0, N, h, scales, controls=U0 if nu else None)
+    point = discrete_march(cm, q0, p0, N, h, scales, controls=U0 if nu else None, options=o.march_options)
     if point is not None and point["steps"].size != N:
         point = None          # the march halved a step (two impacts in it): its grid is not the program's
     if point is None and keep_modes:
@@ -298,7 +298,7 @@ def _setup(problem, N: int, guess, options, verbose: bool, keep_modes: bool, pat
         init.update(_slips(cm, prog, init, scales[2]))
     if vN is not None and cm.friction:
         bounds["fratio_end"] = _end_ratio_bounds(cm, qN, vN, scales[2])
-    ipopt = {**CONTACT_IPOPT, **o.ipopt, **(options or {})}
+    ipopt = {**prog.settings.ipopt, **o.ipopt, **(options or {})}
     P = Problem(cm, prog, q0, N, scales, bounds, ipopt, o, verbose, TOUCH_TOL * length)
     return P, init, point, guess_time
 

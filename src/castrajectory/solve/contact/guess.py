@@ -1,22 +1,16 @@
 """The event-located guess of a contact trajectory (see the package docstring, step 1)."""
 from __future__ import annotations
 
-from typing import Dict
+from typing import Dict, Optional
 
 import numpy as np
 
 from ...models.impact import impact_law, simultaneous_impact
 from ...discretise.contact.elements import ContactMechanics
 from ...discretise.contact.transcription import ALPHA_MIN, REST_SPEED_STEPS, TOUCH_TOL
+from .options import ContactOptions
 
 
-#: Contacts whose gaps close within this (times the length scale) of each other at a located
-#: crossing take one simultaneous impact in the guess (a flat landing).
-SIMULTANEOUS_TOL = 1e-9
-#: Steps looked ahead after a bounce for the rocking-accumulation catch of the guess.
-LOOKAHEAD_CATCH = 3
-#: Steps of free flight integrated per call in the event-located guess.
-GUESS_CHUNK = 64
 
 
 
@@ -87,12 +81,13 @@ def _held_step(cm: ContactMechanics, q, p, active, h, v, iterations: int = 20):
 
 
 def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h: float,
-                length: float, v_zeno: float) -> Dict[str, np.ndarray]:
+                length: float, v_zeno: float, co: Optional[ContactOptions] = None) -> Dict[str, np.ndarray]:
     """Guess for ``L`` steps from ``(q0, v0)``: RK4 flight with located impacts (see module docstring).
 
     One impact per step: a second crossing in the same step is not looked for (the flight continues
-    through it).
+    through it).  ``co``: the settings (``simultaneous_tol``, ``lookahead_catch``, ``guess_chunk``).
     """
+    co = co if co is not None else ContactOptions()
     n, c = cm.n, cm.c
     # (holonomic constraints: the guess leaves their multipliers at 0; the branch solve forms them)
     lam0 = [np.zeros(cm.m)] if cm.m else []
@@ -126,7 +121,7 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
         touching = phi0 <= tol
         if not np.any(touching):
             # fast path: free flight over a chunk of steps (one mapaccum call) up to the first crossing
-            K = min(GUESS_CHUNK, L - k)
+            K = min(co.guess_chunk, L - k)
             Qc, Vc, Pc = (np.asarray(x) for x in cm.flights(K)(q, v, h))
             bad = np.where(np.any(Pc < -tol, axis=0))[0]
             i = int(bad[0]) if bad.size else K
@@ -149,7 +144,7 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
         # contacts that start touching and separate are not crossings
         crossing = ~((phi0 <= tol) & (ph >= -tol))
         if np.any(ph[crossing] < -tol):
-            caught, qn, vn = _arrival(cm, q, v, h, k, crossing, (S, B, MU, event, BOUNCED), tol, length, v_zeno)
+            caught, qn, vn = _arrival(cm, q, v, h, k, crossing, (S, B, MU, event, BOUNCED), tol, length, v_zeno, co)
             if caught is not None:
                 active = caught
         q, v = qn, vn
@@ -161,7 +156,8 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
     return out
 
 
-def _arrival(cm: ContactMechanics, q, v, h: float, k: int, crossing, rows, tol: float, length: float, v_zeno: float):
+def _arrival(cm: ContactMechanics, q, v, h: float, k: int, crossing, rows, tol: float, length: float, v_zeno: float,
+             co: ContactOptions):
     """Step ``k`` of the guess, where an open contact crosses the surface: the crossing located (its sub-node, at
     most ALPHA_MIN of the step from its nodes), and the impact there recorded in ``rows`` (``S, B, MU, event,
     BOUNCED``, in place).  ``(the contacts caught and held from here on, or None for a bounce, the end node and
@@ -190,7 +186,7 @@ def _arrival(cm: ContactMechanics, q, v, h: float, k: int, crossing, rows, tol: 
         # a rocking accumulation: the bounce would barely lift the contact (below v_z h) before
         # another contact closes within LOOKAHEAD_CATCH steps
         bounce = impact_law(Mc, Jc, vc, e)
-        _, _, Pf = (np.asarray(x) for x in cm.flights(LOOKAHEAD_CATCH)(qc, bounce.v_after, h))
+        _, _, Pf = (np.asarray(x) for x in cm.flights(co.lookahead_catch)(qc, bounce.v_after, h))
         others = np.arange(c) != j
         slow = bool(np.any(Pf[others] < -tol)) and float(np.max(Pf[j])) <= v_zeno * h
     if slow:
@@ -207,7 +203,7 @@ def _arrival(cm: ContactMechanics, q, v, h: float, k: int, crossing, rows, tol: 
     imp = impact_law(Mc, Jc, vc, e)
     MU[k, j] = imp.mu
     BOUNCED[k, j] = True
-    together = np.where(crossing & (phc <= phc[j] + SIMULTANEOUS_TOL * length))[0]
+    together = np.where(crossing & (phc <= phc[j] + co.simultaneous_tol * length))[0]
     if together.size > 1:
         # contacts that close together (a flat landing): one simultaneous impact
         mus, v_after = simultaneous_impact(Mc, Jall[together], vc, e)

@@ -37,35 +37,27 @@ from ...discretise.contact.transcription import TOUCH_TOL
 from . import modes as _modes
 from .modes import FIX, FREE, STICK, H, I, O
 from .search import _march_step
+from .options import ContactOptions, MarchOptions
 from .step import _Step
 
-#: Steps that keep their modes (open or held) marched in one call (step.CHUNK_NEWTON Newton steps
-#: each; its rows are those of the march step, each checked after).
-CHUNK_STEPS = 64
-#: ... and the size of one more Newton step accepted there, relative to the unknowns (the chunk's
-#: Jacobian is not equilibrated, so its rounding sits near 1e-11 for a box held on two corners in the
-#: bowl, where 1e-12 rejected 80 % of the chunks; the certificate's Newton step of the whole system
-#: polishes the point)
-CHUNK_TOL = 1e-10
-#: Halvings of a step allowed where impacts crowd (the finest step is h / 2**MAX_SPLITS; the default
-#: of ContactOptions.max_splits).
-MAX_SPLITS = 20
 
 
-def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales, max_splits: int = MAX_SPLITS,
-                   trace: Optional[list] = None, controls=None, starts=None) -> Optional[Dict[str, np.ndarray]]:
+def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales,
+                   max_splits: int = ContactOptions.max_splits, trace: Optional[list] = None, controls=None,
+                   starts=None, options: Optional[MarchOptions] = None) -> Optional[Dict[str, np.ndarray]]:
     """The contact program's point for ``L`` steps of ``h`` from ``(q0, p0)``, solved step by step (module
     docstring), on a grid refined where a step would hold two impacts: the point's arrays, ``steps``
     (the step lengths) and ``base`` (the index of each step's base step); ``None`` where a step's mode
     search fails.  ``controls``: the control of every step, ``(L, nu)``, for a system with controls (a
     halved step keeps its base step's).  ``starts``: each step's ``(modes, friction modes, unknowns)``, tried
-    before its search (:func:`.search._started`; a halved step searches its own), the steps marched one by one."""
-    step = _Step(cm, scales)
+    before its search (:func:`.search._started`; a halved step searches its own), the steps marched one by one.
+    ``options``: the march's settings (:class:`.options.MarchOptions`, the library's by default)."""
+    step = _Step(cm, scales, options)
     U = None
     if cm.nu:
         U = np.asarray(controls, float).reshape(L, cm.nu)
         # (a chunk's function has a fixed length: its steps past L take the last control, unused)
-        U = np.vstack([U, np.repeat(U[-1:], CHUNK_STEPS, axis=0)])
+        U = np.vstack([U, np.repeat(U[-1:], step.o.chunk_steps, axis=0)])
     tol = TOUCH_TOL * scales[0]          # touching: gap within this
     rows = {key: [] for key in _ROWS}
     q, p = np.asarray(q0, float).copy(), np.asarray(p0, float).copy()
@@ -107,7 +99,7 @@ def _chunk(step: _Step, rows, q, p, h, held, fm, k: int, K: int, span: int, U, t
     """Steps that keep their modes (open contacts stay open, held ones held: free flight, a body resting or sliding),
     many in one call (:meth:`_Step.chunk` with those modes: the same rows, Newton to rounding), accepted up to the
     first step that touches or crosses with an open contact, pulls on a held one, or does not converge; the accepted
-    ones recorded in ``rows``.  Chunks run 8 to CHUNK_STEPS steps: ``span`` doubles after a chunk accepted whole
+    ones recorded in ``rows``.  Chunks run 8 to ``chunk_steps`` steps: ``span`` doubles after a chunk accepted whole
     (``K`` of its steps used), and goes back to 8 after a break; one function per length and system.  ``None`` where
     the chunk's Newton system was singular, else ``(steps accepted, the next span, (q, p, gaps) after them)``."""
     cm = step.cm
@@ -124,7 +116,7 @@ def _chunk(step: _Step, rows, q, p, h, held, fm, k: int, K: int, span: int, U, t
         return None      # (a singular Newton system: friction rows at zero force, no step before the chunk yet)
     NU, MU = X[lay["nu"]], X[lay["mu"]]
     NU[~held], MU[~held] = 0.0, 0.0          # open: their rows ν = μ = 0, exactly
-    ok = (Rr <= CHUNK_TOL * (1.0 + np.max(np.abs(X), axis=0)))
+    ok = (Rr <= step.o.chunk_tol * (1.0 + np.max(np.abs(X), axis=0)))
     ok &= np.all((Gs > tol) & (Gn > tol) | held[:, None], axis=0)
     ok &= np.all((NU >= 0.0) & (MU >= 0.0) | ~held[:, None], axis=0)
     if cm.friction:
@@ -133,7 +125,7 @@ def _chunk(step: _Step, rows, q, p, h, held, fm, k: int, K: int, span: int, U, t
         # sub-node times the turn (mode W, search._slip_turn)
         ok &= ~_turns(cm, fm, held, np.column_stack([q, Qn]), np.column_stack([p, Pn]))
     i = int(np.argmin(ok)) if not np.all(ok) else K
-    span = min(2 * span, CHUNK_STEPS) if i == K else 8
+    span = min(2 * span, step.o.chunk_steps) if i == K else 8
     if not i:
         return 0, span, None
     modes = [H if hj else O for hj in held]

@@ -1,7 +1,7 @@
 """The contact program handed to Ipopt: the branch the guess identifies, and the penalty ladder."""
 from __future__ import annotations
 
-from typing import Dict, List
+from typing import Dict, List, Optional
 
 import numpy as np
 
@@ -11,21 +11,9 @@ from ...discretise.contact.transcription import (ALPHA_MIN, COMPLEMENTARITY_TOL,
                                                  ContactTranscription)
 from ..nlp import NLP
 from . import modes as M
+from .options import ContactOptions
 
 
-#: Ipopt options of contact solves: bound_relax_factor 0 (impulses, forces and gaps stay exactly
-#: non-negative), tiny bound and slack pushes so guesses on the ground are not pushed away.
-CONTACT_IPOPT = {"tol": 1e-10, "max_iter": 200, "bound_relax_factor": 0.0,
-                 "bound_push": 1e-8, "bound_frac": 1e-8, "slack_bound_push": 1e-8, "slack_bound_frac": 1e-8,
-                 "mu_init": 1e-8, "constr_mult_init_max": 0}
-#: Options of the branch solve (:meth:`ContactNLP.solve_branch`) on top of CONTACT_IPOPT.  From a guess
-#: that identifies the branch it converges in 6-25 iterations (measured over the battery); a branch that
-#: needs more is a wrong decision, and its iterations grow expensive (restoration on a degenerate KKT
-#: matrix: 2 s each with MUMPS' default pivot tolerance, 0.46 s with 1e-8, on a 4000-step block drop).
-BRANCH_IPOPT = {"max_iter": 30, "mumps_pivtol": 1e-8}
-#: Scaled row violation and relative stationarity residual within which the march's point is
-#: certified as a KKT point of its branch without Ipopt (:meth:`ContactNLP.solve_modes`).
-CERTIFY_TOL = 1e-9
 
 
 class ContactNLP(ContactTranscription):
@@ -35,19 +23,22 @@ class ContactNLP(ContactTranscription):
     #: the penalty ladder rises until the scaled complementarity residual is at most this (and fails above
     #: COMPLEMENTARITY_TOL after its last rung)
     complementarity_target = COMPLEMENTARITY_TOL
+    #: the contact solve's settings (Ipopt's options, the branch's budget and pivot tolerance, the certificate's
+    #: tolerance): the library's unless the solve sets its own
+    settings = ContactOptions()
 
     def solve(self, q0, p0, guess: Dict[str, np.ndarray], penalties=None, options=None, verbose=False):
         """Solve from ``guess``, raising the penalty until complementarity holds.
 
         Returns the :class:`NLPResult` of the last penalty step (see :meth:`_ladder`).
         """
-        opts = dict(CONTACT_IPOPT)
+        opts = dict(self.settings.ipopt)
         opts.update(options or {})
         return self._ladder(self._start(q0, p0, guess), opts, {"q": self._q_bounds(q0)}, penalties or PENALTY,
                             verbose, "rho", "Ipopt")
 
     def solve_modes(self, q0, p0, point: Dict[str, np.ndarray], options=None, verbose=False,
-                    certify_tol: float = CERTIFY_TOL, max_iter: int = BRANCH_IPOPT["max_iter"]) -> NLPResult:
+                    certify_tol: Optional[float] = None, max_iter: Optional[int] = None) -> NLPResult:
         """Solve the branch of the discrete march's modes (``point["modes"]``, one letter per step and
         contact, :mod:`.march`): every pair decided, a square system whose solution ``point`` already is
         (to the march's Newton tolerance).  Held and caught contacts keep their gap rows as equalities
@@ -57,8 +48,8 @@ class ContactNLP(ContactTranscription):
         multipliers."""
         bounds = self.mode_bounds(q0, point)
         init = self._start(q0, p0, point)
-        opts = {**CONTACT_IPOPT, **BRANCH_IPOPT, **(options or {})}
-        opts["max_iter"] = min(int(opts["max_iter"]), max_iter)
+        opts = self._branch_options(options, max_iter)
+        certify_tol = self.settings.certify_tol if certify_tol is None else certify_tol
         # every pair decided with exact zero products and every β fixed or timed: a square feasibility
         # problem, no penalty and no selection term (its point is then a KKT point with zero multipliers)
         self.nlp.set_parameter("rho", 0.0)
@@ -179,7 +170,7 @@ class ContactNLP(ContactTranscription):
         return bounds
 
     def solve_branch(self, q0, p0, guess: Dict[str, np.ndarray], options=None, verbose=False,
-                     max_iter: int = BRANCH_IPOPT["max_iter"], penalties=PENALTY) -> NLPResult:
+                     max_iter: Optional[int] = None, penalties=PENALTY) -> NLPResult:
         """Solve the branch of the complementarity problem that ``guess`` identifies.
 
         Each pair is decided by the event-located guess: a contact that touches at a node (gap within
@@ -226,11 +217,18 @@ class ContactNLP(ContactTranscription):
         on = bounced.reshape(-1)
         bounds["impact_law"] = (np.where(on, 0.0, -np.inf), np.where(on, 0.0, np.inf))
         init = self._start(q0, p0, guess)
-        opts = {**CONTACT_IPOPT, **BRANCH_IPOPT, **(options or {})}
-        opts["max_iter"] = min(int(opts["max_iter"]), max_iter)
+        opts = self._branch_options(options, max_iter)
         # the undecided pairs (if any) by the penalty ladder, warm-started; decided ones are exact
         ladder = penalties if (np.any(node_free) or np.any(sub_free)) else penalties[:1]
         return self._ladder(init, opts, bounds, ladder, verbose, "branch", "the branch")
+
+    def _branch_options(self, options, max_iter: Optional[int]) -> dict:
+        """Ipopt's options of a decided branch: the settings' with the branch's budget (at most ``max_iter``) and
+        MUMPS' pivot tolerance, then ``options``."""
+        s = self.settings
+        opts = {**s.ipopt, "max_iter": s.branch_max_iter, "mumps_pivtol": s.branch_pivtol, **(options or {})}
+        opts["max_iter"] = min(int(opts["max_iter"]), s.branch_max_iter if max_iter is None else max_iter)
+        return opts
 
     def _ladder(self, init, opts, bounds, penalties, verbose, parameter: str, who: str, warm=None) -> NLPResult:
         """Solve at each penalty ρ of ``penalties`` in turn, warm-started, until complementarity holds

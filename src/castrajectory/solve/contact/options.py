@@ -9,6 +9,55 @@ from ...validation import InputError
 
 
 @dataclass(frozen=True)
+class MarchOptions:
+    """Settings of the discrete march (:mod:`.march`, :mod:`.search`, :mod:`.step`), shared by the initial-value solve
+    (``ContactOptions.march_options``) and the contact-implicit optimal control (``ContactControlOptions.march_options``,
+    its guess and its certificate).
+
+    * ``newton_iter``, ``step_tol``: Newton iterations of one step's solve, and the largest row residual accepted
+      (each row divided by its largest derivative, relative to the size of the unknowns); ``runaway``: the largest
+      growth of the unknowns from Newton's start that is still the step's root (Newton from the hopper's node ran to a
+      root 1e10 away, a spurious branch of the friction rows);
+    * ``chunk_steps``: steps that keep their modes (open or held) marched in one call, at most; ``chunk_newton``:
+      Newton steps of each step of a chunk; ``chunk_tol``: a chunk's step is accepted at this scaled residual (its
+      Jacobian is not equilibrated: its rounding sits near 1e-11 for a box held on two corners in the bowl, where
+      1e-12 rejected 80 % of the chunks; the certificate's Newton step of the whole system polishes the point);
+    * ``mode_rounds``: mode changes tried per step before the march gives up; ``friction_rounds``: friction-mode
+      changes tried per solve of a step's normal modes; ``max_combinations``: combinations of modes tried at most
+      when the greedy search fails;
+    * ``simultaneous_gap``: a contact whose gap at an impact's sub-node is within this (times the length scale) takes
+      part in that impact (a flat landing: one simultaneous impact).
+    """
+
+    newton_iter: int = 30
+    step_tol: float = 1e-12
+    runaway: float = 1e6
+    chunk_steps: int = 64
+    chunk_newton: int = 3
+    chunk_tol: float = 1e-10
+    mode_rounds: int = 12
+    friction_rounds: int = 8
+    max_combinations: int = 256
+    simultaneous_gap: float = 1e-9
+
+    def __post_init__(self):
+        for name in ("newton_iter", "chunk_steps", "chunk_newton", "mode_rounds", "friction_rounds",
+                     "max_combinations"):
+            v = getattr(self, name)
+            if not isinstance(v, int) or isinstance(v, bool) or v < 1:
+                raise InputError(f"{name} must be a positive integer (got {v!r})")
+        for name in ("step_tol", "runaway", "chunk_tol", "simultaneous_gap"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and 0.0 < float(v) < float("inf")):
+                raise InputError(f"{name} must be positive and finite (got {v!r})")
+
+
+def _contact_ipopt() -> dict:
+    return {"tol": 1e-10, "max_iter": 200, "bound_relax_factor": 0.0, "bound_push": 1e-8, "bound_frac": 1e-8,
+            "slack_bound_push": 1e-8, "slack_bound_frac": 1e-8, "mu_init": 1e-8, "constr_mult_init_max": 0}
+
+
+@dataclass(frozen=True)
 class ContactOptions:
     """Settings of :func:`~castrajectory.solve.contact.solve_contact`; the defaults are the library's.
 
@@ -18,7 +67,21 @@ class ContactOptions:
     * ``certify_tol``: scaled row violation and stationarity backward error within which the marched
       point is certified as a KKT point of its branch;
     * ``branch_max_iter``: Ipopt's iteration budget of a decided branch (the march's or the guess's);
-    * ``penalties``: the rungs ρ of the penalty continuation, each warm-started from the last.
+    * ``penalties``: the rungs ρ of the penalty continuation, each warm-started from the last;
+    * ``march_options``: the march's own settings (:class:`MarchOptions`);
+    * ``ipopt``: Ipopt's options of every contact solve (the optimal control's start from them too):
+      ``bound_relax_factor`` 0 (impulses, forces and gaps stay exactly non-negative), tiny bound and slack pushes so
+      guesses on the ground are not pushed away; ``branch_pivtol``: MUMPS' pivot tolerance of a decided branch (a
+      branch that needs more than a few iterations is a wrong decision, and restoration on its degenerate KKT
+      matrix cost 2 s an iteration with MUMPS' default, 0.46 s with 1e-8, on a 4000-step block drop);
+    * the event-located guess (the fallback's): ``simultaneous_tol``, contacts whose gaps close within this (times
+      the length scale) of each other at a located crossing take one simultaneous impact; ``lookahead_catch``, steps
+      looked ahead after a bounce for the rocking-accumulation catch; ``guess_chunk``, steps of free flight
+      integrated per call;
+    * the answer's report: ``impulse_tol``, an impulse above this fraction of the momentum scale is listed as an
+      impact; ``caught_law``, an impact is *caught* where Newton's law misses by more than this fraction of the
+      arrival speed; ``elastic_loss_tol``, an elastic scene (e = 1) whose energy falls by more than this fraction
+      is reported with a warning.
     """
 
     march: bool = True
@@ -26,8 +89,25 @@ class ContactOptions:
     certify_tol: float = 1e-9
     branch_max_iter: int = 30
     penalties: Tuple[float, ...] = PENALTY
+    march_options: MarchOptions = field(default_factory=MarchOptions)
+    ipopt: dict = field(default_factory=_contact_ipopt)
+    branch_pivtol: float = 1e-8
+    simultaneous_tol: float = 1e-9
+    lookahead_catch: int = 3
+    guess_chunk: int = 64
+    impulse_tol: float = 1e-6
+    caught_law: float = 1e-6
+    elastic_loss_tol: float = 1e-6
 
     def __post_init__(self):
+        for name in ("branch_pivtol", "simultaneous_tol", "impulse_tol", "caught_law", "elastic_loss_tol"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and 0.0 < float(v) < float("inf")):
+                raise InputError(f"{name} must be positive and finite (got {v!r})")
+        for name in ("lookahead_catch", "guess_chunk"):
+            v = getattr(self, name)
+            if not isinstance(v, int) or isinstance(v, bool) or v < 1:
+                raise InputError(f"{name} must be a positive integer (got {v!r})")
         if not isinstance(self.max_splits, int) or not 0 <= self.max_splits <= 40:
             raise InputError(f"max_splits must be an integer in [0, 40] (got {self.max_splits!r})")
         if not 0.0 < float(self.certify_tol) < 1e-3:
@@ -66,7 +146,7 @@ class ContactControlOptions:
     The solve is one loop (:mod:`.control`): a round solves the program on a :class:`~.branch.Branch` from the first
     of its start policies that converges, the next branch is read from the answer, and every answer is certified.
 
-    Ipopt (each on top of the contact program's own options, ``CONTACT_IPOPT``):
+    Ipopt (each on top of the contact program's own options, ``ContactOptions.ipopt``):
 
     * ``ipopt``: every solve's options; an adaptive barrier from 0.1 with bounds pushed by 1e-2, since the first
       guess is a motion far from the optimum; ``tol`` 1e-8;
@@ -105,7 +185,8 @@ class ContactControlOptions:
       this (relative);
     * ``polish_rounds``, ``polish_contracting``: branch re-solves of an answer that does not certify: at most
       ``polish_rounds``, and up to ``polish_contracting`` while each certificate halves the last;
-    * ``branch_small_iter``: iterations of a branch solve's first try, from its march with a small barrier.
+    * ``branch_small_iter``: iterations of a branch solve's first try, from its march with a small barrier;
+    * ``march_options``: the march's own settings (:class:`MarchOptions`: the guess's march and the certificate's).
 
     >>> import castrajectory as ct
     >>> o = ct.ContactControlOptions(starts=("warm", "cold"), certificate_tol=1e-8)
@@ -139,6 +220,7 @@ class ContactControlOptions:
     polish_rounds: int = 3
     polish_contracting: int = 6
     branch_small_iter: int = 500
+    march_options: MarchOptions = field(default_factory=MarchOptions)
 
     def __post_init__(self):
         # (the names themselves are checked against the registry, .policies.STARTS, when a solve starts)

@@ -16,11 +16,6 @@ from .modes import (AT_SUB, CLOSES, DOWN, FIX, FREE, GAP_TIMED, HELD, IMPACT_SPE
                     STICK, UP, C, F, H, I, K, N, O, P, R, T, W, releases, turn_fraction)
 from .step import _Step, restage
 
-#: Mode changes tried per step before the march gives up.
-MODE_ROUNDS = 12
-#: A contact whose gap at an impact's sub-node is within this (times the length scale) takes part in
-#: that impact (a flat landing: one simultaneous impact).
-SIMULTANEOUS_GAP = 1e-9
 
 
 def _timed_by_bracket(step: _Step, x, q, p, h, modes, j: int):
@@ -101,7 +96,7 @@ def _march_step(step: _Step, q, p, h, g_q, held_prev, tol, finest: bool, start=N
     modes0 = [N if arriving[j] else H if (touch[j] and held_prev[j]) else O for j in range(c)]
     modes, tried, crossed = list(modes0), set(), set()
     x, frac, why = x0, None, "rounds"
-    for _ in range(MODE_ROUNDS):
+    for _ in range(step.o.mode_rounds):
         key = tuple(modes)
         if key in tried:
             why = "cycle"
@@ -226,8 +221,6 @@ def _try(step: _Step, q, p, h, modes, x0, x, frac):
             xn[o:o + c], xn[o + c:o + 2 * c], float(xn[2 * n]), used)
 
 
-#: Friction-mode changes tried per solve of a step's normal modes.
-FRICTION_ROUNDS = 8
 
 
 def _friction(step: _Step, q, p, h, modes, x, mufix=None, rfix=None, mufixl=None, rfixl=None):
@@ -267,7 +260,7 @@ def _friction(step: _Step, q, p, h, modes, x, mufix=None, rfix=None, mufixl=None
                               dict(mufix=mufix, rfix=rfix, mufixl=mufixl, rfixl=rfixl))
     seen = set()
     start = x
-    for _ in range(FRICTION_ROUNDS):
+    for _ in range(step.o.friction_rounds):
         key = tuple(fm)
         if key in seen:
             break
@@ -287,7 +280,7 @@ def _friction(step: _Step, q, p, h, modes, x, mufix=None, rfix=None, mufixl=None
     slots = [i for i in range(2 * c) if active[i] and fm[i] != FIX]
     choices = (STICK, UP, DOWN) if d == 1 else (STICK, SLIDE)
     combos = sorted(product(choices, repeat=len(slots)), key=lambda ch: sum(a != fm[i] for a, i in zip(ch, slots)))
-    for ch in combos[:MAX_COMBINATIONS]:
+    for ch in combos[:step.o.max_combinations]:
         trial = list(fm)
         for i, f in zip(slots, ch):
             trial[i] = f
@@ -418,8 +411,6 @@ def _result(step: _Step, x, modes, gn, fmodes=None):
     return out
 
 
-#: Combinations of modes tried at most when the greedy search fails.
-MAX_COMBINATIONS = 256
 
 
 def _enumerate(step: _Step, q, p, h, g_q, touch, modes0, crossed, x0, pen, tol, finest):
@@ -438,7 +429,7 @@ def _enumerate(step: _Step, q, p, h, g_q, touch, modes0, crossed, x0, pen, tol, 
         combos.append((sum(a != b for a, b in zip(modes, modes0)), modes))
     combos.sort(key=lambda t: t[0])
     free = _try(step, q, p, h, modes0, x0, x0, None)
-    for _, modes in combos[:MAX_COMBINATIONS]:
+    for _, modes in combos[:step.o.max_combinations]:
         timed = [j for j, mj in enumerate(modes) if mj in GAP_TIMED]
         frac = None
         if timed and free is not None:
@@ -706,7 +697,7 @@ def _crossing_change(modes, crossing, g0, gs, gn, alpha, step, finest):
         if timed:
             # a crossing after the sub-node's impact: simultaneous with it, or a second impact
             out = list(modes)
-            if abs(gs[first]) <= SIMULTANEOUS_GAP * step.ell:
+            if abs(gs[first]) <= step.o.simultaneous_gap * step.ell:
                 out[first] = I
                 return out, None
             t = timed[0]

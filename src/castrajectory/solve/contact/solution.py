@@ -13,10 +13,6 @@ from .nlp import ContactNLP
 from .modes import IMPACT_SPEED_STEPS
 
 
-#: ... and its impulse exceeds this fraction of the momentum scale (interior-point noise is far below).
-IMPULSE_TOL = 1e-6
-#: An impact is *caught* where Newton's law misses by more than this fraction of the arrival speed.
-CAUGHT_LAW = 1e-6
 
 @dataclass
 class SubNodeImpact:
@@ -237,6 +233,7 @@ class ContactTrajectory(Result):
 def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: float, attempts,
             guess_time: float, p0: np.ndarray) -> ContactTrajectory:
     n, c, sysm = cm.n, cm.c, cm.system
+    co = tn.settings
     # the reported horizon: the first N steps (the look-ahead steps are not part of the answer)
     q = res.values["q"][:(N + 1) * n].reshape(N + 1, n)
     S = res.values["qs"][:N * n].reshape(N, n)
@@ -295,7 +292,7 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     nu = nu_full[:N + 1].copy()
     total_iter = sum(a["iterations"] for a in attempts)
     fratio, slip, fimp = _friction_parts(cm, tn, res, N, NL, nu_full, alpha_full, mu_full, q, S, B, hv)
-    warnings = simultaneous + _elastic_loss_warning(cm, energy, impacts, H[:N])
+    warnings = simultaneous + _elastic_loss_warning(cm, energy, impacts, H[:N], co.elastic_loss_tol)
     # the nodes' dual cells: node 0's is half a step; node N's reaches past T into the look-ahead step, as its Λ does
     cell = 0.5 * (np.concatenate([[0.0], H[:N]]) + H[:N + 1])
     contact_force = lam / cell[:, None]
@@ -321,7 +318,8 @@ def _impacts(cm, tn, res, N, q, S, B, MU, ZM, ZP, H, t, t_sub, gap, closed, forc
     flight landed on the node (the march's mode N: the node's impulse h ν), whose momentum ``p`` is then set, in
     place, to the one after it, not the mean."""
     c, sysm = cm.c, cm.system
-    tol = IMPULSE_TOL * tn.scales_p / tn.scales_ell
+    tol = tn.settings.impulse_tol * tn.scales_p / tn.scales_ell
+    caught_law = tn.settings.caught_law
     impacts = []
     # (friction: the ratios of the sub-node impulses and of the node forces, for the tangential impulses)
     fd = cm.fd
@@ -353,12 +351,13 @@ def _impacts(cm, tn, res, N, q, S, B, MU, ZM, ZP, H, t, t_sub, gap, closed, forc
             w = np.where(REL[k], 0.0, MUL[k])
             tang = RS[k, c:].reshape(c, -1) * MU[k][:, None] + FL[k].reshape(c, -1) * w[:, None]
             ratio_k = (tang / np.where(imp_k > 0, imp_k, 1.0)[:, None]).reshape(RS[k, c:].shape)
-        impacts += _impacts_at(cm, k, float(t_sub[k]), S[k], pm, pl, imp_k, tol, H[k], at_node=False,
+        impacts += _impacts_at(cm, k, float(t_sub[k]), S[k], pm, pl, imp_k, tol, H[k], caught_law, at_node=False,
                                ratios=ratio_k, leaves=(np.max(gap[k + 1:k + 3], axis=0) > tn.open_gap)
                                & (gap[k] > TOUCH_TOL * tn.scales_ell),
                                held=closed[k + 1] & (gap_sub_k(k) <= TOUCH_TOL * tn.scales_ell))
     for k in np.flatnonzero(np.any(force[1:N] > tol, axis=1)) + 1:
-        at = _impacts_at(cm, k, float(t[k]), q[k], pp[k] - 2 * half[k], pp[k], force[k], tol, H[k], at_node=True,
+        at = _impacts_at(cm, k, float(t[k]), q[k], pp[k] - 2 * half[k], pp[k], force[k], tol, H[k], caught_law,
+                         at_node=True,
                          ratios=RS[k, :c] if k < N else np.zeros_like(RS[0, :c]),
                          held=closed[k] & closed[k + 1])
         if at:
@@ -452,6 +451,7 @@ def _held_share(cm: ContactMechanics, x, p_after, held) -> np.ndarray:
 
 
 def _impacts_at(cm: ContactMechanics, k: int, t: float, x, p_before, p_after, impulses, tol: float, h: float,
+                caught_law: float,
                 at_node: bool, ratios=None, leaves=None, held=None) -> List[SubNodeImpact]:
     """The impacts at one point ``x`` (a sub-node, or a node where a flight landed) with the momenta on either
     side and the contacts' impulses there.  A contact whose impulse meets an arrival faster than a step's worth
@@ -493,7 +493,7 @@ def _impacts_at(cm: ContactMechanics, k: int, t: float, x, p_before, p_after, im
             frictional = bool(np.any(ratios[j] != 0.0))
             # (with friction: caught where it does not leave faster than the scale that separates an impact from
             # persistent contact -- a plastic landing, whose discrete v⁺ carries the support of the step's rest)
-            caught = vn_a <= scale[j] if frictional else abs(vn_a + cm.e * vn_b) > CAUGHT_LAW * max(abs(vn_b), 1e-300)
+            caught = vn_a <= scale[j] if frictional else abs(vn_a + cm.e * vn_b) > caught_law * max(abs(vn_b), 1e-300)
             out.append(SubNodeImpact(int(k), t, int(j), float(impulses[j]), np.array(x, float).copy(), vb, va,
                                      caught=bool(caught), at_node=at_node,
                                      mu_t=(float(ratios[j] * impulses[j]) if np.ndim(ratios[j]) == 0
@@ -525,19 +525,15 @@ def _simultaneous_warnings(cm: ContactMechanics, impacts) -> List[str]:
     return out
 
 
-#: An elastic scene (e = 1) whose energy falls by more than this fraction is reported with a warning.
-ELASTIC_LOSS_TOL = 1e-6
-
-
-def _elastic_loss_warning(cm: ContactMechanics, energy, impacts, H) -> List[str]:
-    """For e = 1: the fraction of the energy lost, if above :data:`ELASTIC_LOSS_TOL`.  Elastic impacts
+def _elastic_loss_warning(cm: ContactMechanics, energy, impacts, H, tol: float) -> List[str]:
+    """For e = 1: the fraction of the energy lost, if above ``tol`` (``ContactOptions.elastic_loss_tol``).  Elastic impacts
     conserve the energy exactly (docs, contact §3); a loss means arrivals were caught, i.e. bounces the
     grid does not resolve -- a step longer than the flights (the answer is the grid's, not the physics')."""
     if cm.e != 1.0 or cm.system.forced or cm.friction or energy.size < 2 or not np.all(np.isfinite(energy)):
         return []
     E0 = float(energy[0])
     loss = (E0 - float(np.min(energy))) / max(abs(E0), 1e-300)
-    if loss <= ELASTIC_LOSS_TOL:
+    if loss <= tol:
         return []
     return [f"an elastic contact (e = 1) lost {100 * loss:.3g} % of the energy: arrivals were caught because "
             f"the step (up to {float(np.max(H)):.3g} s) is longer than the bounces' flights; refine n"]

@@ -3,28 +3,25 @@ modes, and the chunk of steps that keep their modes (the search for a step's mod
 vocabulary :mod:`.modes`, the march :mod:`.march`)."""
 from __future__ import annotations
 
+from typing import Optional
+
 import casadi as ca
 import numpy as np
 
 from ...discretise.contact.elements import ContactMechanics
 from .. import jit
+from .options import MarchOptions
 from .modes import AT_SUB, CLOSES, DOWN, FIX, FREE, HELD, SLIDE, SLIDING_UP, STICK, TIMES_SUB, UP, F, I, K, N, P, T, W, releases
 
-#: Newton iterations of one step solve, and the largest row residual accepted (each row divided by
-#: its largest derivative, relative to the size of the unknowns).
-NEWTON_ITER = 30
-STEP_TOL = 1e-12
-#: ... and the largest growth of the unknowns from Newton's start that is still the step's root
-RUNAWAY = 1e6
-#: Newton steps of each step of a chunk (:meth:`_Step.chunk`).
-CHUNK_NEWTON = 3
 
 
 class _Step:
     """The compiled step of ``cm`` (``ContactMechanics.march_step``) with the scene's scales."""
 
-    def __init__(self, cm: ContactMechanics, scales):
+    def __init__(self, cm: ContactMechanics, scales, options: Optional[MarchOptions] = None):
         self.cm = cm
+        #: the march's settings
+        self.o = options if options is not None else MarchOptions()
         # evaluated once per Newton step of every marched step: compiled once per system (jit's disk
         # cache; CasADi's VM where that is not possible)
         self.fn = cm.derived("march step compiled", lambda: jit.compiled(cm.march_step))
@@ -46,10 +43,11 @@ class _Step:
         open (β = 0), with friction the slots in the friction modes ``fmodes`` (stick or slide, kept through
         the chunk): columns of the nodes ``q_{k+1}``, momenta ``p_{k+1}⁻``, unknowns, sub-node and node
         gaps, each step's largest row residual in units of the unknowns (as :meth:`solve` measures it), and
-        the slip velocities.  ``CHUNK_NEWTON`` Newton steps from the previous step's flight and its forces
+        the slip velocities.  ``chunk_newton`` (:class:`.options.MarchOptions`) Newton steps from the previous step's flight and its forces
         (``x0``, the step before the chunk's: its forces and friction ratios start the first step's Newton,
         whose friction rows are singular at zero force)."""
-        if K not in self._chunks:
+        key = (K, self.o.chunk_newton)
+        if key not in self._chunks:
             cm, n, c, m = self.cm, self.n, self.c, self.m
             qs, ps, hs, hm = ca.MX.sym("q", n), ca.MX.sym("p", n), ca.MX.sym("h"), ca.MX.sym("held", c)
             sc = [ca.MX.sym(name) for name in ("ell", "snu", "smu", "vref")]
@@ -65,7 +63,7 @@ class _Step:
             x = ca.vertcat(qm_, qn_, ca.DM.zeros(1), xs[2 * n + 1:2 * n + 1 + 2 * c + 2 * m + self.nf],
                            _stage_line(cm, qs, qm_, qn_), xs[cm.layout["lam_stage"]],
                            ca.DM.zeros(cm.layout["mul"].stop - cm.layout["mul"].start + self.nf // 2))
-            for _ in range(CHUNK_NEWTON):
+            for _ in range(self.o.chunk_newton):
                 r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero, zero, zero, zero, zero, zero, zero, zero,
                                zero, *fz, *us)
                 x = x - ca.solve(J, r)
@@ -78,7 +76,7 @@ class _Step:
             slip = cm.slip_row(qs, qt, qn, 0.0, hs, zero) if self.nf else ca.DM.zeros(1)
             one = ca.Function("chunk_step", [qs, ps, xs, hs, hm] + sc + fin + us,
                               [qn, cm.p_node_minus(qt, 0.0, qn, hs, *zp, *us), x, cm.gap_row(qt), cm.gap_row(qn), res, slip])
-            self._chunks[K] = one.mapaccum("chunk_steps", K, [0, 1, 2], [0, 1, 2])
+            self._chunks[key] = one.mapaccum("chunk_steps", K, [0, 1, 2], [0, 1, 2])
         fargs = []
         if self.nf:
             fm = fmodes or [FREE] * (2 * self.c)
@@ -87,7 +85,7 @@ class _Step:
         x0 = np.zeros(self.cm.nx) if x0 is None else x0
         # (the controls of the chunk's steps as columns, one per step: a mapped input)
         uargs = [np.asarray(controls, float).reshape(K, -1).T] if self.cm.nu else []
-        out = self._chunks[K](q, p, x0, h, held.astype(float), self.ell, self.pref / h, self.pref, self.vref, *fargs,
+        out = self._chunks[key](q, p, x0, h, held.astype(float), self.ell, self.pref / h, self.pref, self.vref, *fargs,
                               *uargs)
         return tuple(np.asarray(a) for a in out)
 
@@ -158,7 +156,7 @@ class _Step:
         # 94 us per call on the hopper, 48 us packed, and reading its two outputs 32 us more)
         args = np.concatenate([np.asarray(a, float).reshape(-1, order="F") for a in (*args, *self.uarg)])
         nx = x.size
-        for _ in range(NEWTON_ITER):
+        for _ in range(self.o.newton_iter):
             out = self.packed(x, args).full().reshape(-1)
             r, Jr = out[:nx], out[nx:].reshape(nx, nx, order="F")
             # rows and columns equilibrated (momentum rows ~ 1/h², gap rows ~ 1/ℓ): the step's
@@ -190,9 +188,9 @@ class _Step:
         # 1/α near α = 0 are then held to the rounding of the point, not of their size
         r = r / np.maximum(np.max(np.abs(Jr), axis=1), 1e-300)
         size = 1.0 + float(np.max(np.abs(x)))
-        # (a root RUNAWAY times the start's size is not the step's: Newton from the hopper's node ran to a root
+        # (a root ``runaway`` times the start's size is not the step's: Newton from the hopper's node ran to a root
         # 2.5e11 away, whose rows held relative to that size, and the march took it as the step)
-        return x, bool(np.max(np.abs(r)) <= STEP_TOL * size and size <= RUNAWAY * size0)
+        return x, bool(np.max(np.abs(r)) <= self.o.step_tol * size and size <= self.o.runaway * size0)
 
 
 def _packed(fn: ca.Function) -> ca.Function:

@@ -133,12 +133,14 @@ def _solve_once(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str
     scales = _scales(system, q0, qd0, length)
     attempts: List[dict] = []
     t_march = time.perf_counter()
-    point = discrete_march(cm, q0, p0, N + LOOKAHEAD, h, scales, co.max_splits) if co.march else None
+    point = discrete_march(cm, q0, p0, N + LOOKAHEAD, h, scales, co.max_splits,
+                           options=co.march_options) if co.march else None
     march_time = time.perf_counter() - t_march
     if point is not None:
         # the grid refined where impacts crowd: the steps of the first N base steps are reported
         steps, base = point.pop("steps"), point.pop("base")
         marched = ContactNLP(cm, steps.size, h, scales, steps=steps)
+        marched.settings = co
         if not certify:
             init = marched._start(q0, p0, point)
             res = NLPResult(values=init, multipliers={}, bound_multipliers={}, objective=0.0, success=True,
@@ -163,9 +165,10 @@ def _solve_once(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str
     # uniform grid, then the penalty continuation from that guess
     t_guess = time.perf_counter()
     # (a scheme with stages guesses with its guide's two-point rows; its stages start on straight lines)
-    guess = event_guess(cm.guide, q0, qd0, N + LOOKAHEAD, h, length, _v_zeno(cm, h, scales))
+    guess = event_guess(cm.guide, q0, qd0, N + LOOKAHEAD, h, length, _v_zeno(cm, h, scales), co)
     guess_time = time.perf_counter() - t_guess + march_time
     whole = ContactNLP(cm, N + LOOKAHEAD, h, scales)
+    whole.settings = co
     if needs is not None:
         init = whole._start(q0, p0, guess)
         for name in whole.nlp.variable_names:
