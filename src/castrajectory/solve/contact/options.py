@@ -8,6 +8,23 @@ from ...discretise.contact.transcription import PENALTY
 from ...validation import InputError
 
 
+def _integers(obj, names, least: int) -> None:
+    """Refuse a field of ``names`` that is not an integer of at least ``least``."""
+    for name in names:
+        v = getattr(obj, name)
+        if not isinstance(v, int) or isinstance(v, bool) or v < least:
+            kind = "a positive integer" if least == 1 else "a non-negative integer"
+            raise InputError(f"{name} must be {kind} (got {v!r})")
+
+
+def _positive(obj, names) -> None:
+    """Refuse a field of ``names`` that is not a positive finite number."""
+    for name in names:
+        v = getattr(obj, name)
+        if not (isinstance(v, (int, float)) and not isinstance(v, bool) and 0.0 < float(v) < float("inf")):
+            raise InputError(f"{name} must be positive and finite (got {v!r})")
+
+
 @dataclass(frozen=True)
 class MarchOptions:
     """Settings of the discrete march (:mod:`.march`, :mod:`.search`, :mod:`.step`), shared by the initial-value solve
@@ -41,15 +58,9 @@ class MarchOptions:
     simultaneous_gap: float = 1e-9
 
     def __post_init__(self):
-        for name in ("newton_iter", "chunk_steps", "chunk_newton", "mode_rounds", "friction_rounds",
-                     "max_combinations"):
-            v = getattr(self, name)
-            if not isinstance(v, int) or isinstance(v, bool) or v < 1:
-                raise InputError(f"{name} must be a positive integer (got {v!r})")
-        for name in ("step_tol", "runaway", "chunk_tol", "simultaneous_gap"):
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and 0.0 < float(v) < float("inf")):
-                raise InputError(f"{name} must be positive and finite (got {v!r})")
+        _integers(self, ("newton_iter", "chunk_steps", "chunk_newton", "mode_rounds", "friction_rounds",
+                         "max_combinations"), 1)
+        _positive(self, ("step_tol", "runaway", "chunk_tol", "simultaneous_gap"))
 
 
 def _contact_ipopt() -> dict:
@@ -100,14 +111,8 @@ class ContactOptions:
     elastic_loss_tol: float = 1e-6
 
     def __post_init__(self):
-        for name in ("branch_pivtol", "simultaneous_tol", "impulse_tol", "caught_law", "elastic_loss_tol"):
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and 0.0 < float(v) < float("inf")):
-                raise InputError(f"{name} must be positive and finite (got {v!r})")
-        for name in ("lookahead_catch", "guess_chunk"):
-            v = getattr(self, name)
-            if not isinstance(v, int) or isinstance(v, bool) or v < 1:
-                raise InputError(f"{name} must be a positive integer (got {v!r})")
+        _positive(self, ("branch_pivtol", "simultaneous_tol", "impulse_tol", "caught_law", "elastic_loss_tol"))
+        _integers(self, ("lookahead_catch", "guess_chunk"), 1)
         if not isinstance(self.max_splits, int) or not 0 <= self.max_splits <= 40:
             raise InputError(f"max_splits must be an integer in [0, 40] (got {self.max_splits!r})")
         if not 0.0 < float(self.certify_tol) < 1e-3:
@@ -233,15 +238,9 @@ class ContactControlOptions:
         object.__setattr__(self, "penalties", pen)
         if not isinstance(self.timing_rounds, int) or self.timing_rounds < 1:
             raise InputError(f"timing_rounds must be a positive integer (got {self.timing_rounds!r})")
-        for name in ("iteration_budget", "timing_rounds", "move_rounds", "restart_iter", "continuation_iter",
-                     "ladder_max", "across_rounds", "polish_rounds", "polish_contracting", "branch_small_iter"):
-            v = getattr(self, name)
-            if not isinstance(v, int) or isinstance(v, bool) or v < 0:
-                raise InputError(f"{name} must be a non-negative integer (got {v!r})")
-        for name in ("complementarity_target", "node_force", "b_tol", "certificate_tol", "elastic_weight"):
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and 0.0 < float(v) < float("inf")):
-                raise InputError(f"{name} must be positive and finite (got {v!r})")
+        _integers(self, ("iteration_budget", "timing_rounds", "move_rounds", "restart_iter", "continuation_iter",
+                     "ladder_max", "across_rounds", "polish_rounds", "polish_contracting", "branch_small_iter"), 0)
+        _positive(self, ("complementarity_target", "node_force", "b_tol", "certificate_tol", "elastic_weight"))
         if not 0.0 < float(self.edge) < float(self.near_edge) < 0.5:
             raise InputError(f"edge and near_edge must satisfy 0 < edge < near_edge < 0.5 (got {self.edge!r}, "
                              f"{self.near_edge!r})")
