@@ -38,7 +38,7 @@ from ..discretise.optimal_control import ControlTranscription, split_controls
 from ..models.mechanics import LagrangianSystem
 from ..result import ACCEPTABLE, ControlResult
 from ..validation import InputError, integer_at_least, one_of
-from . import memory
+from . import ladder, memory
 from .nlp import NLP
 from .trajectory import check_inertia
 
@@ -261,18 +261,16 @@ class OptimalControl:
             raise InputError("contact= takes the settings of a contact-implicit solve: this system has no contact")
         if keep_modes:
             raise InputError("keep_modes is for a system with contact (the contact modes of the guess's march)")
-        rungs: List[int] = []
-        if guess is None and self.N > LADDER_MAX:
+        def coarser(M):
             coarse = copy.copy(self)
-            coarse.N = (self.N + 1) // 2
-            t0 = _time.perf_counter()
-            prior = coarse.solve(options=options)
-            spent = _time.perf_counter() - t0
-            if prior.success:
-                guess, rungs = self._interpolated(prior), prior.grids
-        out = self._solve_grid(guess, options, verbose)
-        out.grids = rungs + [self.N]
-        if rungs:
+            coarse.N = M
+            return coarse.solve(options=options)
+
+        rung = ladder.below(self.N, LADDER_MAX, guess, coarser, self._interpolated)
+        out = self._solve_grid(rung.guess, options, verbose)
+        out.grids = rung.grids + [self.N]
+        spent = rung.seconds
+        if rung.grids:
             out.solve_time_s += spent
         return out
 

@@ -43,7 +43,7 @@ from ...discretise.contact.elements import ContactMechanics
 from ...discretise.contact.transcription import TOUCH_TOL
 from ...discretise.optimal_control import split_controls
 from ...result import NLPResult
-from .. import budget
+from .. import budget, ladder
 from ..nlp import NLP
 from ...result import SUCCESS_STATUSES, ControlResult
 from ...validation import InputError
@@ -200,14 +200,14 @@ def _solve_contact_control(system, T, N: int, scheme: str, start, end, running, 
     to a target after k bounces), and no homotopy runs."""
     t_all = _time.perf_counter()
     problem = (system, T, scheme, start, end, running, final, u_bounds, controls)
-    prior, rungs = None, []
-    if guess is None and N > o.ladder_max and not keep_modes:
-        # the ladder of grids (as for the smooth problem, OptimalControl.solve): the answer on half the steps, its
-        # controls interpolated at this grid's steps (and its horizon and start), is the guess here
-        prior = _solve_contact_control(system, T, (N + 1) // 2, scheme, start, end, running, final, u_bounds, controls,
-                                       None, options, verbose, keep_modes, path, o)
-        if prior.success:
-            guess, rungs = _interpolated(prior, N), prior.grids
+    rung = ladder.Rung(guess=guess)
+    if not keep_modes:
+        # the ladder of grids (solve.ladder): the answer on half the steps, its controls interpolated at this grid's
+        # steps (and its horizon and start), is the guess here
+        rung = ladder.below(N, o.ladder_max, guess, lambda M: _solve_contact_control(
+            system, T, M, scheme, start, end, running, final, u_bounds, controls, None, options, verbose, keep_modes,
+            path, o), lambda prior: _interpolated(prior, N))
+    prior, rungs, guess = rung.prior, rung.grids, rung.guess
     P, init, marched, guess_time = _setup(problem, N, guess, options, verbose, keep_modes, path, o)
     (qN, vN) = end
     if keep_modes:
