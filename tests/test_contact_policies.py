@@ -36,7 +36,7 @@ def _push(N):
     ({"penalties": (0.0,)}, "penalties must be finite, positive and increasing"),
     ({"timing_rounds": 0}, "timing_rounds must be a positive integer"),
     ({"iteration_budget": -1}, "iteration_budget must be a non-negative integer"),
-    ({"polish_rounds": 2.5}, "polish_rounds must be a non-negative integer"),
+    ({"resolve_rounds": 2.5}, "resolve_rounds must be a non-negative integer"),
     ({"certificate_tol": 0.0}, "certificate_tol must be positive and finite"),
     ({"b_tol": float("nan")}, "b_tol must be positive and finite"),
     ({"edge": 0.02}, "edge and near_edge must satisfy 0 < edge < near_edge < 0.5"),

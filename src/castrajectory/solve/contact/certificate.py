@@ -1,9 +1,9 @@
-"""The certificate of a contact-implicit optimal-control answer, and its polish (steps 4 and 5 of :mod:`.control`).
+"""The certificate of a contact-implicit optimal-control answer, and its branch re-solves (steps 4 and 5 of :mod:`.control`).
 
 Every step of the answer is marched by the contact march from the answer's own node and incoming momentum under its
 control (:func:`_local`), and must land on the answer's next node (relative distance at most
 ``certificate_tol``).  Where a step does not, the program is solved again on a branch of the march
-(:func:`_branch`: its modes fixed, the controls free) and certified again (:func:`_polish`); a branch's answer is
+(:func:`_branch`: its modes fixed, the controls free) and certified again (:func:`certify`); a branch's answer is
 marched from the branch's own modes (:func:`.search._started`).  The timing rounds and the answer are
 :mod:`.control`'s.
 """
@@ -38,7 +38,7 @@ def _start_of(prog, V, q0):
     return h, p0, U
 
 
-def _polish(P: Problem, res):
+def certify(P: Problem, res):
     """Step 5: certify the answer, each of its steps marched from its own node (:func:`_local`); where a step does not
     reproduce it, solve the program again on a branch of the march (its modes fixed, :meth:`ContactNLP.mode_bounds`;
     the controls free) and certify again.  The first branch is the answer's own steps' (:func:`_local_point`: each
@@ -58,8 +58,8 @@ def _polish(P: Problem, res):
         # motion moves the law's; each branch from the last answer's march shrinks that mismatch.  Measured on the
         # battery's seed 1 hopper goal #19: 2.7e-7, then a turn elsewhere 3.3e-5, then 4.7e-8 solved only to Ipopt's
         # acceptable level, where the three solves ran out)
-        if (cert <= o.certificate_tol and res.success) or solves >= o.polish_contracting or \
-                (solves >= o.polish_rounds and not cert < 0.5 * last):
+        if (cert <= o.certificate_tol and res.success) or solves >= o.resolve_contracting or \
+                (solves >= o.resolve_rounds and not cert < 0.5 * last):
             break
         last = cert
         point = _local_point(cm, res.values, local, N) if solves == 0 else None
@@ -107,7 +107,7 @@ def _local(P: Problem, V, hint=None, steps=None):
     does not amplify (the whole march from the start, the march distance, drifts by 2e-6 over 320 steps on the push
     to a target, where every step lands within 1e-10).  ``steps``: only those steps marched (the others' marches
     None, and the distance theirs alone)."""
-    # (the same values are marched twice where the rounds settle: their turns read, then the polish's certificate;
+    # (the same values are marched twice where the rounds settle: their turns read, then the certificate;
     # each step's march is kept for the values' next call, which marches only the steps not marched yet)
     key = b"".join(np.ascontiguousarray(V[k], float).tobytes() for k in sorted(V)) + \
         (b"" if hint is None else np.asarray(hint[0]).tobytes() + np.asarray(hint[1]).tobytes())
@@ -204,7 +204,7 @@ def _branch(P: Problem, point, values, bounds, opts, rho, warm=False):
     # N = 80 the other way round.  The small one first, capped, then the homotopy's)
     got = prog._ladder(init, _small(opts, prog.settings.ipopt, P.o.branch_small_iter), branch, [rho], verbose, "branch",
                        "the march's branch")
-    # (one solved only to Ipopt's acceptable level is the polish's to certify and solve again from: the homotopy's
+    # (one solved only to Ipopt's acceptable level is certify's to check and solve again from: the homotopy's
     # barrier from the march's point instead spent 3000 iterations on the hopper's first branch at N = 40, where
     # the small one reached its acceptable level in 456 and the next branch solved in 106)
     if got.continuable:

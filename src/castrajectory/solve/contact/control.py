@@ -47,7 +47,7 @@ from .. import budget, ladder
 from ..nlp import NLP
 from ...result import SUCCESS_STATUSES, ControlResult
 from ...validation import InputError
-from .certificate import STEP_VALUES, _branch, _local, _polish, _slips, _start_of, _zparts
+from .certificate import STEP_VALUES, _branch, _local, _slips, _start_of, _zparts, certify
 from . import modes as M
 from .march import discrete_march
 from .nlp import ContactNLP
@@ -325,7 +325,7 @@ def _timing_rounds(P: Problem, init: dict, near: bool):
             answers.append(Attempt(res, prog.parameters()))
         if not res.continuable:
             # (a later rung of the ladder failed after an earlier one converged short of complementarity: that one's
-            # controls are the polish's to march and solve on their branch)
+            # controls are the certificate's to march and solve on their branch)
             if prog.last_good is not None and res.solver_status not in SUCCESS_STATUSES:
                 res = prog.last_good[1]
             break
@@ -384,7 +384,7 @@ def _prepare(P: Problem, branch: Branch, init: dict, res, held, moves, moving: b
 
 
 def _certified(P: Problem, res, answers: List[Attempt], rounds: int, keep_modes: bool):
-    """Steps 4 and 5 of the module docstring: the answer polished and certified (:func:`.certificate._polish`); where
+    """Steps 4 and 5 of the module docstring: the answer certified, re-solved on the march's branches where it does not certify (:func:`.certificate.certify`); where
     it does not certify, the earlier rounds' converged answers in turn, the latest first, each with its own events
     timed, and the first certified one is the answer.  ``(result, certificate, march distance, rounds)``."""
     prog, tol = P.prog, P.o.certificate_tol
@@ -393,14 +393,14 @@ def _certified(P: Problem, res, answers: List[Attempt], rounds: int, keep_modes:
         # (also where the homotopy converged short of complementarity, a local minimum of the penalties: its
         # controls, marched, are a motion, and the program on that motion's branch is solved from it)
         answers = [a for a in answers if a.res is not res]
-        res, cert, marched, polished = _polish(P, res)
-        rounds = (1 if keep_modes else rounds) + polished
+        res, cert, marched, resolves = certify(P, res)
+        rounds = (1 if keep_modes else rounds) + resolves
     kept = prog.parameters()
     for earlier in reversed(answers):
         if cert <= tol and res.success:
             break
         prog.restore(earlier.params)
-        got = _polish(P, earlier.res)
+        got = certify(P, earlier.res)
         rounds += got[3]
         if got[1] <= tol and got[0].success:
             res, cert, marched = got[:3]
@@ -562,7 +562,7 @@ def _across(P: Problem, res: NLPResult, cert, marched):
 def _move_across(P: Problem, res: NLPResult, edge, c0: float):
     """The certified answer ``res`` with its event pinned at ``edge`` (``(step, side)``) held in the neighbouring step
     instead (:meth:`.state.Branch.moved`), the answer's other events kept: the program solved from the shifted answer's
-    primal values (:func:`_shift`) with a small barrier, then polished and certified (:func:`_polish`).  (From its
+    primal values (:func:`_shift`) with a small barrier, then certified (:func:`.certificate.certify`).  (From its
     multipliers too, the other branch's, the hopper's first move at N = 40 took 1879 iterations where without them it
     took 96, to the same answer.)  ``(a certified Attempt cheaper than c0 or None, solves, held on its node: the moved
     solve converged no cheaper)``."""
@@ -585,10 +585,10 @@ def _move_across(P: Problem, res: NLPResult, edge, c0: float):
     held = bool(got.success and prog.cost(got.values) >= drop)
     if not (got.continuable and prog.cost(got.values) < drop):
         return None, 1, held
-    got, c, m, polished = _polish(P, got)
+    got, c, m, resolves = certify(P, got)
     if got.success and c <= o.certificate_tol and prog.cost(got.values) < drop:
-        return Attempt(got, prog.parameters(), c, m), 1 + polished, held
-    return None, 1 + polished, held
+        return Attempt(got, prog.parameters(), c, m), 1 + resolves, held
+    return None, 1 + resolves, held
 
 
 def held_branch(P: Problem, V) -> Branch:

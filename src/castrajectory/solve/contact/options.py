@@ -184,12 +184,12 @@ class ContactControlOptions:
     * ``elastic_weight``: the end conditions' weight in the elastic mode's cost (a failed solve with a given end state
       is solved again with the end in the cost, then from that answer);
 
-    The certificate and its polish:
+    The certificate and its branch re-solves:
 
     * ``certificate_tol``: every step of the controls, marched from the answer's own node, lands on the next node to
       this (relative);
-    * ``polish_rounds``, ``polish_contracting``: branch re-solves of an answer that does not certify: at most
-      ``polish_rounds``, and up to ``polish_contracting`` while each certificate halves the last;
+    * ``resolve_rounds``, ``resolve_contracting``: branch re-solves of an answer that does not certify: at most
+      ``resolve_rounds``, and up to ``resolve_contracting`` while each certificate halves the last;
     * ``branch_small_iter``: iterations of a branch solve's first try, from its march with a small barrier;
     * ``march_options``: the march's own settings (:class:`MarchOptions`: the guess's march and the certificate's).
 
@@ -222,8 +222,8 @@ class ContactControlOptions:
     across_rounds: int = 8
     elastic_weight: float = 1.0
     certificate_tol: float = 1e-7
-    polish_rounds: int = 3
-    polish_contracting: int = 6
+    resolve_rounds: int = 3
+    resolve_contracting: int = 6
     branch_small_iter: int = 500
     march_options: MarchOptions = field(default_factory=MarchOptions)
 
@@ -239,7 +239,7 @@ class ContactControlOptions:
         if not isinstance(self.timing_rounds, int) or self.timing_rounds < 1:
             raise InputError(f"timing_rounds must be a positive integer (got {self.timing_rounds!r})")
         _integers(self, ("iteration_budget", "timing_rounds", "move_rounds", "restart_iter", "continuation_iter",
-                     "ladder_max", "across_rounds", "polish_rounds", "polish_contracting", "branch_small_iter"), 0)
+                     "ladder_max", "across_rounds", "resolve_rounds", "resolve_contracting", "branch_small_iter"), 0)
         _positive(self, ("complementarity_target", "node_force", "b_tol", "certificate_tol", "elastic_weight"))
         if not 0.0 < float(self.edge) < float(self.near_edge) < 0.5:
             raise InputError(f"edge and near_edge must satisfy 0 < edge < near_edge < 0.5 (got {self.edge!r}, "

@@ -138,7 +138,7 @@ def _base_mode(m: str, touching: bool):
 
 
 def _started(step: _Step, q, p, h, g_q, tol, finest, x0, start):
-    """The step in given modes (a solved program's own, :func:`.certificate._polish`): ``start = (modes, friction modes,
+    """The step in given modes (a solved program's own, :func:`.certificate.certify`): ``start = (modes, friction modes,
     x)``, solved from ``x`` by the step's Newton and judged by the search's own tests -- every force and multiplier
     of its sign, every gap open, every friction slot in its cone or sliding with its slip (:func:`_friction`, which
     starts from the given friction modes), the impact laws applied again (:func:`_cascade`, :func:`_impact_law`),
