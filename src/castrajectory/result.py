@@ -63,6 +63,10 @@ SUCCESS_STATUSES = frozenset({"Solve_Succeeded", "Rows_Verified"})
 #: itself; a strategy may go on from its point (:attr:`NLPResult.continuable`), and the method's own measurement
 #: (a re-solve, a certificate) decides the answer.
 ACCEPTABLE = "Solved_To_Acceptable_Level"
+#: An optimal control's certificate (``ControlResult.certificate``: every step of its controls, marched from the
+#: answer's own node by the discrete equations, smooth or through contact, lands on the next node to this, relative to
+#: the motion's scale) certifies it at most this: the one tolerance of both certificates.
+CERTIFICATE_TOL = 1e-7
 
 _ADVICE = {
     "Maximum_Iterations_Exceeded": "raise max_iter or supply a better initial guess",

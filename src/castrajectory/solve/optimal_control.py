@@ -36,7 +36,7 @@ import numpy as np
 from ..discretise.lagrangians import SCHEMES, discrete_mechanics
 from ..discretise.optimal_control import ControlTranscription, split_controls
 from ..models.mechanics import LagrangianSystem
-from ..result import ACCEPTABLE, ControlResult
+from ..result import ACCEPTABLE, CERTIFICATE_TOL, ControlResult
 from ..validation import InputError, integer_at_least, one_of
 from . import ladder, memory
 from .nlp import NLP
@@ -44,8 +44,6 @@ from .trajectory import check_inertia
 
 #: Ipopt settings of the DMOC solve (exact Hessian; MUMPS scaling off as for every program here).
 OCP_IPOPT = {"tol": 1e-10, "max_iter": 3000, "mumps_pivtol": 1e-8, "bound_relax_factor": 0.0}
-#: The march of the certificate must reproduce the optimal configurations to this, relative to their scale.
-CERTIFICATE_TOL = 1e-7
 #: A grid of more steps than this starts from the answer of a grid half as fine (see OptimalControl.solve).
 LADDER_MAX = 64
 #: Where Ipopt stops at its acceptable level (the requested ``tol`` out of reach of the grid's rounding: the acrobot,

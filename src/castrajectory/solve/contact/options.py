@@ -5,6 +5,7 @@ from dataclasses import dataclass, field
 from typing import Tuple
 
 from ...discretise.contact.transcription import PENALTY
+from ...result import CERTIFICATE_TOL
 from ...validation import InputError
 
 
@@ -221,7 +222,7 @@ class ContactControlOptions:
     b_tol: float = 1e-6
     across_rounds: int = 8
     elastic_weight: float = 1.0
-    certificate_tol: float = 1e-7
+    certificate_tol: float = CERTIFICATE_TOL
     resolve_rounds: int = 3
     resolve_contracting: int = 6
     branch_small_iter: int = 500
