@@ -102,7 +102,7 @@ class Runner:
 
     def run(self, tag: str, args: list) -> dict:
         out, err = self.logs / f"{tag}.out", self.logs / f"{tag}.err"
-        env = dict(os.environ, PYTHONUNBUFFERED="1")
+        env = _child_env()
         t0 = time.perf_counter()
         with open(out, "w") as fo, open(err, "w") as fe:
             proc = subprocess.Popen([PY, *map(str, args)], cwd=ROOT, stdout=fo, stderr=fe, env=env,
@@ -128,6 +128,22 @@ class Runner:
                 return
             except (ProcessLookupError, subprocess.TimeoutExpired):
                 continue
+
+
+def _child_env() -> dict:
+    """The children's environment: this checkout's src first on the path, so that its code is measured whichever
+    checkout the interpreter's (editable) install points at."""
+    path = os.pathsep.join(p for p in (str(ROOT / "src"), os.environ.get("PYTHONPATH")) if p)
+    return dict(os.environ, PYTHONUNBUFFERED="1", PYTHONPATH=path)
+
+
+def _package_path() -> str:
+    """Where the children import castrajectory from (a check that it is this checkout's)."""
+    try:
+        return subprocess.run([PY, "-c", "import castrajectory; print(castrajectory.__file__)"], cwd=ROOT,
+                              env=_child_env(), capture_output=True, text=True, timeout=120).stdout.strip()
+    except Exception:
+        return ""
 
 
 def _tail(text: str, n=5) -> str:
@@ -603,6 +619,12 @@ def main(argv=None):
         data = {"meta": _meta(started), "families": {}, "notes": []}
         if data["meta"]["dirty"]:
             data["notes"].append("the checkout has uncommitted changes to tracked files")
+        pkg = _package_path()
+        data["meta"]["package_in_checkout"] = bool(pkg) and Path(pkg).resolve().is_relative_to(ROOT / "src")
+        if not data["meta"]["package_in_checkout"]:
+            print(f"contact_figures: the children would import castrajectory from {pkg or '(nowhere)'}, not from "
+                  f"this checkout's src: nothing measured", file=sys.stderr)
+            return 2
         print(f"contact figures: {', '.join(names)}; raw outputs in {logs}", file=sys.stderr)
         run = Runner(logs, args.timeout)
         for name in names:
