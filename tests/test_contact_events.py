@@ -81,6 +81,48 @@ def test_plastic_landing_stops_dead(n):
     assert not tr.releases
 
 
+def test_held_share_keeps_the_other_corners_bounce():
+    """The contact battery's scene 007 (seed 13: e = 0.268) on a coarser grid: corner 0's bouncing accumulates at
+    0.714833 s (the event-driven reference stops there), and with corner 0 held the rectangle turns about it until
+    corner 1 lands at 0.7277 s at 0.207 m/s, a bounce the grid resolves (e |v_n⁻| = 0.055 > |a_n| h = 0.025).
+    Moving corner 0's support out along its own normal alone changed corner 1's v_after by the body's coupling
+    (5.0e-3 m/s here): Newton's law missed and the bounce was listed caught, a catch the grid resolves (15 of the
+    battery's 66 scenes failed).  Corner 0 now reads 0 after it, corner 1 e times its arrival, and no catch is
+    one the grid resolves."""
+    from castrajectory.baselines.events import event_driven
+    from castrajectory.models import collision as col
+
+    e, T, N = 0.268, 1.0, 400
+    system = col.rectangle_drop(1.0, 1.0, 0.3862495171881035, G, e)
+    q0, v0 = np.array([0.0, 1.4108704256970608, 1.0278]), np.array([-0.122, 0.0, -2.99])
+    tr = ct.simulate(system, q0, v0, T=T, N=N).detail
+    assert tr.success
+    ref = event_driven(system, q0, v0, T)
+    assert ref.horizon == pytest.approx(0.714833, abs=1e-6)          # corner 0's accumulation
+    h, acc = T / N, np.asarray(system.acceleration(q0, v0)).reshape(-1)
+    for imp in tr.impacts:
+        J = np.asarray(system.gap(imp.q)[1])
+        vb, va = float(J[imp.contact] @ imp.v_before), float(J[imp.contact] @ imp.v_after)
+        if imp.caught:   # the battery's reading: a catch ends an accumulation, e |v_n⁻| < |a_n| h
+            assert e * abs(vb) < abs(float(J[imp.contact] @ acc)) * h, imp.t
+        else:
+            assert abs(va + e * vb) <= 1e-9 * abs(vb), imp.t
+    # the bounces before the accumulation are the reference's, in time and corner
+    early = [(i.t, i.contact) for i in tr.impacts if i.t < 0.7]
+    assert [c for _, c in early] == [ev.contacts[0] for ev in ref.events if ev.t < 0.7]
+    assert max(abs(t - ev.t) for (t, _), ev in zip(early, ref.events)) < 1e-10
+    # corner 1's landing on the held corner 0: a bounce, corner 0 stays down
+    land = [i for i in tr.impacts if i.contact == 1 and 0.72 < i.t < 0.73]
+    assert len(land) == 1 and not land[0].caught
+    J = np.asarray(system.gap(land[0].q)[1])
+    assert J[1] @ land[0].v_before == pytest.approx(-0.2068, abs=1e-4)
+    assert J[1] @ land[0].v_after == pytest.approx(-e * (J[1] @ land[0].v_before), rel=1e-9)
+    assert abs(J[0] @ land[0].v_after) <= 1e-12
+    # the share moved out is an impulse along both corners' normals that leaves corner 1's normal velocity as it was
+    share = np.linalg.solve(np.asarray(system.mass_matrix(land[0].q)), J.T @ land[0].held_share)
+    assert land[0].held_share[0] < 0 and abs(J[1] @ share) <= 1e-12
+
+
 def test_resting_ball_force_and_node_impulses():
     """A ball (m = 2) at rest on the floor, midpoint, h = 0.1: the contact force per node is m g at every node
     (node 0's half cell included); the node impulse h ν carries half of its cell's impulse and the step's
