@@ -33,8 +33,9 @@ class SubNodeImpact:
     at_node: bool = False
     #: the tangential (friction) impulse along the contact's slip direction (0 without friction)
     mu_t: float = 0.0
-    #: per contact, the (non-positive) share of the point's impulses that supports contacts held through the part
-    #: after it, moved out of the impact (:func:`_held_share`): ``v_after − v_before = M⁻¹ Jᵀ (μ + held_share)``
+    #: per contact, the share of the point's impulses that supports contacts held through the part after it, moved
+    #: out of the impact (:func:`_held_share`: the held contacts' normal velocity after it zero, the leaving contacts'
+    #: kept; non-zero for a leaving contact too): ``v_after − v_before = M⁻¹ Jᵀ (μ + held_share)``
     held_share: Optional[np.ndarray] = None
 
     def as_dict(self) -> dict:
