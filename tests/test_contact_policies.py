@@ -150,3 +150,23 @@ def test_the_march_chunk_length_does_not_change_the_answer(scene):
     assert float(np.max(np.abs(runs[0].q - runs[1].q))) <= 1e-12
     assert [i.contact for i in runs[0].impacts] == [i.contact for i in runs[1].impacts]
     assert max(abs(a.t - b.t) for a, b in zip(runs[0].impacts, runs[1].impacts)) <= 1e-12
+
+
+def test_the_iteration_budget_is_the_solves_own_or_the_runs():
+    """ContactControlOptions.iteration_budget caps every Ipopt iteration of one contact-implicit solve (its rounds,
+    branches and coarser grids) and says so when it ends the solve; a run's budget (--max-iter, budget.iterations)
+    takes its place where one is open.  The hopper at N = 20 needs 941 iterations."""
+    from castrajectory.solve import budget
+    hop = _problems("hopper")
+    ocp = hop.problem(N=20)
+    own = ocp.solve(guess=ocp.guess, contact=ct.ContactControlOptions(iteration_budget=300))
+    assert not own.success and own.iterations <= 300
+    assert own.message.endswith("(the solve's budget of 300 Ipopt iterations is spent)")
+    ocp = hop.problem(N=20)
+    with budget.iterations(250):
+        run = ocp.solve(guess=ocp.guess, contact=ct.ContactControlOptions(iteration_budget=10_000))
+        assert budget.remaining() == 0
+    assert not run.success and run.iterations <= 250
+    ocp = hop.problem(N=20)
+    full = ocp.solve(guess=ocp.guess)                  # (nothing of the earlier budgets is left behind)
+    assert full.success and full.cost == pytest.approx(11.0378620, abs=1e-6)

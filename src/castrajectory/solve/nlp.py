@@ -237,6 +237,9 @@ class NLP(Program):
     #: (a point certified without Ipopt) sets it False: compiling a new system's kernels cost 3.4 s for
     #: a 0.03 s gain on a 4000-step block drop.
     compile_elements: bool = True
+    #: The Ipopt iteration budget of this program's solves (:class:`~castrajectory.solve.budget.Budget`, shared with
+    #: the other programs of the strategy that set it); None: the run's (``--max-iter``), if any.
+    budget = None
     #: Ipopt's statistics of the last solve (empty before one, or when a spent budget skipped it).
     last_stats: dict = {}
 
@@ -734,11 +737,12 @@ class NLP(Program):
             ``lb == ub`` fixes variables, which Ipopt then removes).
         """
         interrupt.check()           # (a signal a finaliser or CasADi dropped since the last solve stops here)
-        left = budget.remaining()
-        if left is not None:
-            # a run-wide iteration budget (solve.budget): at most what is left, and nothing once it is spent
+        # the iteration budget (solve.budget): this program's own, else the run's; at most what is left, and nothing
+        # once it is spent
+        held = self.budget if self.budget is not None else budget.current()
+        if held is not None:
             cap = int((options or {}).get("max_iter", DEFAULT_IPOPT_OPTIONS.get("max_iter", 3000)))
-            options = dict(options or {}, max_iter=min(cap, max(left, 1)))
+            options = dict(options or {}, max_iter=min(cap, max(held.remaining(), 1)))
         solver = self.build(options, verbose, expand)
         build_time = self._build_time
         args = self._arguments(init, warm, bounds)
@@ -747,8 +751,8 @@ class NLP(Program):
 
         p = np.concatenate([b.init for b in self._params]) if self._params else np.zeros(0)
         t = time.perf_counter()
-        if budget.remaining() == 0:
-            # the run's iteration budget is spent: not solved, and Ipopt not started
+        if held is not None and held.remaining() == 0:
+            # the iteration budget is spent: not solved, and Ipopt not started
             nx = np.asarray(args["x0"]).size
             sol = {"x": args["x0"], "lam_x": np.zeros(nx), "lam_g": np.zeros(self._ng), "f": float("nan")}
             status, iters = "Maximum_Iterations_Exceeded", 0
@@ -761,7 +765,8 @@ class NLP(Program):
             stats = self.last_stats = solver.stats()
             status = stats.get("return_status", "unknown")
             iters = int(stats.get("iter_count", 0))
-            budget.spend(iters)
+            if held is not None:
+                held.spend(iters)
         total_time = time.perf_counter() - t
 
         x = np.asarray(sol["x"]).reshape(-1)

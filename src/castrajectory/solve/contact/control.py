@@ -175,20 +175,18 @@ def solve_contact_control(system, T, N: int, scheme: str, start, end, running, f
     unknown = [name for name in o.starts if name not in STARTS]
     if unknown:
         raise InputError(f"unknown start policies {unknown}: the policies are {sorted(STARTS)}")
-    args = (system, T, N, scheme, start, end, running, final, u_bounds, controls, guess, options, verbose, keep_modes,
-            path, o)
-    if budget.remaining() is not None:
-        return _solve_contact_control(*args)
-    with budget.iterations(o.iteration_budget):
-        out = _solve_contact_control(*args)
-        if not out.success and budget.remaining() == 0:
-            out.message = f"{out.message} (the solve's budget of {o.iteration_budget} Ipopt iterations is spent)"
+    run = budget.current()
+    B = run if run is not None else budget.Budget(o.iteration_budget)
+    out = _solve_contact_control(system, T, N, scheme, start, end, running, final, u_bounds, controls, guess, options,
+                                 verbose, keep_modes, path, o, B)
+    if run is None and not out.success and B.remaining() == 0:
+        out.message = f"{out.message} (the solve's budget of {o.iteration_budget} Ipopt iterations is spent)"
     return out
 
 
 def _solve_contact_control(system, T, N: int, scheme: str, start, end, running, final, u_bounds,
                            controls, guess, options, verbose: bool, keep_modes: bool, path,
-                           o: ContactControlOptions, elastic: bool = True) -> ContactControlResult:
+                           o: ContactControlOptions, B: budget.Budget, elastic: bool = True) -> ContactControlResult:
     """Solve a contact-implicit optimal-control problem (module docstring).  ``T``: the horizon, or ``(lo, hi)`` for
     a free final time; ``start``, ``end``: ``(q, q̇)`` with NaN for a free entry (``q̇`` ``None``: free; the start's
     ``q`` given in full, NaN entries of its ``q̇`` are unknowns); ``running(q, v, u, t)``, ``final(q, v, T)``: CasADi
@@ -197,7 +195,8 @@ def _solve_contact_control(system, T, N: int, scheme: str, start, end, running, 
     ``path``: ``[(g(q, u, t), lb, ub)]``, rows at every node and sub-node;
     ``keep_modes``: the answer keeps the contact modes of the guess's march (its impacts in their steps, its holds
     and slides), solved on that branch alone: the number and order of the impacts are the guess's choice (a bounce
-    to a target after k bounces), and no homotopy runs."""
+    to a target after k bounces), and no homotopy runs.  ``B``: the Ipopt iteration budget every solve of it
+    draws on, the coarser grids' and the elastic mode's included."""
     t_all = _time.perf_counter()
     problem = (system, T, scheme, start, end, running, final, u_bounds, controls)
     rung = ladder.Rung(guess=guess)
@@ -206,9 +205,9 @@ def _solve_contact_control(system, T, N: int, scheme: str, start, end, running, 
         # steps (and its horizon and start), is the guess here
         rung = ladder.below(N, o.ladder_max, guess, lambda M: _solve_contact_control(
             system, T, M, scheme, start, end, running, final, u_bounds, controls, None, options, verbose, keep_modes,
-            path, o), lambda prior: _interpolated(prior, N))
+            path, o, B), lambda prior: _interpolated(prior, N))
     prior, rungs, guess = rung.prior, rung.grids, rung.guess
-    P, init, marched, guess_time = _setup(problem, N, guess, options, verbose, keep_modes, path, o)
+    P, init, marched, guess_time = _setup(problem, N, guess, options, verbose, keep_modes, path, o, B)
     (qN, vN) = end
     if keep_modes:
         res, rounds, answers = _continued(P, marched, init, qN, vN), 1, []
@@ -226,7 +225,7 @@ def _solve_contact_control(system, T, N: int, scheme: str, start, end, running, 
     if prior is not None and prior.success and out.success:
         out.cost_estimate = abs(out.cost - prior.cost) / 3.0
     if elastic and not out.success and not keep_modes and (bool(np.any(~np.isnan(qN))) or vN is not None):
-        alt = _elastic(problem, N, dict(guess or {}), options, verbose, path, o, _length_scale(system, start[0]))
+        alt = _elastic(problem, N, dict(guess or {}), options, verbose, path, o, B, _length_scale(system, start[0]))
         if alt is not None:
             alt.iterations += out.iterations
             alt.solve_time_s = _time.perf_counter() - t_all - alt.build_time_s
@@ -245,7 +244,8 @@ def _interpolated(prior: ContactControlResult, N: int) -> dict:
     return guess
 
 
-def _setup(problem, N: int, guess, options, verbose: bool, keep_modes: bool, path, o: ContactControlOptions):
+def _setup(problem, N: int, guess, options, verbose: bool, keep_modes: bool, path, o: ContactControlOptions,
+           B: budget.Budget):
     """The program of one grid and its start: ``(Problem, the start point, the guess's march or None, the guess's
     time)``.  The controls' guess (the user's, else zero clipped to the bounds) is marched from the initial state by
     the contact march; where that fails (or halves a step), the straight line from the start to the end."""
@@ -281,6 +281,7 @@ def _setup(problem, N: int, guess, options, verbose: bool, keep_modes: bool, pat
     prog = _Program(cm, N, Tg, scales, vN is not None, running, final, (lo, hi), free_time=free_time,
                     start_velocity=bool(np.any(free_v)), path=path)
     prog.complementarity_target = o.complementarity_target
+    prog.nlp.budget = B
     prog.set_split_weight(0.0)
     if vN is not None:
         prog.set_end_momentum(system.momentum(qN, vN))
@@ -409,7 +410,7 @@ def _certified(P: Problem, res, answers: List[Attempt], rounds: int, keep_modes:
     return res, cert, marched, rounds
 
 
-def _elastic(problem, N, guess, options, verbose, path, o: ContactControlOptions,
+def _elastic(problem, N, guess, options, verbose, path, o: ContactControlOptions, B: budget.Budget,
              length) -> Optional[ContactControlResult]:
     """The end conditions' elastic mode (as an SQP solver's, SNOPT's): the problem solved with its given end state
     moved into the cost (``elastic_weight`` times its squared distance, on top of the cost), then solved again with
@@ -432,12 +433,12 @@ def _elastic(problem, N, guess, options, verbose, path, o: ContactControlOptions
     soft = ca.Function("phi_elastic", [q, v, Ts], [cost + o.elastic_weight * miss])
     free_end = (np.full(n, np.nan), None)
     first = _solve_contact_control(system, T, N, scheme, (q0, v0), free_end, running, soft, u_bounds, controls, guess,
-                                   options, verbose, False, path, o, elastic=False)
+                                   options, verbose, False, path, o, B, elastic=False)
     if not first.success:
         return None
     g = {"T": first.T, "qd0": first.v[0], **({"u": first.u} if first.u is not None and np.size(first.u) else {})}
     out = _solve_contact_control(system, T, N, scheme, (q0, v0), (qN, vN), running, final, u_bounds, controls, g,
-                                 options, verbose, False, path, o, elastic=False)
+                                 options, verbose, False, path, o, B, elastic=False)
     if not out.success:
         return None
     out.iterations += first.iterations
