@@ -165,7 +165,7 @@ class ContactControlTranscription(ContactTranscription):
         Q, S, B = V["q"].reshape(L + 1, n), V["qs"].reshape(L, n), V["beta"].reshape(L)
         Z = V["zs"].reshape(L, 2 * cm.s) if cm.s else None
         zm, zp = ([Z[:, :cm.s]], [Z[:, cm.s:]]) if cm.s else ([], [])
-        U = [V["u"].reshape(L, cm.nu)] if cm.nu else []
+        U = self._controls(V)
         total = 0.0
         if self.running_fn is not None:
             total += float(np.sum(np.asarray(self.running_fn.map(L)(Q[:-1].T, S.T, Q[1:].T, B, self.steps(V),
@@ -270,7 +270,7 @@ class ContactControlTranscription(ContactTranscription):
         qs, b, q, h, nu, pN = sym("qs", n), sym("b"), sym("q", n), sym("h"), sym("nu", c), sym("pN", n)
         r = sym("r", c)
         zp = [sym("zp", cm.s)] if cm.s else []
-        u = [cm._U] if cm.nu else []
+        u = [cm._U]
         pm = cm.p_node_minus(qs, b, q, h, *zp, *u)
         J = cm.system.gap(q)[1]
         imp = ca.mtimes(J.T, nu)
@@ -295,8 +295,7 @@ class ContactControlTranscription(ContactTranscription):
         tk = kk * h
         val = st.discrete_lagrangian(f, parts[0], a * h, tk) + st.discrete_lagrangian(f, parts[1], (1 - a) * h,
                                                                                      tk + a * h)
-        return ca.Function("c_running", [qk, qs, qn, b, h, kk] + ([zm, zp] if s else []) + ([u] if cm.nu else []),
-                           [val])
+        return ca.Function("c_running", [qk, qs, qn, b, h, kk] + ([zm, zp] if s else []) + [u], [val])
 
     @staticmethod
     def _path_elements(cm: ContactMechanics, fn: ca.Function):
@@ -304,10 +303,8 @@ class ContactControlTranscription(ContactTranscription):
         sym, n = ca.SX.sym, cm.n
         q, b, h, k = sym("q", n), sym("b"), sym("h"), sym("k")
         u = cm._U
-        uin = [u] if cm.nu else []
-        ua = u if cm.nu else ca.SX(0, 1)
-        return (ca.Function("c_path", [q, h, k] + uin, [fn(q, ua, k * h)]),
-                ca.Function("c_path_sub", [q, b, h, k] + uin, [fn(q, ua, (k + 0.5 + b) * h)]))
+        return (ca.Function("c_path", [q, h, k, u], [fn(q, u, k * h)]),
+                ca.Function("c_path_sub", [q, b, h, k, u], [fn(q, u, (k + 0.5 + b) * h)]))
 
     @staticmethod
     def _final(cm: ContactMechanics, final: ca.Function, N: int) -> ca.Function:
@@ -315,6 +312,6 @@ class ContactControlTranscription(ContactTranscription):
         sym, n, s = ca.SX.sym, cm.n, cm.s
         qs, b, q, h = sym("qs", n), sym("b"), sym("q", n), sym("h")
         zp = [sym("zp", s)] if s else []
-        u = [cm._U] if cm.nu else []
+        u = [cm._U]
         v = ca.solve(cm.system.mass_matrix(q), cm.p_node_minus(qs, b, q, h, *zp, *u))
         return ca.Function("c_final", [qs, b, q, h] + zp + u, [final(q, v, N * h)])

@@ -57,11 +57,12 @@ class ContactMechanics:
         z = ca.SX(0, 1)
         self._z = z
         # controls (optimal control through contact): one value per step, u_k, constant over both parts of step k,
-        # an input of every element whose rows hold the forces of a step (appended last: a scene without controls
-        # keeps its element functions); the node row holds the forces of two steps, u_{k−1} and u_k
+        # the last input of every element whose rows hold the forces of a step, zero-size without controls (one
+        # signature: a caller passes the step's controls, an empty column for a scene without them, and the program is
+        # the same); the node row holds the forces of two steps, u_{k−1} and u_k
         self.nu = ncu = dm.nu
         U, Um = ca.SX.sym("u", ncu), ca.SX.sym("um", ncu)
-        xu, xun = ([U], [Um, U]) if ncu else ([], [])
+        xu, xun = [U], [Um, U]
         self._U = U
         if system.forced:
             # forces (Force, Damping; no time): the discrete Lagrange–d'Alembert momenta over each part of a
@@ -207,7 +208,7 @@ class ContactMechanics:
         if not ncu:
             v, acc = sym("v", n), system.acceleration
             self.acc_normal = self.guide.acc_normal if s else ca.Function(
-                "acc_normal", [qk, v], [ca.mtimes(J(qk), acc(qk, v))])
+                "acc_normal", [qk, v, U], [ca.mtimes(J(qk), acc(qk, v))])
         else:
             # the normal accelerations under the step's control (the march's test of an arrival at a node)
             qdd = ca.substitute(system._index1_exprs()[0], system.control_vector, U)
@@ -451,7 +452,7 @@ class ContactMechanics:
             extra = [stick, sgn, fix, rfix, arrive, rfixl]
         self.march_step = ca.Function("march_step", [x, qk, p, h, ell, snu, smu, vref, bfix, t, held, closed, law, node,
                                                       fixed, mufix, nfixed, release, leftfix, mufixl, tslip] + extra
-                                      + ([self._U] if self.nu else []),
+                                      + [self._U],
                                       [R, ca.jacobian(R, x)])
 
     def friction_rows(self, slip, rho, stick, sgn, fix, rfix, vref, muf=None):

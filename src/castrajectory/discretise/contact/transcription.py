@@ -171,14 +171,14 @@ class ContactTranscription:
             if m:
                 nlp.variable("lam_stage", L * 2 * cm.ms)
         # controls (optimal control through contact): one value per step, an input of every row that holds the
-        # step's forces (ContactMechanics); a system without controls has none
+        # step's forces (ContactMechanics); a system without controls passes an empty one (the same signature)
         if cm.nu:
             lo, hi = u_bounds if u_bounds is not None else (np.full(cm.nu, -np.inf), np.full(cm.nu, np.inf))
             nlp.variable("u", L * cm.nu, lb=np.tile(lo, L), ub=np.tile(hi, L), init=np.tile(np.clip(0.0, lo, hi), L))
             UI = nlp.index("u").reshape(L, cm.nu)
             UA = lambda i: [X(UI[i])]  # noqa: E731
         else:
-            UA = lambda i: []  # noqa: E731
+            UA = lambda i: [np.zeros(0)]  # noqa: E731
         self._UA = UA
         nlp.parameter("p0", n)
         nlp.parameter("rho", 1, value=PENALTY[0])
@@ -365,9 +365,9 @@ class ContactTranscription:
         return left + [np.asarray(self.nlp.parameter_value("release"), float).reshape(L, cm.c).T]
 
     def _controls(self, values):
-        """``[U]``, the controls per step ``(L, nu)``, or ``[]`` without controls."""
+        """``[U]``, the controls per step ``(L, nu)`` (``nu`` = 0 without controls: an empty column per step)."""
         if not self.cm.nu:
-            return []
+            return [np.zeros((self.L, 0))]
         return [np.asarray(values["u"], float).reshape(self.L, self.cm.nu)]
 
     def _stages(self, values):

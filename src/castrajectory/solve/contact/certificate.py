@@ -28,13 +28,13 @@ STAGE_VALUES = ("zs", "lam", "lam_sub", "lam_stage")
 
 def _start_of(prog, V, q0):
     """``(h, p0, U)`` of the values ``V``: the step length, the initial momentum and the controls per step."""
-    cm, N = prog.cm, prog.L
+    cm = prog.cm
     h = float(prog.steps(V)[0])
     if prog.start_velocity:
         p0 = np.asarray(cm.system.momentum(q0, V["v0"])).reshape(-1)
     else:
         p0 = np.asarray(prog.nlp.parameter_value("p0"), float).reshape(-1)
-    U = V["u"].reshape(N, cm.nu) if cm.nu else np.zeros((N, 0))
+    U = prog._controls(V)[0]
     return h, p0, U
 
 
@@ -65,7 +65,7 @@ def certify(P: Problem, res):
         point = _local_point(cm, res.values, local, N) if solves == 0 else None
         if point is None:
             h, p0, U = _start_of(prog, res.values, q0)
-            point = discrete_march(cm, q0, p0, N, h, scales, controls=U if cm.nu else None, options=o.march_options)
+            point = discrete_march(cm, q0, p0, N, h, scales, controls=U, options=o.march_options)
             if point is None or point["steps"].size != N:
                 break
         solves += 1
@@ -83,7 +83,7 @@ def certify(P: Problem, res):
         hint = (point["modes"], point["fmodes"] if "fmodes" in point else
                 np.full((N, 2 * cm.c), M.FREE))
     h, p0, U = _start_of(prog, res.values, q0)
-    marched = _distance(discrete_march(cm, q0, p0, N, h, scales, controls=U if cm.nu else None,
+    marched = _distance(discrete_march(cm, q0, p0, N, h, scales, controls=U,
                                        options=o.march_options, starts=_starts(cm, res.values, N, hint)),
                         res.values["q"].reshape(N + 1, cm.n), N, h)
     return res, cert, marched, solves
@@ -123,13 +123,13 @@ def _local_marches(P: Problem, V, hint, steps, done):
     h, p0, U = _start_of(prog, V, q0)
     Q, S, B = V["q"].reshape(N + 1, n), V["qs"].reshape(N, n), V["beta"].reshape(N)
     zp = _zparts(cm, V, N, 1)
-    pin = np.asarray(cm.p_node_minus.map(N)(S.T, B, Q[1:].T, h, *zp, *([U.T] if cm.nu else []))).T
+    pin = np.asarray(cm.p_node_minus.map(N)(S.T, B, Q[1:].T, h, *zp, U.T)).T
     starts = _starts(cm, V, N, hint)
     worst, marches = 0.0, [None] * N
     for k in steps:
         if k not in done:
             p = p0 if k == 0 else pin[k - 1]
-            done[k] = discrete_march(cm, Q[k], p, 1, h, scales, controls=U[k:k + 1] if cm.nu else None,
+            done[k] = discrete_march(cm, Q[k], p, 1, h, scales, controls=U[k:k + 1],
                                      options=P.o.march_options,
                                      starts=None if starts is None else starts[k:k + 1])
         pt = marches[k] = done[k]

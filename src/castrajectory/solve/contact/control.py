@@ -268,10 +268,10 @@ def _setup(problem, N: int, guess, options, verbose: bool, keep_modes: bool, pat
     if nu and "u" in guess:
         U0 = np.clip(np.asarray(guess["u"], float).reshape(N, nu), lo, hi)
     length = _length_scale(system, q0)
-    scales = _scales(system, q0, v0g, length, U0[0] if nu else np.zeros(0), Tg)
+    scales = _scales(system, q0, v0g, length, U0[0], Tg)
     p0 = np.asarray(system.momentum(q0, v0g)).reshape(-1)
     t_guess = _time.perf_counter()
-    point = discrete_march(cm, q0, p0, N, h, scales, controls=U0 if nu else None, options=o.march_options)
+    point = discrete_march(cm, q0, p0, N, h, scales, controls=U0, options=o.march_options)
     if point is not None and point["steps"].size != N:
         point = None          # the march halved a step (two impacts in it): its grid is not the program's
     if point is None and keep_modes:
@@ -751,7 +751,7 @@ def _march_end(cm, prog, point, values):
     Qg = np.asarray(point["q"], float).reshape(N + 1, n)
     h = float(prog.steps(values)[0])
     zp = cm.stage_parts(np.asarray(point["zs"]).reshape(N, -1)[-1])[1] if cm.s else []
-    U = [np.asarray(values["u"]).reshape(N, cm.nu)[-1]] if cm.nu else []
+    U = [prog._controls(values)[0][-1]]
     pg = np.asarray(cm.p_node_minus(np.asarray(point["qs"]).reshape(N, n)[-1], float(np.asarray(point["beta"])[-1]),
                                     Qg[-1], h, *zp, *U)).reshape(-1)
     return Qg[-1], pg
@@ -867,7 +867,7 @@ def _end_ratio_bounds(cm: ContactMechanics, qN, vN, vref):
 def _answer(system, P: Problem, res: NLPResult, rounds, controls, cert, wall,
             guess_time, keep_modes: bool = False, on_node=()) -> ContactControlResult:
     cm, prog, q0, N, o, steps = P.cm, P.prog, P.q0, P.N, P.o, P.steps
-    n, c, nu = cm.n, cm.c, cm.nu
+    n, c = cm.n, cm.c
     V = res.values
     h, p0, U = _start_of(prog, V, q0)
     Q, S = V["q"].reshape(N + 1, n), V["qs"].reshape(N, n)
@@ -883,7 +883,7 @@ def _answer(system, P: Problem, res: NLPResult, rounds, controls, cert, wall,
     impact_times = [sorted([float(t_sub[k]) for k in range(N) if arr[k, j] and MU[k, j] > 0.0]
                            + [float(times[k]) for k in range(N) if node[k, j] and NU[k, j] > 0.0]) for j in range(c)]
     # velocities: the mean of the one-sided momenta at each node (the node's impulse split between them)
-    ua = [U.T] if nu else []
+    ua = [U.T]
     pp = np.asarray(cm.p_node_plus.map(N)(Q[:-1].T, S.T, B, h, *_zparts(cm, V, N, 0), *ua)).T
     pm = np.asarray(cm.p_node_minus.map(N)(S.T, B, Q[1:].T, h, *_zparts(cm, V, N, 1), *ua)).T
     p = np.vstack([p0[None, :], 0.5 * (pp[1:] + pm[:-1]), pm[-1:]])

@@ -10,6 +10,9 @@ from ...discretise.contact.elements import ContactMechanics
 from ...discretise.contact.transcription import ALPHA_MIN, REST_SPEED_STEPS, TOUCH_TOL
 from .options import ContactOptions
 
+#: The controls' input of an element, for the guess of a system without controls (the initial-value problem)
+NO_CONTROL = np.zeros(0)
+
 
 
 
@@ -76,7 +79,7 @@ def _held_step(cm: ContactMechanics, q, p, active, h, v, iterations: int = 20):
     qs, qn, nu, mu = x[:n], x[n:2 * n], x[2 * n:2 * n + c], x[2 * n + c:]
     if np.any(nu[active] < 0) or np.any(mu[active] < 0):
         return None
-    p_next = np.asarray(cm.p_node_minus(qs, 0.0, qn, h)).reshape(-1)
+    p_next = np.asarray(cm.p_node_minus(qs, 0.0, qn, h, NO_CONTROL)).reshape(-1)
     return qs, qn, nu, np.where(active, mu, 0.0), p_next
 
 
@@ -132,7 +135,7 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
                 continue
         else:
             vn0 = J0[touching] @ v
-            an0 = np.asarray(cm.acc_normal(q, v)).reshape(-1)[touching]
+            an0 = np.asarray(cm.acc_normal(q, v, NO_CONTROL)).reshape(-1)[touching]
             if np.all(vn0 <= tol / h) and np.any(an0 < 0) and \
                     np.max(np.abs(J0 @ v)) <= REST_SPEED_STEPS * float(np.max(-an0)) * h:
                 # in contact, not separating, pressed on and no fast normal motion anywhere
@@ -177,7 +180,7 @@ def _arrival(cm: ContactMechanics, q, v, h: float, k: int, crossing, rows, tol: 
     event[k] = True
     B[k] = tc / h - 0.5
     S[k] = qc
-    an = float(np.asarray(cm.acc_normal(qc, vc)).reshape(-1)[j])
+    an = float(np.asarray(cm.acc_normal(qc, vc, NO_CONTROL)).reshape(-1)[j])
     # slow: an arrival the grid does not resolve (below v_z) of a contact that is pressed on
     # (a_n < 0: a bounce would come back, the accumulation of Zeno bouncing or of a pivoting
     # corner).  The rest of the body may move fast (a block pivoting on this corner).
@@ -239,7 +242,8 @@ def _rest(cm: ContactMechanics, Q, S, B, MU, event, h: float, p0, tol: float, la
     # one has no motion at all between the nodes (docs/derivations.md, "Contact trajectories", §2, "A resting ball")
     for k in np.where(~event & (np.min(gq[:-1], axis=1) <= tol) & (np.min(gq[1:], axis=1) <= tol))[0]:
         S[k] = 0.5 * (Q[k] + Q[k + 1])
-        r = np.asarray(cm.sub(Q[k], S[k], Q[k + 1], B[k], np.zeros(c), h, np.zeros(c), *lam0)).reshape(-1) * h
+        r = np.asarray(cm.sub(Q[k], S[k], Q[k + 1], B[k], np.zeros(c), h, np.zeros(c), *lam0,
+                              NO_CONTROL)).reshape(-1) * h
         Js = np.asarray(gapf(S[k])[1])
         act = np.asarray(gapf(S[k])[0]).reshape(-1) <= tol
         if np.any(act):
@@ -250,9 +254,10 @@ def _rest(cm: ContactMechanics, Q, S, B, MU, event, h: float, p0, tol: float, la
     touching = np.where(np.min(gq, axis=1) <= tol)[0]
     for k in touching:
         if k == 0:
-            r = np.asarray(cm.initial(Q[0], S[0], B[0], p0, np.zeros(c), h, *lam0)).reshape(-1)
+            r = np.asarray(cm.initial(Q[0], S[0], B[0], p0, np.zeros(c), h, *lam0, NO_CONTROL)).reshape(-1)
         else:
-            r = np.asarray(cm.node(S[k - 1], B[k - 1], Q[k], S[k], B[k], np.zeros(c), h, h, *lam0)).reshape(-1)
+            r = np.asarray(cm.node(S[k - 1], B[k - 1], Q[k], S[k], B[k], np.zeros(c), h, h, *lam0, NO_CONTROL,
+                                   NO_CONTROL)).reshape(-1)
         J = np.asarray(gapf(Q[k])[1])
         act = gq[k] <= tol
         sol = np.linalg.lstsq(J[act].T, -r, rcond=None)[0]

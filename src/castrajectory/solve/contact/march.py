@@ -53,11 +53,10 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales,
     before its search (:func:`.search._started`; a halved step searches its own), the steps marched one by one.
     ``options``: the march's settings (:class:`.options.MarchOptions`, the library's by default)."""
     step = _Step(cm, scales, options)
-    U = None
-    if cm.nu:
-        U = np.asarray(controls, float).reshape(L, cm.nu)
-        # (a chunk's function has a fixed length: its steps past L take the last control, unused)
-        U = np.vstack([U, np.repeat(U[-1:], step.o.chunk_steps, axis=0)])
+    # the controls of every step, (L, nu): an empty row per step without controls
+    U = np.zeros((L, 0)) if controls is None else np.asarray(controls, float).reshape(L, cm.nu)
+    # (a chunk's function has a fixed length: its steps past L take the last control, unused)
+    U = np.vstack([U, np.repeat(U[-1:], step.o.chunk_steps, axis=0)])
     tol = TOUCH_TOL * scales[0]          # touching: gap within this
     rows = {key: [] for key in _ROWS}
     q, p = np.asarray(q0, float).copy(), np.asarray(p0, float).copy()
@@ -75,8 +74,7 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales,
             act = [bool(held[j % cm.c]) and cm.mu_f[j % cm.c] > 0 for j in range(2 * cm.c)]
             fm = [(step.fprev[i] if step.fprev[i] not in (FREE, FIX) else STICK) if act[i] else FREE
                   for i in range(2 * cm.c)]
-        if cm.nu:
-            step.uarg = [U[k]]
+        step.uarg = [U[k]]
         if L - k >= 2 and np.all(~touch | held_prev) and starts is None:
             got = _chunk(step, rows, q, p, h, held, fm, k, min(span, L - k), span, U, tol)
             if got is not None:
@@ -111,7 +109,7 @@ def _chunk(step: _Step, rows, q, p, h, held, fm, k: int, K: int, span: int, U, t
     try:
         Qn, Pn, X, Gs, Gn, Rr, SL = (a[:, :K] if a.ndim == 2 else a[:K]
                                      for a in step.chunk(span, q, p, h, held, fm, x0,
-                                                         U[k:k + span] if cm.nu else None))
+                                                         U[k:k + span]))
     except RuntimeError:
         return None      # (a singular Newton system: friction rows at zero force, no step before the chunk yet)
     NU, MU = X[lay["nu"]], X[lay["mu"]]

@@ -35,8 +35,8 @@ class _Step:
         self.fd = cm.fd
         self.fprev = [FREE] * (2 * cm.c)
         #: the control of the step marched (optimal control through contact): the last input of every element
-        #: that holds the step's forces; empty without controls
-        self.uarg = []
+        #: that holds the step's forces (an empty one without controls)
+        self.uarg = [np.zeros(0)]
 
     def chunk(self, K: int, q, p, h, held, fmodes=None, x0=None, controls=None):
         """``K`` steps from ``(q, p)`` in one call, the ``held`` contacts held (mode H) and the others
@@ -56,7 +56,7 @@ class _Step:
             fin = [st, sg] if self.nf else []
             fz = [st, sg, ca.DM.zeros(2 * c), ca.DM.zeros(2 * c * cm.fd), zero, ca.DM.zeros(c * cm.fd)] if self.nf else []
             xs = ca.MX.sym("x0", cm.nx)
-            us = [ca.MX.sym("u", cm.nu)] if cm.nu else []
+            us = [ca.MX.sym("u", cm.nu)]
             v = ca.solve(cm.system.mass_matrix(qs), ps)
             qm_, qn_ = qs + 0.5 * hs * v, qs + hs * v
             # the flight's guess of the positions (and stages), the previous step's forces, ratios, multipliers
@@ -84,7 +84,7 @@ class _Step:
                      np.array([1.0 if f in SLIDING_UP else -1.0 if f == DOWN else 0.0 for f in fm])]
         x0 = np.zeros(self.cm.nx) if x0 is None else x0
         # (the controls of the chunk's steps as columns, one per step: a mapped input)
-        uargs = [np.asarray(controls, float).reshape(K, -1).T] if self.cm.nu else []
+        uargs = [np.asarray(controls, float).reshape(K, self.cm.nu).T]
         out = self._chunks[key](q, p, x0, h, held.astype(float), self.ell, self.pref / h, self.pref, self.vref, *fargs,
                               *uargs)
         return tuple(np.asarray(a) for a in out)
