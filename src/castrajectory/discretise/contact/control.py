@@ -65,8 +65,8 @@ class ContactControlTranscription(ContactTranscription):
         UA = self._UA
         s = cm.s
         ZI = nlp.index("zs").reshape(L, 2 * s) if s else None
-        ZM = (lambda i: [X(ZI[i, :s])]) if s else (lambda i: [])  # noqa: E731
-        ZP = (lambda i: [X(ZI[i, s:])]) if s else (lambda i: [])  # noqa: E731
+        ZM = (lambda i: [X(ZI[i, :s])]) if s else (lambda i: [np.zeros(0)])  # noqa: E731
+        ZP = (lambda i: [X(ZI[i, s:])]) if s else (lambda i: [np.zeros(0)])  # noqa: E731
         self.end_velocity = end_velocity
         # a node force acts only on a contact that stays closed through the step's first part: φ(q̃_k) ⟂ ν_k.  (The
         # initial-value program needs no such pair, its march picks the branch; here the cost would otherwise
@@ -161,10 +161,9 @@ class ContactControlTranscription(ContactTranscription):
 
     def cost(self, V) -> float:
         """The running and final costs at the values ``V`` (the objective without the penalties)."""
-        cm, L, n = self.cm, self.L, self.cm.n
+        L, n = self.L, self.cm.n
         Q, S, B = V["q"].reshape(L + 1, n), V["qs"].reshape(L, n), V["beta"].reshape(L)
-        Z = V["zs"].reshape(L, 2 * cm.s) if cm.s else None
-        zm, zp = ([Z[:, :cm.s]], [Z[:, cm.s:]]) if cm.s else ([], [])
+        zm, zp = self._stages(V)
         U = self._controls(V)
         total = 0.0
         if self.running_fn is not None:
@@ -269,7 +268,7 @@ class ContactControlTranscription(ContactTranscription):
         sym, n, c = ca.SX.sym, cm.n, cm.c
         qs, b, q, h, nu, pN = sym("qs", n), sym("b"), sym("q", n), sym("h"), sym("nu", c), sym("pN", n)
         r = sym("r", c)
-        zp = [sym("zp", cm.s)] if cm.s else []
+        zp = [sym("zp", cm.s)]
         u = [cm._U]
         pm = cm.p_node_minus(qs, b, q, h, *zp, *u)
         J = cm.system.gap(q)[1]
@@ -286,7 +285,7 @@ class ContactControlTranscription(ContactTranscription):
         sym, n, s = ca.SX.sym, cm.n, cm.s
         st = cm.dm.scheme
         qk, qs, qn, b, h, kk = sym("q", n), sym("qs", n), sym("qn", n), sym("b"), sym("h"), sym("k")
-        zm, zp = (sym("zm", s), sym("zp", s)) if s else (ca.SX(0, 1), ca.SX(0, 1))
+        zm, zp = sym("zm", s), sym("zp", s)
         u = cm._U
         a = 0.5 + b
         f = lambda q, v, t: running(q, v, u, t)  # noqa: E731
@@ -295,7 +294,7 @@ class ContactControlTranscription(ContactTranscription):
         tk = kk * h
         val = st.discrete_lagrangian(f, parts[0], a * h, tk) + st.discrete_lagrangian(f, parts[1], (1 - a) * h,
                                                                                      tk + a * h)
-        return ca.Function("c_running", [qk, qs, qn, b, h, kk] + ([zm, zp] if s else []) + [u], [val])
+        return ca.Function("c_running", [qk, qs, qn, b, h, kk, zm, zp, u], [val])
 
     @staticmethod
     def _path_elements(cm: ContactMechanics, fn: ca.Function):
@@ -311,7 +310,7 @@ class ContactControlTranscription(ContactTranscription):
         """``φ(q_N, q̇_N, T)``, ``q̇_N = M⁻¹p_N⁻`` (the last part's momentum; no holonomic constraints here)."""
         sym, n, s = ca.SX.sym, cm.n, cm.s
         qs, b, q, h = sym("qs", n), sym("b"), sym("q", n), sym("h")
-        zp = [sym("zp", s)] if s else []
+        zp = [sym("zp", s)]
         u = [cm._U]
         v = ca.solve(cm.system.mass_matrix(q), cm.p_node_minus(qs, b, q, h, *zp, *u))
         return ca.Function("c_final", [qs, b, q, h] + zp + u, [final(q, v, N * h)])

@@ -85,8 +85,9 @@ class ContactMechanics:
         phi = lambda q: gapf(q)[0]  # noqa: E731
         # the stages of the step's two parts (Z⁻ on [q_k, q̃_k], Z⁺ on [q̃_k, q_{k+1}]) and of the previous
         # step's second part (Z⁺_{k−1}, for the node row); inputs only for a scheme with stages
-        zm, zp, zpm = (sym(nm, s) for nm in ("zm", "zp", "zpm")) if s else (z, z, z)
-        xzs, xzn, xz1, xz2 = ([zm, zp], [zpm, zm], [zm], [zp]) if s else ([], [], [], [])
+        # (inputs of every element, empty for a two-point scheme: one signature)
+        zm, zp, zpm = (sym(nm, s) for nm in ("zm", "zp", "zpm"))
+        xzs, xzn, xz1, xz2 = [zm, zp], [zpm, zm], [zm], [zp]
         # constraint forces −C(q)ᵀλ at the nodes and −C(q̃)ᵀλ̃ at the sub-nodes (the sign of the smooth
         # transcription's DEL rows); λ, λ̃ have no entries without constraints
         # (the multipliers are inputs only where there are constraints: a contact scene without them
@@ -233,9 +234,7 @@ class ContactMechanics:
 
     def stage_parts(self, Z):
         """``([Z⁻], [Z⁺])`` of stage rows ``Z`` (``(…, 2s)``): the arguments the element functions take
-        (both empty for a two-point scheme)."""
-        if not self.s:
-            return [], []
+        (of no column for a two-point scheme)."""
         Z = np.asarray(Z)
         return [Z[..., :self.s]], [Z[..., self.s:]]
 

@@ -207,8 +207,8 @@ class ContactTranscription:
         REL = P(nlp.parameter_index("release").reshape(L, c))
         # the stages of a step's first part (ZM) and second part (ZP), none for a two-point scheme
         ZI = nlp.index("zs").reshape(L, 2 * s) if s else None
-        ZM = (lambda i: [X(ZI[i, :s])]) if s else (lambda i: [])  # noqa: E731
-        ZP = (lambda i: [X(ZI[i, s:])]) if s else (lambda i: [])  # noqa: E731
+        ZM = (lambda i: [X(ZI[i, :s])]) if s else (lambda i: [np.zeros(0)])  # noqa: E731
+        ZP = (lambda i: [X(ZI[i, s:])]) if s else (lambda i: [np.zeros(0)])  # noqa: E731
         Hc = self.H.reshape(-1, 1)
         # the step lengths as element arguments (numbers; an unknown h for a free final time, _step_argument)
         HA = self._HA = self._step_argument(nlp, Hc)
@@ -371,9 +371,9 @@ class ContactTranscription:
         return [np.asarray(values["u"], float).reshape(self.L, self.cm.nu)]
 
     def _stages(self, values):
-        """``([Z⁻], [Z⁺])`` per step, ``(L, s)`` each (both empty for a two-point scheme)."""
+        """``([Z⁻], [Z⁺])`` per step, ``(L, s)`` each (of no column for a two-point scheme)."""
         if not self.cm.s:
-            return [], []
+            return [np.zeros((self.L, 0))], [np.zeros((self.L, 0))]
         return self.cm.stage_parts(np.asarray(values["zs"], float).reshape(self.L, 2 * self.cm.s))
 
     def residual(self, values) -> float:

@@ -122,7 +122,7 @@ def _local_marches(P: Problem, V, hint, steps, done):
     n = cm.n
     h, p0, U = _start_of(prog, V, q0)
     Q, S, B = V["q"].reshape(N + 1, n), V["qs"].reshape(N, n), V["beta"].reshape(N)
-    zp = _zparts(cm, V, N, 1)
+    zp = _zparts(prog, V, 1)
     pin = np.asarray(cm.p_node_minus.map(N)(S.T, B, Q[1:].T, h, *zp, U.T)).T
     starts = _starts(cm, V, N, hint)
     worst, marches = 0.0, [None] * N
@@ -231,11 +231,9 @@ def _slips(cm: ContactMechanics, prog, init, vref) -> dict:
     return {"slip_plus": np.maximum(sl, 0.0).reshape(-1), "slip_minus": np.maximum(-sl, 0.0).reshape(-1)}
 
 
-def _zparts(cm, V, N, part):
-    if not cm.s:
-        return []
-    Z = V["zs"].reshape(N, 2 * cm.s)
-    return [(Z[:, :cm.s] if part == 0 else Z[:, cm.s:]).T]
+def _zparts(prog, V, part):
+    """The stages of each step's first (``part`` 0) or second part as the elements' mapped input, ``[(s, N)]``."""
+    return [prog._stages(V)[part][0].T]
 
 
 def _distance(point, Q, N: int, h: float) -> float:

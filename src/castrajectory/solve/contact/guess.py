@@ -10,8 +10,9 @@ from ...discretise.contact.elements import ContactMechanics
 from ...discretise.contact.transcription import ALPHA_MIN, REST_SPEED_STEPS, TOUCH_TOL
 from .options import ContactOptions
 
-#: The controls' input of an element, for the guess of a system without controls (the initial-value problem)
-NO_CONTROL = np.zeros(0)
+#: The controls' and the stages' inputs of an element, for the guess (its functions are the two-point guide's, of a
+#: system without controls: the initial-value problem)
+NO_CONTROL = NO_STAGES = np.zeros(0)
 
 
 
@@ -79,7 +80,7 @@ def _held_step(cm: ContactMechanics, q, p, active, h, v, iterations: int = 20):
     qs, qn, nu, mu = x[:n], x[n:2 * n], x[2 * n:2 * n + c], x[2 * n + c:]
     if np.any(nu[active] < 0) or np.any(mu[active] < 0):
         return None
-    p_next = np.asarray(cm.p_node_minus(qs, 0.0, qn, h, NO_CONTROL)).reshape(-1)
+    p_next = np.asarray(cm.p_node_minus(qs, 0.0, qn, h, NO_STAGES, NO_CONTROL)).reshape(-1)
     return qs, qn, nu, np.where(active, mu, 0.0), p_next
 
 
@@ -242,7 +243,7 @@ def _rest(cm: ContactMechanics, Q, S, B, MU, event, h: float, p0, tol: float, la
     # one has no motion at all between the nodes (docs/derivations.md, "Contact trajectories", §2, "A resting ball")
     for k in np.where(~event & (np.min(gq[:-1], axis=1) <= tol) & (np.min(gq[1:], axis=1) <= tol))[0]:
         S[k] = 0.5 * (Q[k] + Q[k + 1])
-        r = np.asarray(cm.sub(Q[k], S[k], Q[k + 1], B[k], np.zeros(c), h, np.zeros(c), *lam0,
+        r = np.asarray(cm.sub(Q[k], S[k], Q[k + 1], B[k], np.zeros(c), h, np.zeros(c), *lam0, NO_STAGES, NO_STAGES,
                               NO_CONTROL)).reshape(-1) * h
         Js = np.asarray(gapf(S[k])[1])
         act = np.asarray(gapf(S[k])[0]).reshape(-1) <= tol
@@ -254,10 +255,10 @@ def _rest(cm: ContactMechanics, Q, S, B, MU, event, h: float, p0, tol: float, la
     touching = np.where(np.min(gq, axis=1) <= tol)[0]
     for k in touching:
         if k == 0:
-            r = np.asarray(cm.initial(Q[0], S[0], B[0], p0, np.zeros(c), h, *lam0, NO_CONTROL)).reshape(-1)
+            r = np.asarray(cm.initial(Q[0], S[0], B[0], p0, np.zeros(c), h, *lam0, NO_STAGES, NO_CONTROL)).reshape(-1)
         else:
-            r = np.asarray(cm.node(S[k - 1], B[k - 1], Q[k], S[k], B[k], np.zeros(c), h, h, *lam0, NO_CONTROL,
-                                   NO_CONTROL)).reshape(-1)
+            r = np.asarray(cm.node(S[k - 1], B[k - 1], Q[k], S[k], B[k], np.zeros(c), h, h, *lam0, NO_STAGES,
+                                   NO_STAGES, NO_CONTROL, NO_CONTROL)).reshape(-1)
         J = np.asarray(gapf(Q[k])[1])
         act = gq[k] <= tol
         sol = np.linalg.lstsq(J[act].T, -r, rcond=None)[0]

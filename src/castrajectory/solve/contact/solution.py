@@ -241,7 +241,7 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     B = res.values["beta"][:N].reshape(N)
     MU = res.values["mu"][:N * c].reshape(N, c)
     # the stages of each step's two parts (none for a two-point scheme)
-    ZM, ZP = cm.stage_parts(res.values["zs"][:N * 2 * cm.s].reshape(N, 2 * cm.s)) if cm.s else ([], [])
+    ZM, ZP = ([z[:N] for z in part] for part in tn._stages(res.values))
     # step lengths (a refined grid where impacts crowd; h everywhere otherwise)
     H = tn.H
     hv = H[:N]

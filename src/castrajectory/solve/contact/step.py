@@ -72,7 +72,7 @@ class _Step:
                            *fz, *us)
             res = ca.mmax(ca.fabs(ca.solve(J, r)))
             qn, qt = x[n:2 * n], x[:n]
-            zp = [x[cm.layout["zs"]][cm.s:]] if cm.s else []
+            zp = [x[cm.layout["zs"]][cm.s:]]
             slip = cm.slip_row(qs, qt, qn, 0.0, hs, zero) if self.nf else ca.DM.zeros(1)
             one = ca.Function("chunk_step", [qs, ps, xs, hs, hm] + sc + fin + us,
                               [qn, cm.p_node_minus(qt, 0.0, qn, hs, *zp, *us), x, cm.gap_row(qt), cm.gap_row(qn), res, slip])
