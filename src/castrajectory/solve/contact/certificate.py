@@ -19,7 +19,7 @@ from .march import discrete_march
 from .state import Problem
 
 #: A step's unknowns of the program that a one-step march gives (its nodes and stages apart): a restarted round takes
-#: these (:func:`.control._restart`), the branch point (:func:`_local_point`) these and the stages
+#: these (:func:`.events._restart`), the branch point (:func:`_local_point`) these and the stages
 STEP_VALUES = ("qs", "beta", "nu", "mu", "mul", "fleft", "fratio")
 #: ... and a step's stages and their multipliers.  (A restarted round that took them too: the hopper at N = 20 cost
 #: 11.774 against 11.697 with galerkin4 and 11.187 against 11.154 with gauss4, the push to a target unchanged)

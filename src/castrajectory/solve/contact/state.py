@@ -7,7 +7,7 @@
 * :class:`Attempt`: a converged point of the program with the parameters it was solved on.
 
 The loop is ``attempt = solve(branch, start)`` (:func:`.policies.solve_round`), ``branch = read(attempt)``
-(:func:`.control.read_branch`), ``certify(attempt)`` (:func:`.certificate.certify`).
+(:func:`.events.read_branch`), ``certify(attempt)`` (:func:`.certificate.certify`).
 """
 from __future__ import annotations
 
