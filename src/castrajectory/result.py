@@ -68,6 +68,35 @@ ACCEPTABLE = "Solved_To_Acceptable_Level"
 #: the motion's scale) certifies it at most this: the one tolerance of both certificates.
 CERTIFICATE_TOL = 1e-7
 
+
+
+@dataclass(frozen=True)
+class Certificate:
+    """The check of an optimal-control answer against the discrete equations of the continuous problem under its own
+    controls, the one interface of both certificates: the smooth one marches each step by Newton on its DEL, stage and
+    constraint rows (:mod:`castrajectory.solve.optimal_control`), the contact one by the contact march with its modes
+    and impacts (:mod:`castrajectory.solve.contact.certificate`).
+
+    * ``local``: every step marched from the answer's own node (and incoming momentum) lands on the answer's next node
+      to this, relative to the motion's scale :func:`motion_scale` (the certificate proper: each step is a step of the
+      system under its control; ``inf`` where a step's march failed);
+    * ``march``: the whole motion marched from the initial state, against the answer (what the motion's own
+      instability makes of rounding: a swing-up held upright amplifies it, a sliding block drifts neutrally).
+
+    ``holds(tol)``: ``local <= tol`` (NaN, not measured, does not hold)."""
+
+    local: float = math.nan
+    march: float = math.nan
+
+    def holds(self, tol: float = CERTIFICATE_TOL) -> bool:
+        return bool(self.local <= tol)
+
+
+def motion_scale(Q) -> float:
+    """The scale a certificate's distances are relative to: ``max(1, max |q|)`` over the answer's nodes."""
+    return max(1.0, float(np.max(np.abs(np.asarray(Q, float)))))
+
+
 _ADVICE = {
     "Maximum_Iterations_Exceeded": "raise max_iter or supply a better initial guess",
     "Solved_To_Acceptable_Level": "the requested tolerance was not reached; loosen tol or rescale the problem",
@@ -223,7 +252,7 @@ class ControlResult(Result):
     an impulse ``ι`` is the right-hand side ``−ι/h`` of the row, a momentum balance per unit time), which
     converge to the continuous costates of the momenta; the ``certificate``: the largest distance of a
     step of the controls' march, taken from the optimal nodes, from the next optimal node (relative to the
-    motion's scale), and ``march_distance``: the same for the whole march (see :func:`_certify`); ``grids``:
+    motion's scale), and ``march_distance``: the same for the whole march (see :class:`Certificate`); ``grids``:
     the grids solved (see :meth:`OptimalControl.solve`); ``q_stages``: a higher-order scheme's stage
     configurations, ``(N, stages, n)``, at the times ``t_k + c_j h`` of its ``stage_times`` c."""
 

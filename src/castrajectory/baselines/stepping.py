@@ -302,27 +302,26 @@ def march(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str = "mi
     ny = s + n + nmult
     y = ca.SX.sym("y", ny)
     Zy, qy, lamy, nuy = y[:s], y[s:s + n], y[s + n:s + n + m], y[s + n + m:]
-    ta = dm.time_args
+    none = np.zeros(0)   # the elements' controls: a baseline marches a system without controls
 
     def closing_rows(a, tk):
         """Stage equations and constraint rows of the step that starts at node ``a`` at the time ``tk``."""
-        rows = [dm.stage_residual(a, Zy, qy, nuy, h, *ta(tk))] if s else []
+        rows = [dm.stage_residual(a, Zy, qy, nuy, h, tk, none)] if s else []
         if m:
-            rows += [dm.constraint_rows(qy, *ta(tk + h))]
-            rows += [dm.stage_constraint_rows[j](Zy[j * n:(j + 1) * n], *([tk, h] if dm.timed else []))
-                     for j in range(ns)]
+            rows += [dm.constraint_rows(qy, tk + h)]
+            rows += [dm.stage_constraint_rows[j](Zy[j * n:(j + 1) * n], tk, h) for j in range(ns)]
         return rows
 
     # step 0: parameters (q0, p0) -> y0 = (Z0, q1, lam0, nu0)
     q0s, p0s = ca.SX.sym("q0", n), ca.SX.sym("p0", n)
     par0 = ca.vertcat(q0s, p0s)
-    r0 = ca.vertcat(dm.initial_residual(q0s, Zy, qy, p0s, lamy, h, *ta(0.0)), *closing_rows(q0s, 0.0))
+    r0 = ca.vertcat(dm.initial_residual(q0s, Zy, qy, p0s, lamy, h, 0.0, none), *closing_rows(q0s, 0.0))
     first = _implicit_solver("vi_first", r0, y, par0)
 
     # step k >= 1: state S = (q_{k-1}, y_{k-1}, t_k) = (q_{k-1}, Z_{k-1}, q_k, lam_{k-1}, nu_{k-1}, t_k) -> (q_k, y_k, t_{k+1})
     S = ca.SX.sym("S", n + ny + 1)
     qm, Zm, qk, tk = S[:n], S[n:n + s], S[n + s:2 * n + s], S[n + ny]
-    r = ca.vertcat(dm.del_residual(qm, Zm, qk, Zy, qy, lamy, h, *ta(tk)), *closing_rows(qk, tk))
+    r = ca.vertcat(dm.del_residual(qm, Zm, qk, Zy, qy, lamy, h, tk, none, none), *closing_rows(qk, tk))
     newton = _implicit_solver("vi", r, y, S)
     Sx = ca.MX.sym("S", n + ny + 1)
     qm_, Zm_, qk_, mult_ = Sx[:n], Sx[n:n + s], Sx[n + s:2 * n + s], Sx[2 * n + s:n + ny]

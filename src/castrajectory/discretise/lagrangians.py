@@ -18,8 +18,9 @@ ends of a step, ``p_k⁺ = −D₁L_d(q_k, q_{k+1}) − f⁻_k`` and ``p_{k+1}�
 the DEL equation says ``p_k⁻ = p_k⁺``.  The initial-value problem fixes ``q_0`` and
 ``p_0 = ∂L/∂q̇(q_0, q̇_0, 0)`` and imposes ``p_0 = p_0⁺``.
 
-Time enters as an input of every element of a time-dependent system (the node's time ``t_k``; the
-quadrature's times are ``t_k + τ_i h``) and of no element of a time-independent one.
+Every element takes the time (the node's time ``t_k``; the quadrature's times are ``t_k + τ_i h``) and the
+step's controls, which a time-independent system's expressions do not read and an uncontrolled system's
+leave empty: one signature for every scene (:class:`DiscreteMechanics`).
 
 Holonomic constraints ``c(q, t) = 0`` are added to the action by the scheme's
 constraint quadrature, ``−h Σ_k W_k λ_k·c(q_k)`` with ``W_k`` the node's total weight
@@ -70,15 +71,22 @@ class DiscreteMechanics:
     """CasADi functions of the discrete mechanics of ``system`` under ``scheme`` (a name or a
     :class:`~castrajectory.discretise.schemes.Scheme`).
 
-    Functions (``n = nq``, ``s = stages * n``, ``m = nc``; ``[t]`` an input only for a time-dependent
-    system: the step's start time, or the node's time for the node rows):
+    Every element has one signature: the nodes and stages it joins and its multipliers, then the step
+    ``h``, the time ``t`` (the step's start; the node's time in the node rows) and the controls ``u`` of
+    its step (``nu`` values, an empty column for a system without controls).  A time-independent
+    system's elements do not read ``t``, and an uncontrolled one's ``u`` is empty: every caller passes
+    the same arguments, and each scene's expressions hold only its own terms.  (``n = nq``,
+    ``s = stages * n``, ``m = nc``.)
 
-    * ``Ld(a, Z, b, h[, t])`` — discrete Lagrangian;
-    * ``del_residual(qm, Zm, q, Zp, qp, lam, h[, t])`` — ``[p⁻(qm, q) − p⁺(q, qp)]/h − 2w ∇c(q)ᵀλ``
-      (``w`` the end-node quadrature weight, so ``2w = 1`` for the two-point schemes);
-    * ``stage_residual(a, Z, b, nu, h[, t])`` — ``(∂L_d/∂Z + f^Z) / h − w ∇c(Z)ᵀν`` (only if ``s > 0``);
-    * ``initial_residual(q0, Z0, q1, p0, lam0, h[, t])`` — ``[p0 − p⁺(q0, q1)]/h − w∇c(q0)ᵀλ0``;
-    * ``p_plus(a, Z, b, h[, t]) = −D₁L_d − f⁻``, ``p_minus(a, Z, b, h[, t]) = D₂L_d + f⁺``;
+    * ``Ld(a, Z, b, h, t)`` — discrete Lagrangian; ``D1``, ``D2`` its gradients in ``a`` and ``b``;
+    * ``p_plus(a, Z, b, h, t, u) = −D₁L_d − f⁻``, ``p_minus(a, Z, b, h, t, u) = D₂L_d + f⁺``;
+    * ``del_residual(qm, Zm, q, Zp, qp, lam, h, t, um, u)`` — ``[p⁻(qm, q) − p⁺(q, qp)]/h − 2w ∇c(q)ᵀλ``
+      (``w`` the end-node quadrature weight, so ``2w = 1`` for the two-point schemes; ``um`` the controls
+      of the step before the node);
+    * ``stage_residual(a, Z, b, nu, h, t, u)`` — ``(∂L_d/∂Z + f^Z) / h − w ∇c(Z)ᵀν`` (``None`` if ``s = 0``);
+    * ``initial_residual(q0, Z0, q1, p0, lam0, h, t, u)`` — ``[p0 − p⁺(q0, q1)]/h − w∇c(q0)ᵀλ0``;
+    * ``final_residual(qm, Zm, q, pN, lam, h, t, u)`` — ``[p⁻(qm, q) − pN]/h − w∇c(q)ᵀλ``;
+    * ``constraint_rows(q, t)`` at a node, ``stage_constraint_rows[j](z, t, h)`` at stage ``j`` of a step;
     * ``work(a, Z, b, h, t)`` — the scheme's quadrature over the step of the forces' power ``Q·q̇`` and of
       the time dependence's ``−∂L/∂t`` (post-processing: the energy balance).
     """
@@ -89,13 +97,6 @@ class DiscreteMechanics:
         n = system.nq
         self.n, self.s, self.m = n, S.stages * n, system.nc
         self.timed, self.forced = bool(system.time_dependent), bool(system.forced)
-        a, b = ca.SX.sym("a", n), ca.SX.sym("b", n)
-        Z = ca.SX.sym("Z", self.s)
-        h = ca.SX.sym("h")
-        t0 = ca.SX.sym("t")
-        tin = [t0] if self.timed else []
-        # control inputs (optimal control): one vector per step, an input of every forced element after the
-        # time; a system without controls builds exactly the elements it had
         self.controls = list(system.controls)
         #: control values per step: one ("step", constant on the step) or one at each of the scheme's
         #: quadrature nodes ("quadrature", so that the forces' and the cost's quadrature keep the order)
@@ -103,87 +104,90 @@ class DiscreteMechanics:
         self.nqu = S.nodes.size if control_points == "quadrature" else 1
         self.nu1 = int(sum(c.size for c in self.controls))
         self.nu = self.nu1 * self.nqu
-        U, Um = ca.SX.sym("u", self.nu), ca.SX.sym("um", self.nu)
-        uin = [U] if self.nu else []
-        Lf = system.L
-        Lq = (lambda q, v, t: Lf(q, v, t)) if self.timed else (lambda q, v, t: Lf(q, v))  # noqa: E731
-        X = [a] + [Z[j * n:(j + 1) * n] for j in range(S.stages)] + [b]
-        Ld = S.discrete_lagrangian(Lq, X, h, t0 if self.timed else None)
-        self.Ld = ca.Function("Ld", [a, Z, b, h] + tin, [Ld])
+        sym = ca.SX.sym
+        self._a, self._b, self._Z, self._h, self._t = sym("a", n), sym("b", n), sym("Z", self.s), sym("h"), sym("t")
+        self._U = sym("u", self.nu)
+        self._X = [self._a] + [self._Z[j * n:(j + 1) * n] for j in range(S.stages)] + [self._b]
+        self._step_elements()
+        self._node_rows()
+        self._constraint_rows()
+
+    def _step_elements(self) -> None:
+        """``Ld``, ``D1``, ``D2``, ``p_plus``, ``p_minus`` of one step, and the stages' ``∂L_d/∂Z + f^Z``."""
+        S, system = self.scheme, self.system
+        a, b, Z, h, t, U, X = self._a, self._b, self._Z, self._h, self._t, self._U, self._X
+        Ld = S.discrete_lagrangian(system.L, X, h, t)
+        self.Ld = ca.Function("Ld", [a, Z, b, h, t], [Ld])
         D1, D2 = ca.gradient(Ld, a), ca.gradient(Ld, b)
         DZ = ca.gradient(Ld, Z) if self.s else ca.SX(0, 1)
-        if self.forced:
-            Qf = system.force
-            if self.nu:
-                f = S.discrete_forces(self.control_at(lambda q, v, t, u: Qf(q, v, 0 if t is None else t, u), U), X, h,
-                                      t0 if self.timed else None)
-            else:
-                f = S.discrete_forces(lambda q, v, t: Qf(q, v, 0 if t is None else t), X, h,
-                                      t0 if self.timed else None)
+        self.D1 = ca.Function("D1", [a, Z, b, h, t], [D1])
+        self.D2 = ca.Function("D2", [a, Z, b, h, t], [D2])
+        if self.forced:  # Q(q, q̇, t, u), each quadrature node with its control (control_at)
+            Qu = system.actuated_force
+            f = S.discrete_forces(self.control_at(lambda q, v, tt, u: Qu(q, v, tt, u), U), X, h, t)
             fm, fp = f[0], f[-1]
-            fZ = ca.vertcat(*f[1:-1]) if self.s else ca.SX(0, 1)
+            self._stage_rows = (DZ + ca.vertcat(*f[1:-1])) / h if self.s else ca.SX(0, 1)
         else:
-            fm = fp = fZ = None
-        self.D1 = ca.Function("D1", [a, Z, b, h] + tin, [D1])
-        self.D2 = ca.Function("D2", [a, Z, b, h] + tin, [D2])
-        self.p_plus = ca.Function("p_plus", [a, Z, b, h] + tin + uin, [-D1 if fm is None else -D1 - fm])
-        self.p_minus = ca.Function("p_minus", [a, Z, b, h] + tin + uin, [D2 if fp is None else D2 + fp])
-        self._work_parts = (X, a, Z, b, h, t0)   # the work's quadrature is formed when first asked for
+            fm = fp = None
+            self._stage_rows = DZ / h
+        self._forces = fm is not None
+        self.p_plus = ca.Function("p_plus", [a, Z, b, h, t, U], [-D1 if fm is None else -D1 - fm])
+        self.p_minus = ca.Function("p_minus", [a, Z, b, h, t, U], [D2 if fp is None else D2 + fp])
 
-        cfun = system.constraint if self.m else None
+    def _grad_c(self, q, lam, t):
+        """``∇c(q, t)ᵀ λ`` (zeros without constraints)."""
+        if not self.m:
+            return ca.SX.zeros(self.n)
+        return ca.mtimes(self.system.constraint(q, t)[1].T, lam)
 
-        def grad_c(q, lam, t=None):
-            if not self.m:
-                return ca.SX.zeros(n)
-            c, C = cfun(q, t) if self.timed else cfun(q)
-            return ca.mtimes(C.T, lam)
-
-        qm, q, qp = ca.SX.sym("qm", n), ca.SX.sym("q", n), ca.SX.sym("qp", n)
-        Zm, Zp = ca.SX.sym("Zm", self.s), ca.SX.sym("Zp", self.s)
-        lam = ca.SX.sym("lam", self.m)
-        targ = (lambda t: [t]) if self.timed else (lambda t: [])  # noqa: E731
-        self.time_args = targ
-        tk = t0  # the node's time in the node rows, the step's start in the step rows
-        # An interior node closes two steps, so its constraint weight is twice the end weight
-        # (1 for midpoint/trapezoid, 1/3 for Simpson): lam_k is then the physical multiplier.
-        if fm is None:
-            r = (self.D2(qm, Zm, q, h, *targ(tk - h)) + self.D1(q, Zp, qp, h, *targ(tk))) / h
-        elif self.nu:  # the steps either side of the node have their own controls
-            r = (self.p_minus(qm, Zm, q, h, *targ(tk - h), Um) - self.p_plus(q, Zp, qp, h, *targ(tk), U)) / h
+    def _node_rows(self) -> None:
+        """The DEL row of an interior node, the initial and the final Legendre rows, and the stage rows."""
+        S, n, h, t, U = self.scheme, self.n, self._h, self._t, self._U
+        sym = ca.SX.sym
+        qm, q, qp, p0 = sym("qm", n), sym("q", n), sym("qp", n), sym("p0", n)
+        Zm, Zp, Um = sym("Zm", self.s), sym("Zp", self.s), sym("um", self.nu)
+        lam = sym("lam", self.m)
+        # the node's time t: the step before it starts at t − h; an interior node closes two steps, so its
+        # constraint weight is twice the end weight (1 for midpoint/trapezoid, 1/3 for Simpson) and lam is
+        # the physical multiplier.  Without forces p⁻ − p⁺ is D₂L_d + D₁L_d, written as such.
+        if self._forces:
+            r = (self.p_minus(qm, Zm, q, h, t - h, Um) - self.p_plus(q, Zp, qp, h, t, U)) / h
+            r0 = (p0 - self.p_plus(q, Zp, qp, h, t, U)) / h
         else:
-            r = (self.p_minus(qm, Zm, q, h, *targ(tk - h)) - self.p_plus(q, Zp, qp, h, *targ(tk))) / h
-        r = r - 2 * S.node_weight * grad_c(q, lam, tk)
-        self.del_residual = ca.Function("del", [qm, Zm, q, Zp, qp, lam, h] + tin + ([Um, U] if self.nu else []), [r])
-        p0 = ca.SX.sym("p0", n)
-        if fm is None:
-            r0 = (p0 + self.D1(q, Zp, qp, h, *targ(tk))) / h
-        else:
-            r0 = (p0 - self.p_plus(q, Zp, qp, h, *targ(tk), *uin)) / h
-        r0 = r0 - S.node_weight * grad_c(q, lam, tk)
-        self.initial_residual = ca.Function("del0", [q, Zp, qp, p0, lam, h] + tin + uin, [r0])
+            r = (self.D2(qm, Zm, q, h, t - h) + self.D1(q, Zp, qp, h, t)) / h
+            r0 = (p0 + self.D1(q, Zp, qp, h, t)) / h
+        w = S.node_weight
+        self.del_residual = ca.Function("del", [qm, Zm, q, Zp, qp, lam, h, t, Um, U],
+                                        [r - 2 * w * self._grad_c(q, lam, t)])
+        self.initial_residual = ca.Function("del0", [q, Zp, qp, p0, lam, h, t, U], [r0 - w * self._grad_c(q, lam, t)])
         # the final node's momentum, p_N⁻ − p_N, for a boundary velocity at the end (optimal control)
         # (the end node's half of a DEL row: p_N⁻ − w∇c(q_N)ᵀλ_N = p_N)
-        self.final_residual = ca.Function("delN", [qm, Zm, q, p0, lam, h] + tin + uin,
-                                          [(self.p_minus(qm, Zm, q, h, *targ(tk - h), *uin) - p0) / h
-                                           - S.node_weight * grad_c(q, lam, tk)])
+        self.final_residual = ca.Function("delN", [qm, Zm, q, p0, lam, h, t, U],
+                                          [(self.p_minus(qm, Zm, q, h, t - h, U) - p0) / h
+                                           - w * self._grad_c(q, lam, t)])
+        self.stage_residual = None
         if self.s:
-            nu = ca.SX.sym("nu", self.m * S.stages)
-            rz = DZ / h if fZ is None else (DZ + fZ) / h
+            a, b, Z = self._a, self._b, self._Z
+            nu = sym("nu", self.m * S.stages)
+            rz = self._stage_rows
             if self.m:
                 for j in range(S.stages):
-                    tj = t0 + float(S.stage_times[j]) * h
-                    rz[j * n:(j + 1) * n] -= S.stage_weights[j] * grad_c(Z[j * n:(j + 1) * n],
-                                                                         nu[j * self.m:(j + 1) * self.m], tj)
-            self.stage_residual = ca.Function("stage", [a, Z, b, nu, h] + tin + uin, [rz])
-        else:
-            self.stage_residual = None
-        # Constraint rows, for the NLP: at a node (its time), and at stage j of a step (the step's start and h)
-        if self.m:
-            self.constraint_rows = ca.Function("c", [q] + tin, [cfun(q, *tin)[0] if self.timed else cfun(q)[0]])
-            zj = ca.SX.sym("zj", n)
-            self.stage_constraint_rows = [
-                ca.Function(f"c_stage{j}", [zj, t0, h], [cfun(zj, t0 + float(S.stage_times[j]) * h)[0]])
-                if self.timed else self.constraint_rows for j in range(S.stages)]
+                    tj = t + float(S.stage_times[j]) * h
+                    rz[j * n:(j + 1) * n] -= S.stage_weights[j] * self._grad_c(Z[j * n:(j + 1) * n],
+                                                                               nu[j * self.m:(j + 1) * self.m], tj)
+            self.stage_residual = ca.Function("stage", [a, Z, b, nu, h, t, U], [rz])
+
+    def _constraint_rows(self) -> None:
+        """The constraint rows for the NLP: at a node (its time), and at stage ``j`` of a step (the step's start
+        and ``h``)."""
+        if not self.m:
+            return
+        S, n, h, t = self.scheme, self.n, self._h, self._t
+        cfun = self.system.constraint
+        q, zj = ca.SX.sym("q", n), ca.SX.sym("zj", n)
+        self.constraint_rows = ca.Function("c", [q, t], [cfun(q, t)[0]])
+        self.stage_constraint_rows = [ca.Function(f"c_stage{j}", [zj, t, h], [cfun(zj, t + float(S.stage_times[j]) * h)[0]])
+                                      for j in range(S.stages)]
 
     def control_at(self, fn, U):
         """``fn(q, v, t, u)`` as ``g(q, v, t)`` for a quadrature, the control at its i-th node being ``U``'s
@@ -211,16 +215,17 @@ class DiscreteMechanics:
         qdd = np.asarray(self.system.acceleration(q0, qd0, t0)).reshape(-1)
         return np.asarray(q0) + h * np.asarray(qd0) + 0.5 * h * h * qdd
 
-    def momenta(self, q: np.ndarray, Z: np.ndarray, h: float, t0: float = 0.0) -> np.ndarray:
-        """Nodal momenta: ``p_k⁺ = −D₁L_d(q_k, q_{k+1}) − f⁻_k`` for k < N and ``p_N⁻ = D₂L_d(q_{N−1}, q_N) + f⁺``.
+    def momenta(self, q: np.ndarray, Z: np.ndarray, h: float, t0: float = 0.0, U=None) -> np.ndarray:
+        """Nodal momenta: ``p_k⁺ = −D₁L_d(q_k, q_{k+1}) − f⁻_k`` for k < N and ``p_N⁻ = D₂L_d(q_{N−1}, q_N) + f⁺``,
+        under the controls ``U`` (``(N, nu)``; none for a system without controls).
 
         (At a DEL solution ``p_k⁺ = p_k⁻`` for interior nodes.)
         """
         N = q.shape[0] - 1
         tk = self.node_times(N, h, t0)
-        ts = [tk[None, :-1]] if self.timed else []
-        pp = np.asarray(self.p_plus.map(N)(q[:-1].T, Z.T, q[1:].T, h, *ts)).T
-        pN = np.asarray(self.p_minus(q[-2], Z[-1], q[-1], h, *self.time_args(tk[-2]))).reshape(1, -1)
+        U = np.zeros((N, 0)) if U is None else np.asarray(U, float).reshape(N, self.nu)
+        pp = np.asarray(self.p_plus.map(N)(q[:-1].T, Z.T, q[1:].T, h, tk[None, :-1], U.T)).T
+        pN = np.asarray(self.p_minus(q[-2], Z[-1], q[-1], h, tk[-2], U[-1])).reshape(1, -1)
         return np.vstack([pp, pN])
 
     def velocities(self, q: np.ndarray, p: np.ndarray, t=0.0) -> np.ndarray:
@@ -248,7 +253,7 @@ class DiscreteMechanics:
         N = q.shape[0] - 1
         tk = self.node_times(N, h, t0)
         if not hasattr(self, "_work"):
-            X, a, Zs, b, hs, ts = self._work_parts
+            X, a, Zs, b, hs, ts = self._X, self._a, self._Z, self._b, self._h, self._t
             pw = self.system.power
             work = self.scheme.step_integral(lambda qq, v, t: ca.vertcat(*pw(qq, v, t)), X, hs, ts)
             self._work = ca.Function("work", [a, Zs, b, hs, ts], [work])

@@ -78,26 +78,25 @@ class ControlTranscription:
         Ui = nlp.index("u").reshape(N, nu)
         none = np.zeros(0)
         zarg = (lambda rows: X(Zi[rows])) if s else (lambda rows: none)  # noqa: E731
-        if dm.timed:
-            times = np.arange(N + 1) * (float(T) / N)
-            targ = lambda rows: [times[rows][:, None] if np.ndim(rows) else np.array([times[rows]])]  # noqa: E731
-        else:
-            targ = lambda rows: []  # noqa: E731
+        # every element takes its time and its step's controls (an empty column without controls); the node
+        # times are constants (a time-dependent system's final time is fixed; a free one moves only the
+        # unread times of a time-independent system)
         self.Q, self.Zi, self.Ui = Q, Zi, Ui
-        uarg = lambda rows: [X(Ui[rows])] if nu else []  # noqa: E731
+        uarg = lambda rows: X(Ui[rows]) if nu else np.zeros((np.size(rows), 0) if np.ndim(rows) else 0)  # noqa: E731
+        targ = lambda rows: _node_times(self, rows)  # noqa: E731
 
         # dynamics: the DEL rows at the interior nodes, the controls of both steps
         if N > 1:
             Li = nlp.index("lam").reshape(N - 1, m) if m else None
             nlp.equal_elements("del", dm.del_residual,
                                [X(Q[interior - 1]), zarg(interior - 1), X(Q[interior]), zarg(interior),
-                                X(Q[interior + 1]), X(Li) if m else none, hh] + targ(interior)
-                               + ([X(Ui[interior - 1]), X(Ui[interior])] if nu else []))
+                                X(Q[interior + 1]), X(Li) if m else none, hh, targ(interior),
+                                uarg(interior - 1), uarg(interior)])
         if s:
             k = np.arange(N)
             Ni = nlp.index("nu").reshape(N, st * m) if m else None
             nlp.equal_elements("stage", dm.stage_residual,
-                               [X(Q[k]), X(Zi[k]), X(Q[k + 1]), X(Ni) if m else none, hh] + targ(k) + uarg(k))
+                               [X(Q[k]), X(Zi[k]), X(Q[k + 1]), X(Ni) if m else none, hh, targ(k), uarg(k)])
         # boundary velocities, through the discrete Legendre transforms
         sysm = dm.system
         if v0 is not None:
@@ -105,45 +104,43 @@ class ControlTranscription:
             self._p0_fn = sysm.momentum
             nlp.equal_elements("initial", dm.initial_residual,
                                [X(Q[0]), zarg(0), X(Q[1]), P(nlp.parameter_index("p0")),
-                                X(nlp.index("lam0")) if m else none, hh] + targ(0) + uarg(0))
+                                X(nlp.index("lam0")) if m else none, hh, targ(0), uarg(0)])
         if vN is not None:
             nlp.parameter("pN", n, value=np.zeros(n))
             nlp.equal_elements("final", dm.final_residual,
                                [X(Q[N - 1]), zarg(N - 1), X(Q[N]), P(nlp.parameter_index("pN")),
-                                X(nlp.index("lamN")) if m else none, hh] + targ(N - 1) + uarg(N - 1))
+                                X(nlp.index("lamN")) if m else none, hh, targ(N), uarg(N - 1)])
         # holonomic constraints at every node with a free entry, and at the stages
         if m:
             nodes = [k for k in range(N + 1) if not (k == 0 and _all_fixed(q0)) and not (k == N and _all_fixed(qN))]
             nodes = np.array(nodes)
-            nlp.equal_elements("constraint", dm.constraint_rows, [X(Q[nodes])] + targ(nodes))
+            nlp.equal_elements("constraint", dm.constraint_rows, [X(Q[nodes]), targ(nodes)])
             if s:
                 for j in range(st):
                     nlp.equal_elements(f"stage_constraint{j}", dm.stage_constraint_rows[j],
-                                       [X(Zi[:, j * n:(j + 1) * n])] + (targ(np.arange(N)) + [hh] if dm.timed else []))
+                                       [X(Zi[:, j * n:(j + 1) * n]), targ(np.arange(N)), hh])
         # path constraints: see _path_nodes
         for j, (fn, lb, ub) in enumerate(path):
             at_nodes, tau = self._path_nodes(fn)
             if at_nodes:
                 k = np.arange(N + 1)
                 ku = np.minimum(k, N - 1)
-                args = [X(Q[k]), X(Ui[ku][:, :dm.nu1]) if nu else np.zeros(0), _node_times(self, k)]
+                args = [X(Q[k]), X(Ui[ku][:, :dm.nu1]) if nu else np.zeros(0), targ(k)]
                 nlp.inequality_elements(f"path{j}", fn, args, lb=np.tile(lb, N + 1), ub=np.tile(ub, N + 1))
             if tau.size:
                 k = np.arange(N)
                 nlp.inequality_elements(f"path{j}_steps", self._path_element(fn, tau),
-                                        [X(Q[k]), zarg(k), X(Q[k + 1]), _node_times(self, k), hh]
-                                        + ([X(Ui[k])] if nu else [np.zeros((N, 0))]),
+                                        [X(Q[k]), zarg(k), X(Q[k + 1]), targ(k), hh, uarg(k)],
                                         lb=np.tile(lb, N * tau.size), ub=np.tile(ub, N * tau.size))
         # the cost
         if running is not None:
             k = np.arange(N)
             nlp.minimize_elements("running", self._running_element(running),
-                                  [X(Q[k]), zarg(k), X(Q[k + 1]), hh, (np.arange(N) * 1.0)[:, None]]
-                                  + ([X(Ui[k])] if nu else [np.zeros((N, 0))]))
+                                  [X(Q[k]), zarg(k), X(Q[k + 1]), hh, (np.arange(N) * 1.0)[:, None], uarg(k)])
         if final is not None:
             # φ(q_N, q̇_N, T), q̇_N from the last step's discrete Legendre transform p_N⁻
             nlp.minimize_elements("final", self._final_element(final),
-                                  [X(Q[N - 1]), zarg(N - 1), X(Q[N]), hh] + targ(N - 1) + uarg(N - 1))
+                                  [X(Q[N - 1]), zarg(N - 1), X(Q[N]), hh, targ(N - 1), uarg(N - 1)])
         if running is None and final is None:
             nlp.minimize(ca.SX(0))
 
@@ -206,11 +203,9 @@ class ControlTranscription:
         a, Z, q, h = ca.SX.sym("a", n), ca.SX.sym("Z", s), ca.SX.sym("q", n), ca.SX.sym("h")
         t = ca.SX.sym("t")
         u = ca.SX.sym("u", dm.nu)
-        tin = [t] if dm.timed else []
-        uin = [u] if dm.nu else []
-        p = dm.p_minus(a, Z, q, h, *tin, *uin)
+        p = dm.p_minus(a, Z, q, h, t, u)
         T = h * self.N
-        tN = T if not dm.timed else t + h
+        tN = T if not dm.timed else t + h   # a free final time's T = N h (its system is time-independent)
         M = sysm.mass_matrix(q, tN)
         rhs = p - sysm.momentum(q, ca.SX.zeros(n), tN)
         if m:
@@ -219,7 +214,7 @@ class ControlTranscription:
             v = ca.solve(K, ca.vertcat(rhs, -sysm.constraint_rate(q, tN)))[:n]
         else:
             v = ca.solve(M, rhs)
-        return ca.Function("final", [a, Z, q, h] + tin + uin, [final(q, v, T)])
+        return ca.Function("final", [a, Z, q, h, t, u], [final(q, v, T)])
 
     def bounds(self):
         """Bounds fixing the given entries of ``q_0`` and ``q_N``."""
@@ -236,11 +231,14 @@ def _all_fixed(q) -> bool:
     return bool(np.all(~np.isnan(q)))
 
 
-def _node_times(tr: ControlTranscription, k: np.ndarray):
-    """The node times as element arguments: constants for a fixed final time (a free one: ``t`` is refused
-    in path constraints, see :mod:`castrajectory.solve.optimal_control`)."""
+def _node_times(tr: ControlTranscription, k):
+    """The times of the nodes ``k`` as element arguments, ``(E, 1)`` for an array of nodes and ``(1,)`` for one:
+    constants for a fixed final time.  A free final time moves the nodes, and only a time-independent system
+    may have one (its elements do not read the time; ``t`` is refused in its path constraints, see
+    :mod:`castrajectory.solve.optimal_control`): its times are given at the interval's upper end."""
     T = tr.T_spec if not tr.free_time else tr.T_spec[1]
-    return (k * (float(T) / tr.N))[:, None]
+    t = np.asarray(k) * (float(T) / tr.N)
+    return t[:, None] if t.ndim else t.reshape(1)
 
 
 def split_controls(values: np.ndarray, controls: List, N: int) -> dict:

@@ -66,13 +66,15 @@ class TrajectoryTranscription:
         hh = np.array([h])
         zarg = (lambda rows: X(Zi[rows])) if s else (lambda rows: none)
         self.Q, self.Zi, self.Li, self.Ni = Q, Zi, Li, Ni
+        # every element takes the time and its step's controls (none here: an empty column)
+        nou = lambda rows: np.zeros((np.size(rows), 0) if np.ndim(rows) else 0)  # noqa: E731
         if dm.timed:
             # the node times are parameters, so that one NLP serves windows that start at other times
             nlp.parameter("t", N + 1, value=dm.node_times(N, h, t0))
             Ti = nlp.parameter_index("t")
-            targ = lambda rows: [P(Ti[rows][:, None] if np.ndim(rows) else Ti[[rows]])]  # noqa: E731
-        else:
-            targ = lambda rows: []  # noqa: E731
+            targ = lambda rows: P(Ti[rows][:, None] if np.ndim(rows) else Ti[[rows]])  # noqa: E731
+        else:  # a time-independent system's elements do not read the time: constants
+            targ = lambda rows: (h * np.asarray(rows, float))[:, None] if np.ndim(rows) else np.array([h * rows])  # noqa: E731
         self._targ = targ
 
         if mode == "initial_value":
@@ -80,31 +82,32 @@ class TrajectoryTranscription:
             nlp.parameter("p0", n, value=end)
             lam0 = X(Li[0]) if m else none
             nlp.equal_elements("initial", dm.initial_residual,
-                               [X(Q[0]), zarg(0), X(Q[1]), P(nlp.parameter_index("p0")), lam0, hh] + targ(0))
+                               [X(Q[0]), zarg(0), X(Q[1]), P(nlp.parameter_index("p0")), lam0, hh, targ(0), nou(0)])
             if N > 1:
                 k = np.arange(1, N)
                 lam = X(Li[k]) if m else none
                 nlp.equal_elements("del", dm.del_residual,
-                                   [X(Q[k - 1]), zarg(k - 1), X(Q[k]), zarg(k), X(Q[k + 1]), lam, hh] + targ(k))
+                                   [X(Q[k - 1]), zarg(k - 1), X(Q[k]), zarg(k), X(Q[k + 1]), lam, hh, targ(k),
+                                    nou(k), nou(k)])
             nlp.minimize(ca.SX(0))
         else:
             a, b, Zs = ca.SX.sym("a", n), ca.SX.sym("b", n), ca.SX.sym("Z", s)
-            ts = [ca.SX.sym("t")] if dm.timed else []
-            act = ca.Function("action", [a, Zs, b] + ts, [dm.Ld(a, Zs, b, h, *ts) / h])
+            ts = ca.SX.sym("t")
+            act = ca.Function("action", [a, Zs, b, ts], [dm.Ld(a, Zs, b, h, ts) / h])
             k = np.arange(N)
-            nlp.minimize_elements("action", act, [X(Q[k]), zarg(k), X(Q[k + 1])] + targ(k))
+            nlp.minimize_elements("action", act, [X(Q[k]), zarg(k), X(Q[k + 1]), targ(k)])
         if s and mode == "initial_value":
             k = np.arange(N)
             nu = X(Ni[k]) if (m and s) else np.zeros(0)
-            nlp.equal_elements("stage", dm.stage_residual, [X(Q[k]), X(Zi[k]), X(Q[k + 1]), nu, hh] + targ(k))
+            nlp.equal_elements("stage", dm.stage_residual, [X(Q[k]), X(Zi[k]), X(Q[k + 1]), nu, hh, targ(k), nou(k)])
         if m:
             nodes = np.arange(1, N + 1) if mode == "initial_value" else np.arange(1, N)
-            nlp.equal_elements("constraint", dm.constraint_rows, [X(Q[nodes])] + targ(nodes))
+            nlp.equal_elements("constraint", dm.constraint_rows, [X(Q[nodes]), targ(nodes)])
             if s:
                 k = np.arange(N)
                 for j in range(st):
                     nlp.equal_elements(f"stage_constraint{j}", dm.stage_constraint_rows[j],
-                                       [X(Zi[:, j * n:(j + 1) * n])] + (targ(k) + [hh] if dm.timed else []))
+                                       [X(Zi[:, j * n:(j + 1) * n]), targ(k), hh])
         self.set_start(q0, end, t0)
 
     def set_start(self, q0, end, t0: float = 0.0) -> None:

@@ -630,6 +630,13 @@ class LagrangianSystem:
         return self._get("Q", lambda: self._timed(ca.Function("Q", [self.q, self.qd, self.t], [self.force_expr()])))
 
     @property
+    def actuated_force(self) -> ca.Function:
+        """``Q(q, q̇, t, u)`` with the controls ``u`` an input whether or not the system has any (an empty column
+        without controls, an unread ``t`` without time): the one signature the discrete elements call."""
+        return self._get("Qu", lambda: ca.Function("Qu", [self.q, self.qd, self.t, self.control_vector],
+                                                   [self.force_expr()]))
+
+    @property
     def mass_matrix(self) -> ca.Function:
         """``M(q, t) = ∂²K/∂q̇²``."""
         return self._get("M", lambda: self._timed(ca.Function(

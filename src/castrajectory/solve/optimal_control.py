@@ -36,7 +36,7 @@ import numpy as np
 from ..discretise.lagrangians import SCHEMES, discrete_mechanics
 from ..discretise.optimal_control import ControlTranscription, split_controls
 from ..models.mechanics import LagrangianSystem
-from ..result import ACCEPTABLE, CERTIFICATE_TOL, ControlResult
+from ..result import ACCEPTABLE, CERTIFICATE_TOL, Certificate, ControlResult, motion_scale
 from ..validation import InputError, integer_at_least, one_of
 from . import ladder, memory
 from .nlp import NLP
@@ -408,25 +408,25 @@ class OptimalControl:
         h = float(vals["h"][0]) if self._is_free_time() else self.T / N
         T = h * N
         times = h * np.arange(N + 1)
-        p = _momenta(dm, Q, Z, U, h, times)
+        p = dm.momenta(Q, Z, h, 0.0, U)
         v = dm.velocities(Q, p, times)
         # costate_k = ∂J*/∂p_k: an impulse ι at node k is the DEL row's right-hand side −ι/h, and the row's
         # multiplier is ∂J*/∂rhs
         costates = -res.multipliers["del"].reshape(N - 1, n) / h if "del" in res.multipliers else None
         measured = res.success or acceptable is not None
-        cert, marched = _certify(dm, Q, Z, U, h, times, p[0]) if measured else (math.nan, math.nan)
+        C = certify(dm, Q, Z, U, h, times, p[0]) if measured else Certificate()
         out = ControlResult(success=res.success, solver_status=res.solver_status, message=res.message, iterations=res.iterations, build_time_s=res.build_time_s,
                             solve_time_s=wall - res.build_time_s, cost=float(res.objective), T=T, t=times, q=Q,
                             v=v, u=U.reshape(N * dm.nqu, nu), t_u=_control_times(dm, times),
                             controls=split_controls(U.reshape(N * dm.nqu, nu), self._controls, N * dm.nqu),
                             costates=costates,
-                            certificate=cert, march_distance=marched, scheme=self.scheme,
+                            certificate=C.local, march_distance=C.march, scheme=self.scheme,
                             q_stages=Z.reshape(N, dm.scheme.stages, n) if dm.s else None)
         if acceptable is not None:
-            _judge_acceptable(out, acceptable, cert)
-        elif res.success and not (cert <= CERTIFICATE_TOL):
+            _judge_acceptable(out, acceptable, C)
+        elif res.success and not C.holds():
             out.fail("Certificate_Failed", f"the march of the optimal controls departs from the optimal "
-                                           f"trajectory by {cert:.3g} (relative): not a motion of the system")
+                                           f"trajectory by {C.local:.3g} (relative): not a motion of the system")
         return out
 
     def _guess(self, dm, guess, lo, hi) -> Dict[str, np.ndarray]:
@@ -478,13 +478,13 @@ def _remeasure(tr, res, opts, verbose):
     return ans, record
 
 
-def _judge_acceptable(out: ControlResult, m: dict, cert: float) -> None:
+def _judge_acceptable(out: ControlResult, m: dict, C: Certificate) -> None:
     """The verdict on an answer Ipopt solved only to its acceptable level, from what was measured (``m``, see
-    :func:`_remeasure`, and the certificate ``cert``): ok when the warm re-solve converged at its tolerance (the
+    :func:`_remeasure`, and the certificate ``C``): ok when the warm re-solve converged at its tolerance (the
     scaled KKT residuals within it) and the march certifies the answer; otherwise a failure that says what would
     make it succeed."""
-    first = m["first"]
-    if m["status"] == "Solve_Succeeded" and cert <= CERTIFICATE_TOL:
+    first, cert = m["first"], C.local
+    if m["status"] == "Solve_Succeeded" and C.holds():
         out.success, out.status = True, "ok"
         out.solver_status = first.solver_status     # (Ipopt's word for the first solve, for the record)
         resolve = ("the acceptable point itself meets it (a warm re-solve stopped at once)" if not m["iterations"]
@@ -521,24 +521,12 @@ def _control_times(dm, times) -> np.ndarray:
     return (t0[:, None] + h * dm.scheme.nodes[None, :]).reshape(-1)
 
 
-def _momenta(dm, Q, Z, U, h, times) -> np.ndarray:
-    """Nodal momenta ``p_k⁺`` (k < N) and ``p_N⁻`` of a controlled solution."""
-    N = Q.shape[0] - 1
-    targ = [times[None, :-1]] if dm.timed else []
-    uarg = [U.T] if dm.nu else []
-    pp = np.asarray(dm.p_plus.map(N)(Q[:-1].T, Z.T, Q[1:].T, h, *targ, *uarg)).T
-    pN = np.asarray(dm.p_minus(Q[-2], Z[-1], Q[-1], h, *dm.time_args(times[-2]), *([U[-1]] if dm.nu else []))).reshape(1, -1)
-    return np.vstack([pp, pN])
-
-
-def _certify(dm, Q, Z, U, h, times, p0):
-    """March the controls ``U`` with the same discrete equations from ``(q_0, p_0⁺)``: each step a Newton
-    solve (CasADi's rootfinder) of the DEL row at the node (the initial Legendre row first), the stage
-    rows and the constraint rows at the new node.  Returns ``(local, global)``, relative to the motion's
-    scale: the largest distance of a step marched from the optimal trajectory's own nodes from the next
-    optimal node (the certificate: every step is a step of the system under its control), and of the
-    whole march from the optimal trajectory (which an unstable motion amplifies from rounding: the
-    pendulum held upright at the end of a swing-up, 7e-8 on 400 steps where the local one is 1e-13)."""
+def certify(dm, Q, Z, U, h, times, p0) -> Certificate:
+    """The smooth :class:`~castrajectory.result.Certificate`: march the controls ``U`` with the same discrete equations
+    from ``(q_0, p_0⁺)``, each step a Newton solve (CasADi's rootfinder) of the DEL row at the node (the initial
+    Legendre row first), the stage rows and the constraint rows at the new node.  ``local``: each step marched from the
+    answer's own nodes; ``march``: the whole motion from the start (which an unstable motion amplifies from rounding:
+    the pendulum held upright at the end of a swing-up, 7e-8 on 400 steps where the local one is 1e-13)."""
     n, s, m, st, nu = dm.n, dm.s, dm.m, dm.scheme.stages, dm.nu
     N = Q.shape[0] - 1
     w = ca.SX.sym("w", n + s + m + st * m)
@@ -546,26 +534,21 @@ def _certify(dm, Q, Z, U, h, times, p0):
     qm, Zm, qk = ca.SX.sym("qm", n), ca.SX.sym("Zm", s), ca.SX.sym("qk", n)
     um, uk = ca.SX.sym("um", nu), ca.SX.sym("uk", nu)
     p0s, tk = ca.SX.sym("p0", n), ca.SX.sym("t")
-    ta = dm.time_args(tk)
-    ua = [uk] if nu else []
     none = ca.SX(0, 1)
-    rows_first = [dm.initial_residual(qk, Zk if s else none, qn, p0s, lam, h, *ta, *ua)]
-    rows_next = [dm.del_residual(qm, Zm if s else none, qk, Zk if s else none, qn, lam, h, *ta,
-                                 *([um, uk] if nu else []))]
+    rows_first = [dm.initial_residual(qk, Zk if s else none, qn, p0s, lam, h, tk, uk)]
+    rows_next = [dm.del_residual(qm, Zm if s else none, qk, Zk if s else none, qn, lam, h, tk, um, uk)]
     common = []
     if s:
-        common.append(dm.stage_residual(qk, Zk, qn, nuk if m else none, h, *ta, *ua))
+        common.append(dm.stage_residual(qk, Zk, qn, nuk if m else none, h, tk, uk))
     if m:
-        common.append(dm.constraint_rows(qn, *dm.time_args(tk + h)))
-        for j in range(st):
-            zj = Zk[j * n:(j + 1) * n]
-            common.append(dm.stage_constraint_rows[j](zj, tk, h) if dm.timed else dm.constraint_rows(zj))
+        common.append(dm.constraint_rows(qn, tk + h))
+        common += [dm.stage_constraint_rows[j](Zk[j * n:(j + 1) * n], tk, h) for j in range(st)]
     par = ca.vertcat(qm, Zm, qk, um, uk, p0s, tk)
     G0 = ca.Function("g0", [w, par], [ca.vertcat(*(rows_first + common))])
     G1 = ca.Function("g1", [w, par], [ca.vertcat(*(rows_next + common))])
     R0 = ca.rootfinder("march0", "newton", G0, {"abstol": 1e-13, "max_iter": 50, "error_on_fail": False})
     R1 = ca.rootfinder("march1", "newton", G1, {"abstol": 1e-13, "max_iter": 50, "error_on_fail": False})
-    scale = max(1.0, float(np.max(np.abs(Q))))
+    scale = motion_scale(Q)
 
     def march(local: bool):
         qs = [Q[0]]
@@ -591,4 +574,4 @@ def _certify(dm, Q, Z, U, h, times, p0):
             worst = max(worst, float(np.max(np.abs(wk[:n] - Q[k + 1]))))
         return worst / scale
 
-    return march(True), march(False)
+    return Certificate(march(True), march(False))

@@ -388,8 +388,8 @@ def _solve_level(tn: TrajectoryNLP, guess, options, verbose, log: List[Level], a
                 if s:
                     Nc[K:K + L] = r.values["nu"].reshape(L, st * m)
             Zlast = Zc[K + L - 1] if s else np.zeros(0)
-            pK = np.asarray(dm.p_minus(Qc[K + L - 1], Zlast, Qc[K + L], h,
-                                       *dm.time_args(tn.t0 + (K + L - 1) * h))).reshape(-1)
+            pK = np.asarray(dm.p_minus(Qc[K + L - 1], Zlast, Qc[K + L], h, tn.t0 + (K + L - 1) * h,
+                                       np.zeros(0))).reshape(-1)
             K, L = K + L, min(2 * L, cap)
         else:
             L //= 2
@@ -439,8 +439,7 @@ def _finish(tn: TrajectoryNLP, res: NLPResult, log: List[Level], mode: str) -> T
            "solve_time_s": float(sum(lv.solve_time_s for lv in log))},
         scheme=dm.scheme.name, mode=mode, levels=log,
         program={"terms": dm.system.terms(), "steps": int(N), **tn.nlp.anatomy()},
-        action=float(np.sum(np.asarray(dm.Ld.map(N)(q[:-1].T, Z.T, q[1:].T, tn.h,
-                                                    *([t[None, :-1]] if dm.timed else []))))))
+        action=float(np.sum(np.asarray(dm.Ld.map(N)(q[:-1].T, Z.T, q[1:].T, tn.h, t[None, :-1])))))
 
 
 def _validate(system, T, N, scheme: str = "midpoint", polish: bool = False):

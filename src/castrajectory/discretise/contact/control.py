@@ -50,24 +50,27 @@ class ContactControlTranscription(ContactTranscription):
                  start_velocity: bool = False, path=()):
         self.free_time, self.start_velocity = free_time, start_velocity
         super().__init__(cm, N, T / N, scales, u_bounds=u_bounds)
-        nlp, L, n, c = self.nlp, N, cm.n, cm.c
         self.N, self.T = N, float(T)
-        h = self.h
-        ell, pref, vref = scales[0], scales[1], scales[2]
-        self.scales_v, self.scales_pref = vref, pref
-        Q = nlp.index("q").reshape(L + 1, n)
-        S = nlp.index("qs").reshape(L, n)
-        B = nlp.index("beta").reshape(L, 1)
-        k = np.arange(L)
-        Hc = self.H.reshape(-1, 1)
-        HA = self._HA
-        rho = P(nlp.parameter_index("rho"))
-        UA = self._UA
-        s = cm.s
-        ZI = nlp.index("zs").reshape(L, 2 * s) if s else None
-        ZM = (lambda i: [X(ZI[i, :s])]) if s else (lambda i: [np.zeros(0)])  # noqa: E731
-        ZP = (lambda i: [X(ZI[i, s:])]) if s else (lambda i: [np.zeros(0)])  # noqa: E731
+        self.scales_v, self.scales_pref = scales[2], scales[1]
         self.end_velocity = end_velocity
+        self._launch_and_law()
+        self._slip_complementarity()
+        if end_velocity:
+            self._end_rows()
+        self._costs(running, final, path)
+
+    def _control_blocks(self):
+        """``(Q, S, B, k, Hc, rho, HA, UA, ZM, ZP)``: the index blocks and arguments the control problem's rows take."""
+        nlp, L, s = self.nlp, self.L, self.cm.s
+        Q, S, B = self._blocks()[:3]
+        return (Q, S, B, np.arange(L), self.H.reshape(-1, 1), P(nlp.parameter_index("rho")), self._HA, self._UA,
+                self._argument("zs", 2 * s, slice(0, s)), self._argument("zs", 2 * s, slice(s, 2 * s)))
+
+    def _launch_and_law(self) -> None:
+        """The launch and the catch pairs, and Newton's law of a bounce, exactly (see the comments)."""
+        cm, nlp, L, c, h = self.cm, self.nlp, self.L, self.cm.c, self.h
+        vref, pref = self.scales_v, self.scales_pref
+        Q, S, B, k, Hc, rho, HA, UA, ZM, ZP = self._control_blocks()
         # a node force acts only on a contact that stays closed through the step's first part: φ(q̃_k) ⟂ ν_k.  (The
         # initial-value program needs no such pair, its march picks the branch; here the cost would otherwise
         # buy a launch: a node force at a closed node that throws the body off, saving the friction of sliding.)
@@ -99,65 +102,83 @@ class ContactControlTranscription(ContactTranscription):
         nlp.variable("law_plus", L * c, lb=0.0)
         nlp.variable("law_minus", L * c, lb=0.0)
         REL = P(nlp.parameter_index("release").reshape(L, c))
-        LEFT = [X(nlp.index("mul").reshape(L, c))] + ([X(nlp.index("fleft").reshape(L, c * cm.fd))] if cm.friction else [])
         nlp.equal_elements("exact_law", self._exact_law(cm),
-                           [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), HA(k)] + LEFT + [REL] + ZM(k) + ZP(k)
-                           + UA(k) + [BO, X(nlp.index("law_plus").reshape(L, c)),
-                                      X(nlp.index("law_minus").reshape(L, c)), np.array([self.scales_law])])
+                           [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), HA(k), self._argument("mul", c)(k),
+                            self._argument("fleft", cm.nfl)(k), REL, ZM(k), ZP(k), UA(k), BO,
+                            X(nlp.index("law_plus").reshape(L, c)), X(nlp.index("law_minus").reshape(L, c)),
+                            np.array([self.scales_law])])
         nlp.minimize_elements("exact_law_penalty", cm.slack_penalty,
                               [X(nlp.index("law_plus").reshape(L, c)), X(nlp.index("law_minus").reshape(L, c)), rho])
         self.delta = vref * h
         nlp.declared_pairs.update({"exact_law": L * c})
         nlp.declared_pairs.update({"catch": L * c})
+
+    def _slip_complementarity(self) -> None:
+        """Maximal dissipation as complementarity: the slip split into its signs (planar friction)."""
+        cm, nlp, L, c = self.cm, self.nlp, self.L, self.cm.c
+        if not cm.friction:
+            return
+        Q, S, B, k, Hc, rho, HA, UA, ZM, ZP = self._control_blocks()
+        vref = self.scales_v
+        if cm.fd != 1:
+            raise ValueError("contact-implicit optimal control takes planar friction (one slip component)")
+        # maximal dissipation as complementarity: the slip split into its signs, s/v_ref = s⁺ − s⁻
+        nlp.variable("slip_plus", L * 2 * c, lb=0.0)
+        nlp.variable("slip_minus", L * 2 * c, lb=0.0)
+        AR = P(nlp.parameter_index("arrive").reshape(L, c))
+        nlp.equal_elements("slip_split", self._slip_split(cm, vref),
+                           [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), HA(k), AR,
+                            X(nlp.index("slip_plus").reshape(L, 2 * c)),
+                            X(nlp.index("slip_minus").reshape(L, 2 * c))])
+        # (an open contact's slot has no force, so its ratio is free: the pair sets it against a flight's slip, and
+        # nothing follows from it.  Weighted by the slot's normal force, three factors, the penalty stopped being
+        # exact: Ipopt converged with residuals of 0.1-50 on the push to a target, the friction pushing forward)
+        nlp.minimize_elements("slip_penalty", self._slip_penalty(cm),
+                              [X(nlp.index("fratio").reshape(L, 2 * c)), X(nlp.index("slip_plus").reshape(L, 2 * c)),
+                               X(nlp.index("slip_minus").reshape(L, 2 * c)), rho])
+        nlp.declared_pairs.update({"slip": L * 4 * c})
+
+    def _end_rows(self) -> None:
+        """The end node's contact force and its friction ratio, and the final momentum row (bounds by the final slip:
+        :func:`castrajectory.solve.contact.control._end_bounds`)."""
+        cm, nlp, L, n, c, h = self.cm, self.nlp, self.L, self.cm.n, self.cm.c, self.h
+        Q, S, B, k, Hc, rho, HA, UA, ZM, ZP = self._control_blocks()
+        ell, pref = self.scales_ell, self.scales_pref
+        # the end node's contact force and its friction ratio (bounds by the final slip: _end_bounds)
+        nlp.variable("nu_end", c, lb=0.0)
         if cm.friction:
-            if cm.fd != 1:
-                raise ValueError("contact-implicit optimal control takes planar friction (one slip component)")
-            # maximal dissipation as complementarity: the slip split into its signs, s/v_ref = s⁺ − s⁻
-            nlp.variable("slip_plus", L * 2 * c, lb=0.0)
-            nlp.variable("slip_minus", L * 2 * c, lb=0.0)
-            AR = P(nlp.parameter_index("arrive").reshape(L, c))
-            nlp.equal_elements("slip_split", self._slip_split(cm, vref),
-                               [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), HA(k), AR,
-                                X(nlp.index("slip_plus").reshape(L, 2 * c)),
-                                X(nlp.index("slip_minus").reshape(L, 2 * c))])
-            # (an open contact's slot has no force, so its ratio is free: the pair sets it against a flight's slip, and
-            # nothing follows from it.  Weighted by the slot's normal force, three factors, the penalty stopped being
-            # exact: Ipopt converged with residuals of 0.1-50 on the push to a target, the friction pushing forward)
-            nlp.minimize_elements("slip_penalty", self._slip_penalty(cm),
-                                  [X(nlp.index("fratio").reshape(L, 2 * c)), X(nlp.index("slip_plus").reshape(L, 2 * c)),
-                                   X(nlp.index("slip_minus").reshape(L, 2 * c)), rho])
-            nlp.declared_pairs.update({"slip": L * 4 * c})
-        if end_velocity:
-            # the end node's contact force and its friction ratio (bounds by the final slip: _end_bounds)
-            nlp.variable("nu_end", c, lb=0.0)
-            if cm.friction:
-                nlp.variable("fratio_end", c, lb=-cm.mu_f, ub=cm.mu_f)
-            nlp.parameter("pN", n)
-            nlp.equal_elements("final_momentum", self._end_row(cm),
-                               [X(S[L - 1]), X(B[L - 1]), X(Q[L]), HA(L - 1), X(nlp.index("nu_end")),
-                                P(nlp.parameter_index("pN"))]
-                               + ([X(nlp.index("fratio_end"))] if cm.friction else []) + ZP(L - 1) + UA(L - 1))
-            nlp.minimize_elements("end_node_penalty", cm.product_penalty,
-                                  [X(Q[L]), X(nlp.index("nu_end")), rho, np.array([ell * pref / h])])
-            nlp.declared_pairs.update({"end_node": c})
+            nlp.variable("fratio_end", c, lb=-cm.mu_f, ub=cm.mu_f)
+        nlp.parameter("pN", n)
+        nlp.equal_elements("final_momentum", self._end_row(cm),
+                           [X(S[L - 1]), X(B[L - 1]), X(Q[L]), HA(L - 1), X(nlp.index("nu_end")),
+                            P(nlp.parameter_index("pN")), X(nlp.index("fratio_end")) if cm.friction else np.zeros(0),
+                            ZP(L - 1), UA(L - 1)])
+        nlp.minimize_elements("end_node_penalty", cm.product_penalty,
+                              [X(Q[L]), X(nlp.index("nu_end")), rho, np.array([ell * pref / h])])
+        nlp.declared_pairs.update({"end_node": c})
+
+    def _costs(self, running, final, path) -> None:
+        """The running and final costs, and the path constraints."""
+        cm, nlp, L, N = self.cm, self.nlp, self.L, self.N
+        Q, S, B, k, Hc, rho, HA, UA, ZM, ZP = self._control_blocks()
         self.running_fn = self._running(cm, running) if running is not None else None
         self.final_fn = self._final(cm, final, N) if final is not None else None
         if running is not None:
             nlp.minimize_elements("running", self.running_fn,
-                                  [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), HA(k), k[:, None] * 1.0] + ZM(k) + ZP(k)
-                                  + UA(k))
+                                  [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), HA(k), k[:, None] * 1.0, ZM(k), ZP(k), UA(k)])
         # path constraints g(q, u, t) in [lb, ub]: at every node (the control of the step it starts; the last node's
         # its step's) and at every sub-node (its step's control, at its time t_k + αh)
         kn = np.arange(L + 1)
         for j, (fn, lb, ub) in enumerate(path):
             gn, gs = self._path_elements(cm, fn)
-            nlp.inequality_elements(f"path{j}", gn, [X(Q[kn]), HA(np.minimum(kn, L - 1)), kn[:, None] * 1.0]
-                                    + UA(np.minimum(kn, L - 1)), lb=np.tile(lb, L + 1), ub=np.tile(ub, L + 1))
-            nlp.inequality_elements(f"path{j}_sub", gs, [X(S[k]), X(B[k]), HA(k), k[:, None] * 1.0] + UA(k),
+            nlp.inequality_elements(f"path{j}", gn, [X(Q[kn]), HA(np.minimum(kn, L - 1)), kn[:, None] * 1.0,
+                                                     UA(np.minimum(kn, L - 1))], lb=np.tile(lb, L + 1), ub=np.tile(ub, L + 1))
+            nlp.inequality_elements(f"path{j}_sub", gs, [X(S[k]), X(B[k]), HA(k), k[:, None] * 1.0, UA(k)],
                                     lb=np.tile(lb, L), ub=np.tile(ub, L))
         if final is not None:
             nlp.minimize_elements("final", self.final_fn,
-                                  [X(S[L - 1]), X(B[L - 1]), X(Q[L]), HA(L - 1)] + ZP(L - 1) + UA(L - 1))
+                                  [X(S[L - 1]), X(B[L - 1]), X(Q[L]), HA(L - 1), ZP(L - 1), UA(L - 1)])
+
 
     def cost(self, V) -> float:
         """The running and final costs at the values ``V`` (the objective without the penalties)."""
@@ -267,16 +288,14 @@ class ContactControlTranscription(ContactTranscription):
         """``(p_N⁻ + h(∇φ(q_N)ᵀ + D(q_N)ᵀρ_N)ν_N − p_N)/h``: the end node's momentum balance."""
         sym, n, c = ca.SX.sym, cm.n, cm.c
         qs, b, q, h, nu, pN = sym("qs", n), sym("b"), sym("q", n), sym("h"), sym("nu", c), sym("pN", n)
-        r = sym("r", c)
-        zp = [sym("zp", cm.s)]
-        u = [cm._U]
-        pm = cm.p_node_minus(qs, b, q, h, *zp, *u)
+        r = sym("r", c if cm.friction else 0)    # the end node's friction ratios (none without friction)
+        zp, u = sym("zp", cm.s), cm._U
+        pm = cm.p_node_minus(qs, b, q, h, zp, u)
         J = cm.system.gap(q)[1]
         imp = ca.mtimes(J.T, nu)
         if cm.friction:
             imp = imp + ca.mtimes(cm.system.tangent(q).T, r * nu)
-        return ca.Function("c_end", [qs, b, q, h, nu, pN] + ([r] if cm.friction else []) + zp + u,
-                           [(pm + h * imp - pN) / h])
+        return ca.Function("c_end", [qs, b, q, h, nu, pN, r, zp, u], [(pm + h * imp - pN) / h])
 
     @staticmethod
     def _running(cm: ContactMechanics, running: ca.Function) -> ca.Function:

@@ -14,6 +14,7 @@ pieces, each integrated at the scheme's order.
 """
 from __future__ import annotations
 
+from types import SimpleNamespace
 from typing import Dict
 
 import casadi as ca
@@ -26,6 +27,10 @@ from ..lagrangians import GUESS_SUBSTEPS, DiscreteMechanics, rk4_step
 
 #: Weight of Σβ² (the split of impact-free steps), far below the penalties.
 SPLIT_WEIGHT = 1e-6
+
+#: the time the discrete mechanics' elements are given: a contact system is time-independent (refused otherwise,
+#: below), so its elements do not read it
+_T = 0.0
 
 
 class ContactMechanics:
@@ -40,181 +45,229 @@ class ContactMechanics:
         dm = DiscreteMechanics(system, scheme, control_points="step")
         self.system, self.dm = system, dm
         self._derived: Dict[str, object] = {}
-        self.n, self.c, self.e = n, c, e = dm.n, system.ncontact, system.contact.restitution
+        self.n, self.c, self.e = dm.n, system.ncontact, system.contact.restitution
         #: stage values per part of a step (each step has two parts, split at its sub-node), and the
         #: constraint multipliers at those stages (none for the two-point schemes)
-        self.s = s = dm.s
-        self.ms = dm.scheme.stages * dm.m if s else 0
+        self.s = dm.s
+        self.ms = dm.scheme.stages * dm.m if self.s else 0
         #: the two-point functions of the event-located guess (the fallback's guess flies with RK4 and holds
         #: contacts with the midpoint's rows; the stages then start on the straight lines, stage_guess)
-        self.guide = self if not s else ContactMechanics(system, "midpoint")
-        # holonomic constraints c(q) = 0 (m of them): multipliers at the nodes and the sub-nodes
-        self.m = m = dm.m
-        cfun = system.constraint if m else None
-        C = (lambda q: cfun(q)[1]) if m else (lambda q: ca.SX(0, n))  # noqa: E731
+        self.guide = self if not self.s else ContactMechanics(system, "midpoint")
+        self._z = ca.SX(0, 1)       # the stages of a two-point scheme's part: none
+        self._constraints()
+        self._momenta()
+        self._friction_sizes()
+        x = self._symbols()
+        self._kinematics = lambda xp, xx, xn, tau_m, tau_p, Zm, Zp: _sub_node_kinematics(  # noqa: E731
+            self._D1, self._D2, self._J, system.mass_matrix, self._C, self.e, xp, xx, xn, tau_m, tau_p, Zm, Zp)
+        self._step_rows(x)
+        self._friction_functions(x)
+        self._law_rows(x)
+        self._objective_functions()
+        self._momentum_functions(x)
+        if not self.s and not self.nu:
+            self._guess_functions(x)
+        self._march_function(x.phi)
+        self.node_law_fn = ca.Function("c_node_law", [x.p0, x.qk, x.qs, x.b, x.h, x.zm, x.U],
+                                       [self.node_law(x.p0, x.qk, x.qs, x.b, x.h, x.zm)])
+        self._normal_acceleration(x)
+
+    def _constraints(self) -> None:
+        """Holonomic constraints ``c(q) = 0`` (``m`` of them; multipliers at the nodes and the sub-nodes): their row and
+        their Jacobian ``C(q)`` (no rows without)."""
+        n, m = self.n, self.dm.m
+        self.m = m
+        cfun = self.system.constraint if m else None
+        self._C = (lambda q: cfun(q)[1]) if m else (lambda q: ca.SX(0, n))  # noqa: E731
         qc = ca.SX.sym("qc", n)
         self.constraint_row = ca.Function("c_con", [qc], [cfun(qc)[0] if m else ca.SX(0, 1)])
-        z = ca.SX(0, 1)
-        self._z = z
-        # controls (optimal control through contact): one value per step, u_k, constant over both parts of step k,
-        # the last input of every element whose rows hold the forces of a step, zero-size without controls (one
-        # signature: a caller passes the step's controls, an empty column for a scene without them, and the program is
-        # the same); the node row holds the forces of two steps, u_{k−1} and u_k
-        self.nu = ncu = dm.nu
-        U, Um = ca.SX.sym("u", ncu), ca.SX.sym("um", ncu)
-        xu, xun = [U], [Um, U]
-        self._U = U
-        if system.forced:
-            # forces (Force, Damping; no time): the discrete Lagrange–d'Alembert momenta over each part of a
-            # step, p⁺ = −D₁L_d − f⁻ and p⁻ = D₂L_d + f⁺, stand where D₁L_d and D₂L_d stand without them
-            ua = (lambda u: [u]) if ncu else (lambda u: [])  # noqa: E731
-            D1 = lambda a, Z, b, tau, u=U: -dm.p_plus(a, Z, b, tau, *ua(u))  # noqa: E731
-            D2 = lambda a, Z, b, tau, u=U: dm.p_minus(a, Z, b, tau, *ua(u))  # noqa: E731
+
+    def _momenta(self) -> None:
+        """The controls and the discrete momenta of a part of a step.
+
+        Controls (optimal control through contact): one value per step, ``u_k``, constant over both parts of step k,
+        the last input of every element whose rows hold the forces of a step, zero-size without controls (one
+        signature: a caller passes the step's controls, an empty column for a scene without them, and the program is
+        the same); the node row holds the forces of two steps, ``u_{k−1}`` and ``u_k``.  With forces (Force, Damping;
+        no time) the discrete Lagrange–d'Alembert momenta over each part of a step, ``p⁺ = −D₁L_d − f⁻`` and
+        ``p⁻ = D₂L_d + f⁺``, stand where ``D₁L_d`` and ``D₂L_d`` stand without them."""
+        dm = self.dm
+        self.nu = dm.nu
+        U = self._U = ca.SX.sym("u", dm.nu)
+        if self.system.forced:
+            self._D1 = lambda a, Z, b, tau, u=U: -dm.p_plus(a, Z, b, tau, _T, u)  # noqa: E731
+            self._D2 = lambda a, Z, b, tau, u=U: dm.p_minus(a, Z, b, tau, _T, u)  # noqa: E731
         else:
-            D1 = lambda a, Z, b, tau, u=None: dm.D1(a, Z, b, tau)  # noqa: E731
-            D2 = lambda a, Z, b, tau, u=None: dm.D2(a, Z, b, tau)  # noqa: E731
-        gapf = system.gap
-        Mf = system.mass_matrix
-        sym = ca.SX.sym
-        q0, qk, qs, qsm, qk1 = sym("q0", n), sym("q", n), sym("qs", n), sym("qsm", n), sym("qk1", n)
-        b, bm, h = sym("beta"), sym("betam"), sym("h")
-        mu, nu, p0 = sym("mu", c), sym("nu", c), sym("p0", n)
-        lam, lams = sym("lam", m), sym("lams", m)
-        a, am = 0.5 + b, 0.5 + bm
-        J = lambda q: gapf(q)[1]  # noqa: E731
-        phi = lambda q: gapf(q)[0]  # noqa: E731
-        # the stages of the step's two parts (Z⁻ on [q_k, q̃_k], Z⁺ on [q̃_k, q_{k+1}]) and of the previous
-        # step's second part (Z⁺_{k−1}, for the node row); inputs only for a scheme with stages
-        # (inputs of every element, empty for a two-point scheme: one signature)
-        zm, zp, zpm = (sym(nm, s) for nm in ("zm", "zp", "zpm"))
-        xzs, xzn, xz1, xz2 = [zm, zp], [zpm, zm], [zm], [zp]
-        # constraint forces −C(q)ᵀλ at the nodes and −C(q̃)ᵀλ̃ at the sub-nodes (the sign of the smooth
-        # transcription's DEL rows); λ, λ̃ have no entries without constraints
-        # (the multipliers are inputs only where there are constraints: a contact scene without them
-        # keeps the element functions it had)
-        xl, xls = ([lam], [lams]) if m else ([], [])
-        self._kinematics = lambda xp, x, xn, tau_m, tau_p, Zm, Zp: _sub_node_kinematics(  # noqa: E731
-            D1, D2, J, Mf, C, e, xp, x, xn, tau_m, tau_p, Zm, Zp)
-        self._C, self._D1, self._D2, self._J = C, D1, D2, J
-        # Coulomb friction (only where a coefficient is positive: a frictionless system keeps its rows and
-        # element functions exactly): the tangential force is ρ times the normal one, at the node (ρ ν) and
-        # at the sub-node (ρ μ), |ρ| ≤ μ_f; see node_row, sub_row and slip
+            self._D1 = lambda a, Z, b, tau, u=None: dm.D1(a, Z, b, tau, _T)  # noqa: E731
+            self._D2 = lambda a, Z, b, tau, u=None: dm.D2(a, Z, b, tau, _T)  # noqa: E731
+        self._J = lambda q: self.system.gap(q)[1]  # noqa: E731
+
+    def _friction_sizes(self) -> None:
+        """Coulomb friction, only where a coefficient is positive (a frictionless system keeps its rows and element
+        functions exactly): the tangential force is ρ times the normal one, at the node (ρ ν) and at the sub-node (ρ μ),
+        ``|ρ| ≤ μ_f``; see :meth:`node_row`, :meth:`sub_row` and :meth:`slip`."""
+        system, c = self.system, self.c
         self.mu_f = np.asarray(system.contact.friction, float)
         self.friction = bool(np.any(self.mu_f > 0))
         self._D = system.tangent if self.friction else None
         #: components of each contact's slip: 1 in the plane, 2 on a tangent plane in 3-D (the isotropic cone)
         self.fd = d = system.contact.slip_dim if self.friction else 1
+        #: entries of a step's friction ratios [ρ_node; ρ_sub] and of its first part's closing ratios (none without
+        #: friction)
+        self.nfr, self.nfl = (2 * c * d, c * d) if self.friction else (0, 0)
+        #: friction slots per step, two per contact (node force, sub-node impulse; none without friction)
+        self.nfs = 2 * c if self.friction else 0
+
+    def _symbols(self) -> SimpleNamespace:
+        """The symbols of the element functions, one namespace for the methods that build them."""
+        n, c, m, s, sym = self.n, self.c, self.m, self.s, ca.SX.sym
+        gapf = self.system.gap
+        x = SimpleNamespace(phi=lambda q: gapf(q)[0], U=self._U, Um=sym("um", self.nu))
+        x.q0, x.qk, x.qs, x.qsm, x.qk1 = sym("q0", n), sym("q", n), sym("qs", n), sym("qsm", n), sym("qk1", n)
+        x.b, x.bm, x.h, x.hp = sym("beta"), sym("betam"), sym("h"), sym("hp")
+        x.mu, x.nu, x.p0 = sym("mu", c), sym("nu", c), sym("p0", n)
+        # constraint forces −C(q)ᵀλ at the nodes and −C(q̃)ᵀλ̃ at the sub-nodes (the sign of the smooth
+        # transcription's DEL rows); λ, λ̃ are inputs of every element that holds them, with no entries without
+        # constraints (one signature: a caller passes an empty column, and the rows are the same)
+        x.lam, x.lams = sym("lam", m), sym("lams", m)
+        x.a, x.am = 0.5 + x.b, 0.5 + x.bm
+        # the stages of the step's two parts (Z⁻ on [q_k, q̃_k], Z⁺ on [q̃_k, q_{k+1}]) and of the previous
+        # step's second part (Z⁺_{k−1}, for the node row): inputs of every element, empty for a two-point scheme
+        x.zm, x.zp, x.zpm = (sym(nm, s) for nm in ("zm", "zp", "zpm"))
         # two ratios per contact and step, [ρ_node; ρ_sub] (each with d components): the node's force ν and the
-        # sub-node's impulse μ each carry their own friction, against the slip of their own part of the step (slip)
-        rho = sym("rho", 2 * c * d)
-        xr = [rho] if self.friction else []
-        frn, frs = (rho[:c * d], rho[c * d:]) if self.friction else (None, None)
-        # every node and sub-node row of the program, the held step and the march is node_row or sub_row
-        self.initial = ca.Function("c_initial", [q0, qs, b, p0, nu, h] + xl + xr + xz1 + xu,
-                                   [self.node_row(p0, q0, qs, b, nu, lam, h, frn, zm)])
-        hp = sym("hp")
-        self.node = ca.Function("c_node", [qsm, bm, qk, qs, b, nu, hp, h] + xl + xr + xzn + xun,
-                                [self.node_row(D2(qsm, zpm, qk, (1 - am) * hp, Um), qk, qs, b, nu, lam, h, frn, zm)])
+        # sub-node's impulse μ each carry their own friction, against the slip of their own part of the step (slip);
+        # an input of every element that holds them, with no entries without friction (like λ above)
+        x.rho = sym("rho", self.nfr)
+        cd = c * self.fd
+        x.frn, x.frs = (x.rho[:cd], x.rho[cd:]) if self.friction else (None, None)
         # the sub-node's impulse from the first part, μ⁻ with its ratios ρ⁻ (0 but where the march's modes set it): a
         # contact released at an impact's sub-node takes there its share of its force over the first part
         # (release_row), and an arrival caught with friction there takes Stronge's impulse; μ is then the second
-        # part's (see sub_row)
-        mul = sym("mul", c)
-        rl = sym("rl", c * d)
-        # (rel: 1 for the contacts released at the step's impact, whose μ⁻ are shares, not impacts)
-        rel = sym("rel", c)
-        xleft = ([mul, rl] if self.friction else [mul]) + [rel]
-        rll = rl if self.friction else None
-        sub_row, r = self.sub_row(qk, qs, qk1, b, mu, lams, h, frs, zm, zp, mul, rll, rel)
-        pm, pp = D2(qk, zm, qs, a * h), -D1(qs, zp, qk1, (1 - a) * h)          # the momenta on either side of q̃
-        self.sub = ca.Function("c_sub", [qk, qs, qk1, b, mu, h] + xleft[:-1] + xls + xr + xzs + xu, [sub_row])
+        # part's (see sub_row).  (rel: 1 for the contacts released at the step's impact, whose μ⁻ are shares)
+        x.mul, x.rl, x.rel = sym("mul", c), sym("rl", self.nfl), sym("rel", c)
+        x.rll = x.rl if self.friction else None
+        x.left = [x.mul, x.rl, x.rel]
+        return x
+
+    def _step_rows(self, x) -> None:
+        """Every node and sub-node row of the program (the held step's and the march's are the same :meth:`node_row`
+        and :meth:`sub_row`), the release rows and the stage rows."""
+        D1, D2 = self._D1, self._D2
+        qk, qs, qk1, b, h, zm, zp, U = x.qk, x.qs, x.qk1, x.b, x.h, x.zm, x.zp, x.U
+        self.initial = ca.Function("c_initial", [x.q0, qs, b, x.p0, x.nu, h, x.lam, x.rho, zm, U],
+                                   [self.node_row(x.p0, x.q0, qs, b, x.nu, x.lam, h, x.frn, zm)])
+        self.node = ca.Function("c_node", [x.qsm, x.bm, qk, qs, b, x.nu, x.hp, h, x.lam, x.rho, x.zpm, zm, x.Um, U],
+                                [self.node_row(D2(x.qsm, x.zpm, qk, (1 - x.am) * x.hp, x.Um), qk, qs, b, x.nu, x.lam,
+                                               h, x.frn, zm)])
+        sub_row, x.r = self.sub_row(qk, qs, qk1, b, x.mu, x.lams, h, x.frs, zm, zp, x.mul, x.rll, x.rel)
+        # the momenta on either side of q̃
+        x.pm, x.pp = D2(qk, zm, qs, x.a * h), -D1(qs, zp, qk1, (1 - x.a) * h)
+        self.sub = ca.Function("c_sub", [qk, qs, qk1, b, x.mu, h, x.mul, x.rl, x.lams, x.rho, zm, zp, U], [sub_row])
         #: the contacts' normal velocities at the sub-node before its impact, after the released contacts' shares
-        self.release = ca.Function("c_release", [qk, qs, b, h] + xleft + xz1 + xu,
-                                   [self.release_row(qk, qs, b, h, mul, rll, rel, zm)])
+        self.release = ca.Function("c_release", [qk, qs, b, h] + x.left + [zm, U],
+                                   [self.release_row(qk, qs, b, h, x.mul, x.rll, x.rel, zm)])
         if self.friction:
             #: ... and the slip velocities there (against which a released contact's share sticks or slides)
-            self.left_slip = ca.Function("c_left_slip", [qk, qs, b, h] + xleft + xz1 + xu,
-                                         [self.left_velocity(qk, qs, b, h, mul, rll, rel, zm)])
-        if s:
+            self.left_slip = ca.Function("c_left_slip", [qk, qs, b, h] + x.left + [zm, U],
+                                         [self.left_velocity(qk, qs, b, h, x.mul, x.rll, x.rel, zm)])
+        if self.s:
             #: the stage rows of both parts of a step (stage_rows) and the constraints at their stages
-            lz = sym("lamz", 2 * self.ms)
-            xlz = [lz] if m else []
-            self.stage = ca.Function("c_stage", [qk, qs, qk1, b, h, zm, zp] + xlz + xu,
+            lz = ca.SX.sym("lamz", 2 * self.ms)
+            self.stage = ca.Function("c_stage", [qk, qs, qk1, b, h, zm, zp, lz, U],
                                      [self.stage_rows(qk, qs, qk1, b, h, zm, zp, lz)])
-            if m:
+            if self.m:
                 self.stage_constraint = ca.Function("c_stage_con", [zm, zp], [self.stage_constraints(zm, zp)])
-        if self.friction:
-            #: the slip velocities the friction opposes, [node part; sub-node part] (see slip)
-            arrive = sym("arrive", c)
-            self.slip_row = ca.Function("c_slip", [qk, qs, qk1, b, h, arrive], [self.slip(qk, qs, qk1, b, h, arrive)])
-            if d == 2:
-                # the isotropic cone's rows for the certificate: μ_f² − |ρ|² ≥ 0 per slot, and sliding's
-                # ρ + μ_f s/|s| = 0 per component (friction_rows)
-                R2 = ca.reshape(rho, d, -1)
-                muf2 = np.concatenate([self.mu_f, self.mu_f])
-                self.cone_row = ca.Function("c_cone", [rho], [ca.DM(muf2 ** 2) - ca.transpose(ca.sum1(R2 * R2))])
-                one = ca.DM.ones(2 * c)
-                self.slide_row = ca.Function("c_slide", [qk, qs, qk1, b, h, arrive, rho], [self.friction_rows(
-                    self.slip(qk, qs, qk1, b, h, arrive), rho, 0 * one, one, 0 * one, ca.DM.zeros(2 * c * d), 1.0)])
-        # Newton's law on the normal velocity at the sub-node, weighted by W = φ(q_{k+1})/δ: the law
-        # holds unless the contact is closed again at the next node, where the body is caught (the
-        # accumulation point of Zeno bouncing, where no step-resolved flight is left, or a body at
-        # rest).  δ is a parameter per step and contact (ContactNLP.law_lengths): ℓ, or for a bounce
-        # of the guess its next-node gap, so that W ≈ 1 also for a bounce late in its step.  A global
-        # small δ (ℓ/100, or a saturating W with δ = a h²/8) made Ipopt fail on the bowl and on a
-        # grazing corner in our trials; the unweighted law of every real impact is checked
-        # separately (ContactNLP.residual).
-        ell = sym("delta", c)
+
+    def _friction_functions(self, x) -> None:
+        """The slip velocities the friction opposes, [node part; sub-node part] (:meth:`slip`), and on a tangent plane
+        the isotropic cone's rows for the certificate: ``μ_f² − |ρ|² ≥ 0`` per slot, and sliding's
+        ``ρ + μ_f s/|s| = 0`` per component (:meth:`friction_rows`)."""
+        if not self.friction:
+            return
+        c, d = self.c, self.fd
+        qk, qs, qk1, b, h, rho = x.qk, x.qs, x.qk1, x.b, x.h, x.rho
+        arrive = ca.SX.sym("arrive", c)
+        self.slip_row = ca.Function("c_slip", [qk, qs, qk1, b, h, arrive], [self.slip(qk, qs, qk1, b, h, arrive)])
+        if d == 2:
+            R2 = ca.reshape(rho, d, -1)
+            muf2 = np.concatenate([self.mu_f, self.mu_f])
+            self.cone_row = ca.Function("c_cone", [rho], [ca.DM(muf2 ** 2) - ca.transpose(ca.sum1(R2 * R2))])
+            one = ca.DM.ones(2 * c)
+            self.slide_row = ca.Function("c_slide", [qk, qs, qk1, b, h, arrive, rho], [self.friction_rows(
+                self.slip(qk, qs, qk1, b, h, arrive), rho, 0 * one, one, 0 * one, ca.DM.zeros(2 * c * d), 1.0)])
+
+    def _law_rows(self, x) -> None:
+        """Newton's law on the normal velocity at the sub-node, weighted by ``W = φ(q_{k+1})/δ``: the law holds unless
+        the contact is closed again at the next node, where the body is caught (the accumulation point of Zeno
+        bouncing, where no step-resolved flight is left, or a body at rest).  δ is a parameter per step and contact
+        (:meth:`ContactNLP.law_lengths`): ℓ, or for a bounce of the guess its next-node gap, so that ``W ≈ 1`` also
+        for a bounce late in its step.  (A global small δ, ℓ/100 or a saturating W with δ = a h²/8, made Ipopt fail on
+        the bowl and on a grazing corner.)  The unweighted law of every real impact is checked separately
+        (:meth:`ContactNLP.residual`, :attr:`law_check`); the gap and pair rows; the split's weight."""
+        qk, qs, qk1, b, mu, h, phi = x.qk, x.qs, x.qk1, x.b, x.mu, x.h, x.phi
+        ell = ca.SX.sym("delta", self.c)
         self.impact_law, self.law_slack = self._law_functions(
-            "", [qk, qs, qk1, b, mu], [h, ell] + xleft + xzs, mu * r * phi(qk1) / ell, xu)
+            "", [qk, qs, qk1, b, mu], [h, ell] + x.left + [x.zm, x.zp], mu * x.r * phi(qk1) / ell, [x.U])
         # the unweighted law and the next node's gaps, for the residual of real (not caught) impacts
-        self.law_check = ca.Function("c_law_check", [qk, qs, qk1, b, mu, h] + xleft + xzs + xu, [mu * r, phi(qk1)])
-        self.pair = ca.Function("c_pair", [qk, nu], [ca.vertcat(phi(qk), nu)])
+        self.law_check = ca.Function("c_law_check", [qk, qs, qk1, b, mu, h] + x.left + [x.zm, x.zp, x.U],
+                                     [mu * x.r, phi(qk1)])
+        self.pair = ca.Function("c_pair", [qk, x.nu], [ca.vertcat(phi(qk), x.nu)])
         self.gap_row = ca.Function("c_gap", [qk], [phi(qk)])
-        w = sym("w")
+        w = ca.SX.sym("w")
         self.split = ca.Function("c_split", [b, w], [w * b * b])
-        self._objective_functions()
-        self.p_minus = ca.Function("p_minus_sub", [qk, qs, b, h] + xz1 + xu, [pm])
-        self.p_plus = ca.Function("p_plus_sub", [qs, qk1, b, h] + xz2 + xu, [pp])
-        self.p_node_plus = ca.Function("p_node_plus", [qk, qs, b, h] + xz1 + xu, [-D1(qk, zm, qs, a * h)])
-        self.p_node_minus = ca.Function("p_node_minus", [qsm, bm, qk, h] + xz2 + xu, [D2(qsm, zp, qk, (1 - am) * h)])
-        if not s and not ncu:
-            # a held step of the guess (α = ½): the node row with the incoming momentum p, the sub-node row,
-            # and, for the contacts held (mask 1), both gaps closed; the others' force and impulse pinned
-            # to 0.  Square in (q̃, q_{k+1}, ν, μ): the discrete motion with the held contacts as
-            # constraints (docs/derivations.md, "Contact trajectories", §5, "Held contacts").  (A scheme with
-            # stages guesses with its guide's, the midpoint's.)
-            mask = sym("mask", c)
-            xh = ca.vertcat(qs, qk1, nu, mu)
-            zm0 = ca.SX.zeros(m)
-            Rh = ca.vertcat(self.node_row(p0, qk, qs, 0.0, nu * mask, zm0, h),
-                            self.sub_row(qk, qs, qk1, 0.0, mu * mask, zm0, h)[0],
-                            mask * phi(qs) + (1 - mask) * mu, mask * phi(qk1) + (1 - mask) * nu)
-            self.held_step = ca.Function("held_step", [xh, qk, p0, mask, h], [Rh, ca.jacobian(Rh, xh)])
-            # free sub-node (no impact, α = ½): Newton function for the guess
-            F = D2(qk, z, qs, 0.5 * h) + D1(qs, z, qk1, 0.5 * h)
-            self.free_sub = ca.Function("free_sub", [qk, qs, qk1, h], [F, ca.jacobian(F, qs)])
-            # RK4 flow over tau with GUESS_SUBSTEPS substeps, for the event-located guess
-            v, tau = sym("v", n), sym("tau")
+
+    def _momentum_functions(self, x) -> None:
+        """The momenta either side of a sub-node (``p_minus``, ``p_plus``) and at the nodes (``p_node_plus``,
+        ``p_node_minus``)."""
+        D1, D2, U, h = self._D1, self._D2, x.U, x.h
+        self.p_minus = ca.Function("p_minus_sub", [x.qk, x.qs, x.b, h, x.zm, U], [x.pm])
+        self.p_plus = ca.Function("p_plus_sub", [x.qs, x.qk1, x.b, h, x.zp, U], [x.pp])
+        self.p_node_plus = ca.Function("p_node_plus", [x.qk, x.qs, x.b, h, x.zm, U], [-D1(x.qk, x.zm, x.qs, x.a * h)])
+        self.p_node_minus = ca.Function("p_node_minus", [x.qsm, x.bm, x.qk, h, x.zp, U],
+                                        [D2(x.qsm, x.zp, x.qk, (1 - x.am) * h)])
+
+    def _guess_functions(self, x) -> None:
+        """The event-located guess's functions (a two-point scheme without controls; a scheme with stages guesses with
+        its guide's, the midpoint's).
+
+        A held step (α = ½): the node row with the incoming momentum p, the sub-node row, and, for the contacts held
+        (mask 1), both gaps closed; the others' force and impulse pinned to 0.  Square in (q̃, q_{k+1}, ν, μ): the
+        discrete motion with the held contacts as constraints (``docs/derivations.md``, "Contact trajectories", §5,
+        "Held contacts").  A free sub-node (no impact, α = ½): its Newton function.  The RK4 flow over τ with
+        ``GUESS_SUBSTEPS`` substeps."""
+        n, sym, phi = self.n, ca.SX.sym, x.phi
+        qk, qs, qk1, nu, mu, h, p0 = x.qk, x.qs, x.qk1, x.nu, x.mu, x.h, x.p0
+        mask = sym("mask", self.c)
+        xh = ca.vertcat(qs, qk1, nu, mu)
+        zm0 = ca.SX.zeros(self.m)
+        Rh = ca.vertcat(self.node_row(p0, qk, qs, 0.0, nu * mask, zm0, h),
+                        self.sub_row(qk, qs, qk1, 0.0, mu * mask, zm0, h)[0],
+                        mask * phi(qs) + (1 - mask) * mu, mask * phi(qk1) + (1 - mask) * nu)
+        self.held_step = ca.Function("held_step", [xh, qk, p0, mask, h], [Rh, ca.jacobian(Rh, xh)])
+        z = ca.SX(0, 1)
+        F = self._D2(qk, z, qs, 0.5 * h) + self._D1(qs, z, qk1, 0.5 * h)
+        self.free_sub = ca.Function("free_sub", [qk, qs, qk1, h], [F, ca.jacobian(F, qs)])
+        v, tau = sym("v", n), sym("tau")
+        acc = self.system.acceleration
+        y, dt = ca.vertcat(qk, v), tau / GUESS_SUBSTEPS
+        f = lambda y: ca.vertcat(y[n:], acc(y[:n], y[n:]))  # noqa: E731
+        for _ in range(GUESS_SUBSTEPS):
+            y = rk4_step(f, y, dt)
+        self.flow = ca.Function("flow", [qk, v, tau], [y[:n], y[n:], phi(y[:n])])
+        self._flights: Dict[int, ca.Function] = {}
+
+    def _normal_acceleration(self, x) -> None:
+        """The contacts' normal accelerations ``J(q) q̈`` (under the step's control: the march's test of an arrival at a
+        node)."""
+        system, J, U, qk = self.system, self._J, x.U, x.qk
+        v = ca.SX.sym("v", self.n)
+        if not self.nu:
             acc = system.acceleration
-            x, dt = ca.vertcat(qk, v), tau / GUESS_SUBSTEPS
-            f = lambda x: ca.vertcat(x[n:], acc(x[:n], x[n:]))  # noqa: E731
-            for _ in range(GUESS_SUBSTEPS):
-                x = rk4_step(f, x, dt)
-            self.flow = ca.Function("flow", [qk, v, tau], [x[:n], x[n:], phi(x[:n])])
-            self._flights: Dict[int, ca.Function] = {}
-        self._march_function(phi)
-        self.node_law_fn = ca.Function("c_node_law", [p0, qk, qs, b, h] + xz1 + xu,
-                                       [self.node_law(p0, qk, qs, b, h, zm)])
-        if not ncu:
-            v, acc = sym("v", n), system.acceleration
-            self.acc_normal = self.guide.acc_normal if s else ca.Function(
+            self.acc_normal = self.guide.acc_normal if self.s else ca.Function(
                 "acc_normal", [qk, v, U], [ca.mtimes(J(qk), acc(qk, v))])
         else:
-            # the normal accelerations under the step's control (the march's test of an arrival at a node)
             qdd = ca.substitute(system._index1_exprs()[0], system.control_vector, U)
             acc = ca.Function("qdd_u", [system.q, system.qd, U], [qdd])
-            v = sym("v", n)
             self.acc_normal = ca.Function("acc_normal", [qk, v, U], [ca.mtimes(J(qk), acc(qk, v, U))])
 
     # ------------------------------------------------------------------ stages
@@ -246,8 +299,8 @@ class ContactMechanics:
         a, ms = 0.5 + b, self.ms
         sr = self.dm.stage_residual
         l1, l2 = (lz[:ms], lz[ms:]) if self.m else (ca.SX(0, 1), ca.SX(0, 1))
-        ua = [self._U] if self.nu else []
-        return ca.vertcat(sr(qk, zm, qs, l1, a * h, *ua) * a, sr(qs, zp, qn, l2, (1 - a) * h, *ua) * (1 - a))
+        U = self._U
+        return ca.vertcat(sr(qk, zm, qs, l1, a * h, _T, U) * a, sr(qs, zp, qn, l2, (1 - a) * h, _T, U) * (1 - a))
 
     def stage_constraints(self, zm, zp):
         """``c(Z_j) = 0`` at every stage of both parts of a step."""
@@ -359,8 +412,8 @@ class ContactMechanics:
         if not hasattr(self, "_layout"):
             n, c, m = self.n, self.c, self.m
             sizes = [("qs", n), ("q", n), ("beta", 1), ("nu", c), ("mu", c), ("lam", m), ("lam_sub", m),
-                     ("fratio", 2 * c * self.fd if self.friction else 0), ("zs", 2 * self.s),
-                     ("lam_stage", 2 * self.ms), ("mul", c), ("fleft", c * self.fd if self.friction else 0)]
+                     ("fratio", self.nfr), ("zs", 2 * self.s),
+                     ("lam_stage", 2 * self.ms), ("mul", c), ("fleft", self.nfl)]
             out, o = {}, 0
             for name, size in sizes:
                 out[name] = slice(o, o + size)
@@ -433,25 +486,23 @@ class ContactMechanics:
             R = ca.vertcat(R, self.stage_rows(qk, qs, qn, b, h, zm, zp, x[L["lam_stage"]]))
             if m:
                 R = ca.vertcat(R, self.stage_constraints(zm, zp))
-        extra = []
+        # the friction's modes per slot: inputs of the step whether or not it has friction (no entries without)
+        # (per contact: stick (the slip vanishes), slide (ρ = −sgn μ_f, sgn the slip's sign), or no friction force
+        # (ρ = 0: an open contact, or a frictionless one); fix: ρ = rfix, a ratio decided outside the step, the
+        # frictional impact law's tangential impulse; a tangent plane, d = 2: sgn is the mask of sliding, whose rows
+        # are ρ + μ_f s/|s| = 0, the ratio against the slip's direction on the circular cone, see friction_rows)
+        nfs = self.nfs
+        stick, sgn, fix, rfix = sym("stick", nfs), sym("sgn", nfs), sym("fix", nfs), sym("rfix", self.nfr)
+        arrive, rfixl = sym("arrive", nfs // 2), sym("rfixl", self.nfl)
         if self.friction:
-            # per contact: stick (the slip vanishes), slide (ρ = −sgn μ_f, sgn the slip's sign), or no
-            # friction force (ρ = 0: an open contact, or a frictionless one)
-            # (fix: ρ = rfix, a ratio decided outside the step: the frictional impact law's tangential impulse)
-            # (a tangent plane, d = 2: sgn is the mask of sliding, whose rows are ρ + μ_f s/|s| = 0, the ratio
-            # against the slip's direction on the circular cone; see friction_rows)
-            stick, sgn, fix, rfix = sym("stick", 2 * c), sym("sgn", 2 * c), sym("fix", 2 * c), sym("rfix", 2 * cd)
-            arrive = sym("arrive", c)
             R = ca.vertcat(R, self.friction_rows(self.slip(qk, qs, qn, b, h, arrive), rho, stick, sgn, fix, rfix, vref))
             # the first part's closing impulses μ⁻: a released contact's share sticks or slides as its node slot did
             # through that part, against the slip velocity before the impact; a law's (leftfix) ratio is fixed (rfixl)
-            rfixl = sym("rfixl", cd)
             R = ca.vertcat(R, self.friction_rows(self.left_velocity(qk, qs, b, h, mul, rl, release, zm), rl, stick[:c] * release,
                                                  sgn[:c] * release, leftfix, rfixl, vref, self.mu_f))
-            extra = [stick, sgn, fix, rfix, arrive, rfixl]
         self.march_step = ca.Function("march_step", [x, qk, p, h, ell, snu, smu, vref, bfix, t, held, closed, law, node,
-                                                      fixed, mufix, nfixed, release, leftfix, mufixl, tslip] + extra
-                                      + [self._U],
+                                                      fixed, mufix, nfixed, release, leftfix, mufixl, tslip, stick, sgn,
+                                                      fix, rfix, arrive, rfixl, self._U],
                                       [R, ca.jacobian(R, x)])
 
     def friction_rows(self, slip, rho, stick, sgn, fix, rfix, vref, muf=None):

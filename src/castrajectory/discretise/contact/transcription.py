@@ -121,7 +121,6 @@ class ContactTranscription:
         self.cm, self.L, self.h = cm, L, h
         # step lengths h_k (a grid refined where impacts crowd, see solve.contact.march); h by default
         self.H = np.full(L, float(h)) if steps is None else np.asarray(steps, float).reshape(L)
-        n, c = cm.n, cm.c
         ell, pref, vref, aref = scales
         self.scales_p = ell * pref
         self.scales_ell = ell
@@ -140,7 +139,28 @@ class ContactTranscription:
         # (law_lengths sets a shorter δ at the guess's bounces)
         self.delta = ell
         self.open_gap = max(CLOSING_FRACTION * aref * h * h, 1e-12 * ell)
-        self.nlp = nlp = self.program(hessian="exact")
+        self.nlp = self.program(hessian="exact")
+        self._variables(u_bounds)
+        self._UA = self._argument("u", cm.nu)
+        self._parameters()
+        self._momentum_rows()
+        self._friction_rows()
+        self._contact_rows()
+        self._penalties()
+
+    def _blocks(self):
+        """The index blocks of the per-step unknowns: nodes ``Q``, sub-nodes ``S``, splits ``B``, impulses ``MU``, node
+        forces ``NU``, the law's slacks ``SP``, ``SM``."""
+        nlp, L, n, c = self.nlp, self.L, self.cm.n, self.cm.c
+        return (nlp.index("q").reshape(L + 1, n), nlp.index("qs").reshape(L, n), nlp.index("beta").reshape(L, 1),
+                nlp.index("mu").reshape(L, c), nlp.index("nu").reshape(L, c), nlp.index("s_plus").reshape(L, c),
+                nlp.index("s_minus").reshape(L, c))
+
+    def _variables(self, u_bounds) -> None:
+        """The unknowns: nodes, sub-nodes and their splits, impulses and node forces, the law's slacks; friction ratios,
+        constraint multipliers, stages and controls where the scene has them."""
+        cm, nlp, L = self.cm, self.nlp, self.L
+        n, c = cm.n, cm.c
         nlp.variable("q", (L + 1) * n)
         nlp.variable("qs", L * n)
         nlp.variable("beta", L, lb=ALPHA_MIN - 0.5, ub=0.5 - ALPHA_MIN)
@@ -175,102 +195,125 @@ class ContactTranscription:
         if cm.nu:
             lo, hi = u_bounds if u_bounds is not None else (np.full(cm.nu, -np.inf), np.full(cm.nu, np.inf))
             nlp.variable("u", L * cm.nu, lb=np.tile(lo, L), ub=np.tile(hi, L), init=np.tile(np.clip(0.0, lo, hi), L))
-            UI = nlp.index("u").reshape(L, cm.nu)
-            UA = lambda i: [X(UI[i])]  # noqa: E731
-        else:
-            UA = lambda i: [np.zeros(0)]  # noqa: E731
-        self._UA = UA
+
+    def _parameters(self) -> None:
+        """The initial momentum, the penalty weight, the split's weight and the law's weight lengths."""
+        nlp, L, n, c = self.nlp, self.L, self.cm.n, self.cm.c
         nlp.parameter("p0", n)
         nlp.parameter("rho", 1, value=PENALTY[0])
         # weight of the centred-split term (0 where every β is fixed or timed: a decided branch)
         nlp.parameter("split", 1, value=SPLIT_WEIGHT)
         # weight length of Newton's law per step and contact (law_lengths)
         nlp.parameter("law_length", L * c, value=self.delta)
-        Q = nlp.index("q").reshape(L + 1, n)
-        S = nlp.index("qs").reshape(L, n)
-        B = nlp.index("beta").reshape(L, 1)
-        MU = nlp.index("mu").reshape(L, c)
-        NU = nlp.index("nu").reshape(L, c)
-        SP = nlp.index("s_plus").reshape(L, c)
-        SM = nlp.index("s_minus").reshape(L, c)
-        # the constraint multipliers' arguments (none without constraints)
-        LAM = (lambda i: [X(nlp.index("lam").reshape(L, m)[i])]) if m else (lambda i: [])  # noqa: E731
-        LAMS = (lambda i: [X(nlp.index("lam_sub").reshape(L, m)[i])]) if m else (lambda i: [])  # noqa: E731
-        RHO = (lambda i: [X(nlp.index("fratio").reshape(L, 2 * c * cm.fd)[i])]) if cm.friction else (lambda i: [])  # noqa: E731
+
+    def _momentum_rows(self) -> None:
+        """The discrete momentum balance: the initial, node and sub-node rows, the release rows, the stage rows."""
+        cm, nlp, L = self.cm, self.nlp, self.L
+        c, m, s = cm.c, cm.m, cm.s
+        Q, S, B, MU, NU, _, _ = self._blocks()
+        UA = self._UA
+        # the constraint multipliers and the friction ratios (empty columns without constraints, without friction)
+        LAM, LAMS, RHO = self._argument("lam", m), self._argument("lam_sub", m), self._argument("fratio", cm.nfr)
         # the first part's closing impulses μ⁻ of every sub-node, and their ratios (0 outside the march's branch)
-        MUL = nlp.index("mul").reshape(L, c)
-        FL = nlp.index("fleft").reshape(L, c * cm.fd) if cm.friction else None
-        LEFT = (lambda i: [X(MUL[i]), X(FL[i])]) if cm.friction else (lambda i: [X(MUL[i])])  # noqa: E731
+        MUL, FL = self._argument("mul", c), self._argument("fleft", cm.nfl)
         # which contacts release at their step's impact (the march's modes, ContactNLP.solve_modes; 0 elsewhere): their
         # μ⁻ are shares of their force before it, which the momentum before the impact carries
         nlp.parameter("release", L * c, value=0.0)
         REL = P(nlp.parameter_index("release").reshape(L, c))
         # the stages of a step's first part (ZM) and second part (ZP), none for a two-point scheme
-        ZI = nlp.index("zs").reshape(L, 2 * s) if s else None
-        ZM = (lambda i: [X(ZI[i, :s])]) if s else (lambda i: [np.zeros(0)])  # noqa: E731
-        ZP = (lambda i: [X(ZI[i, s:])]) if s else (lambda i: [np.zeros(0)])  # noqa: E731
+        ZM, ZP = self._argument("zs", 2 * s, slice(0, s)), self._argument("zs", 2 * s, slice(s, 2 * s))
         Hc = self.H.reshape(-1, 1)
         # the step lengths as element arguments (numbers; an unknown h for a free final time, _step_argument)
         HA = self._HA = self._step_argument(nlp, Hc)
         k = np.arange(L)
-        rho = P(nlp.parameter_index("rho"))
         fn0, p0arg = self._initial_element(nlp)
         nlp.equal_elements("initial", fn0,
-                           [X(Q[0]), X(S[0]), X(B[0]), p0arg, X(NU[0]), HA(0)] + LAM(0)
-                           + RHO(0) + ZM(0) + UA(0))
+                           [X(Q[0]), X(S[0]), X(B[0]), p0arg, X(NU[0]), HA(0), LAM(0), RHO(0), ZM(0), UA(0)])
         if L > 1:
             i = np.arange(1, L)
             nlp.equal_elements("node", cm.node, [X(S[i - 1]), X(B[i - 1]), X(Q[i]), X(S[i]), X(B[i]),
-                                                 X(NU[i]), HA(i - 1), HA(i)] + LAM(i) + RHO(i) + ZP(i - 1) + ZM(i)
-                               + UA(i - 1) + UA(i))
-        nlp.equal_elements("sub", cm.sub, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), HA(k)] + LEFT(k) + LAMS(k)
-                           + RHO(k) + ZM(k) + ZP(k) + UA(k))
+                                                 X(NU[i]), HA(i - 1), HA(i), LAM(i), RHO(i), ZP(i - 1), ZM(i),
+                                                 UA(i - 1), UA(i)])
+        nlp.equal_elements("sub", cm.sub, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), HA(k), MUL(k), FL(k),
+                                           LAMS(k), RHO(k), ZM(k), ZP(k), UA(k)])
         # the normal (and slip) velocities before each sub-node's impact, after its first part's closing impulses:
         # zero for a contact released there (its share; the bounds are the march's modes, ContactNLP.solve_modes)
-        nlp.inequality_elements("release", cm.release, [X(Q[k]), X(S[k]), X(B[k]), HA(k)] + LEFT(k) + [REL] + ZM(k) + UA(k),
-                                lb=-np.inf, ub=np.inf)
+        nlp.inequality_elements("release", cm.release, [X(Q[k]), X(S[k]), X(B[k]), HA(k), MUL(k), FL(k), REL, ZM(k),
+                                                        UA(k)], lb=-np.inf, ub=np.inf)
         if cm.friction:
-            nlp.inequality_elements("left_slip", cm.left_slip, [X(Q[k]), X(S[k]), X(B[k]), HA(k)] + LEFT(k) + [REL] + ZM(k)
-                                    + UA(k),
-                                    lb=-np.inf, ub=np.inf)
+            nlp.inequality_elements("left_slip", cm.left_slip, [X(Q[k]), X(S[k]), X(B[k]), HA(k), MUL(k), FL(k), REL,
+                                                                ZM(k), UA(k)], lb=-np.inf, ub=np.inf)
         if s:
-            LAMZ = [X(nlp.index("lam_stage").reshape(L, 2 * cm.ms))] if m else []
-            nlp.equal_elements("stage", cm.stage, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), HA(k)] + ZM(k) + ZP(k) + LAMZ
-                               + UA(k))
+            nlp.equal_elements("stage", cm.stage, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), HA(k), ZM(k), ZP(k),
+                                                   self._argument("lam_stage", 2 * cm.ms)(k), UA(k)])
             if m:
-                nlp.equal_elements("stage_constraint", cm.stage_constraint, ZM(k) + ZP(k))
-        if cm.friction:
-            # the step's slip velocity: its bounds are the friction's modes (ContactNLP.solve_modes)
-            # (which contacts arrive at their sub-node: their slip is the one after it, ContactMechanics.slip)
-            nlp.parameter("arrive", L * c, value=0.0)
-            AR = P(nlp.parameter_index("arrive").reshape(L, c))
-            nlp.inequality_elements("slip", cm.slip_row, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), HA(k), AR],
+                nlp.equal_elements("stage_constraint", cm.stage_constraint, [ZM(k), ZP(k)])
+
+    def _friction_rows(self) -> None:
+        """The step's slip velocity (its bounds are the friction's modes), and on a tangent plane the cone's rows."""
+        if not self.cm.friction:
+            return
+        cm, nlp, L, c = self.cm, self.nlp, self.L, self.cm.c
+        Q, S, B = self._blocks()[:3]
+        k = np.arange(L)
+        HA, RHO = self._HA, self._argument("fratio", cm.nfr)
+        # (which contacts arrive at their sub-node: their slip is the one after it, ContactMechanics.slip)
+        nlp.parameter("arrive", L * c, value=0.0)
+        AR = P(nlp.parameter_index("arrive").reshape(L, c))
+        nlp.inequality_elements("slip", cm.slip_row, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), HA(k), AR],
+                                lb=-np.inf, ub=np.inf)
+        if cm.fd == 2:
+            # the tangent plane's circular cone, and sliding against the slip (bounds by the modes)
+            nlp.inequality_elements("cone", cm.cone_row, [RHO(k)], lb=-np.inf, ub=np.inf)
+            nlp.inequality_elements("slide", cm.slide_row, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), HA(k), AR, RHO(k)],
                                     lb=-np.inf, ub=np.inf)
-            if cm.fd == 2:
-                # the tangent plane's circular cone, and sliding against the slip (bounds by the modes)
-                nlp.inequality_elements("cone", cm.cone_row, RHO(k), lb=-np.inf, ub=np.inf)
-                nlp.inequality_elements("slide", cm.slide_row, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), HA(k), AR] + RHO(k),
-                                        lb=-np.inf, ub=np.inf)
-        if m:
+
+    def _contact_rows(self) -> None:
+        """The holonomic constraints at the nodes and sub-nodes, the gaps, and Newton's law with its slacks."""
+        cm, nlp, L = self.cm, self.nlp, self.L
+        c, s = cm.c, cm.s
+        Q, S, B, MU, _, SP, SM = self._blocks()
+        k = np.arange(L)
+        HA, UA = self._HA, self._UA
+        ZM, ZP = self._argument("zs", 2 * s, slice(0, s)), self._argument("zs", 2 * s, slice(s, 2 * s))
+        MUL, FL = self._argument("mul", c), self._argument("fleft", cm.nfl)
+        REL = P(nlp.parameter_index("release").reshape(L, c))
+        if cm.m:
             nlp.equal_elements("node_constraint", cm.constraint_row, [X(Q[1:])])
             nlp.equal_elements("sub_constraint", cm.constraint_row, [X(S)])
         nlp.inequality_elements("node_gap", cm.gap_row, [X(Q[1:])], lb=0.0)
         nlp.inequality_elements("sub_gap", cm.gap_row, [X(S)], lb=0.0)
         LL = P(nlp.parameter_index("law_length").reshape(L, c))
         nlp.equal_elements("impact_law", cm.law_slack,
-                           [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), X(SP[k]), X(SM[k]), HA(k), LL]
-                           + LEFT(k) + [REL] + ZM(k) + ZP(k) + [np.array([self.scales_law])] + UA(k))
-        # exact (l1) penalties: complementarity products and the impact-law slacks
-        nlp.minimize_elements("node_penalty", cm.product_penalty, [X(Q[k]), X(NU[k]), rho, ell * pref / Hc])
-        nlp.minimize_elements("sub_penalty", cm.product_penalty, [X(S[k]), X(MU[k]), rho, np.array([ell * pref])])
+                           [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), X(SP[k]), X(SM[k]), HA(k), LL,
+                            MUL(k), FL(k), REL, ZM(k), ZP(k), np.array([self.scales_law]), UA(k)])
+
+    def _penalties(self) -> None:
+        """The exact (ℓ1) penalties: the complementarity products and the impact law's slacks, and the split's weight."""
+        cm, nlp, L = self.cm, self.nlp, self.L
+        Q, S, B, MU, NU, SP, SM = self._blocks()
+        k = np.arange(L)
+        p, Hc = self.scales_p, self.H.reshape(-1, 1)        # (ℓ p_ref, the products' scale)
+        rho = P(nlp.parameter_index("rho"))
+        nlp.minimize_elements("node_penalty", cm.product_penalty, [X(Q[k]), X(NU[k]), rho, p / Hc])
+        nlp.minimize_elements("sub_penalty", cm.product_penalty, [X(S[k]), X(MU[k]), rho, np.array([p])])
         nlp.minimize_elements("law_penalty", cm.slack_penalty, [X(SP[k]), X(SM[k]), rho])
         nlp.minimize_elements("split", cm.split, [X(B[k]), P(nlp.parameter_index("split"))])
         # terminal condition: the last node force may not launch the body (its gap at the end node
         # q_L would otherwise be free; see the module docstring, "Look-ahead step")
-        nlp.minimize_elements("end_penalty", cm.product_penalty, [X(Q[L]), X(NU[L - 1]), rho, ell * pref / Hc[L - 1]])
+        nlp.minimize_elements("end_penalty", cm.product_penalty, [X(Q[L]), X(NU[L - 1]), rho, p / Hc[L - 1]])
         # the pairs those penalties hold, per contact: gap ⟂ node force, sub-node gap ⟂ impulse, Newton's
         # law ⟂ impulse (the slacks), and the end node's gap ⟂ the last node force
         nlp.declared_pairs.update({"node": L * cm.c, "sub": L * cm.c, "impact_law": L * cm.c, "end": cm.c})
+
+    def _argument(self, name: str, width: int, cols: slice = slice(None)):
+        """``rows -> element argument`` of the per-step unknowns ``name`` (``width`` entries per step, the columns
+        ``cols`` of them): their indices, or an empty column where the scene has none of them (no constraints, no
+        friction, no stages, no controls), so that every element call has one argument list."""
+        if not width:
+            return lambda rows: np.zeros(0)
+        idx = self.nlp.index(name).reshape(self.L, width)[:, cols]
+        return lambda rows: X(idx[rows])
 
     # ------------------------------------------------------------------ hooks of the control problem
     def _step_argument(self, nlp, Hc):
@@ -359,10 +402,9 @@ class ContactTranscription:
     def _law_extras(self, values):
         """The law's inputs after ``h`` (and ``δ``): the first parts' closing impulses and their ratios (columns)."""
         cm, L = self.cm, self.L
-        left = [np.asarray(values["mul"], float).reshape(L, cm.c).T]
-        if cm.friction:
-            left.append(np.asarray(values["fleft"], float).reshape(L, -1).T)
-        return left + [np.asarray(self.nlp.parameter_value("release"), float).reshape(L, cm.c).T]
+        fleft = np.asarray(values["fleft"], float).reshape(L, -1) if cm.nfl else np.zeros((L, 0))
+        return [np.asarray(values["mul"], float).reshape(L, cm.c).T, fleft.T,
+                np.asarray(self.nlp.parameter_value("release"), float).reshape(L, cm.c).T]
 
     def _controls(self, values):
         """``[U]``, the controls per step ``(L, nu)`` (``nu`` = 0 without controls: an empty column per step)."""

@@ -14,6 +14,7 @@ import math
 import numpy as np
 
 from ...discretise.contact.elements import ContactMechanics
+from ...result import Certificate, motion_scale
 from . import modes as M
 from .march import discrete_march
 from .state import Problem
@@ -21,8 +22,8 @@ from .state import Problem
 #: A step's unknowns of the program that a one-step march gives (its nodes and stages apart): a restarted round takes
 #: these (:func:`.events._restart`), the branch point (:func:`_local_point`) these and the stages
 STEP_VALUES = ("qs", "beta", "nu", "mu", "mul", "fleft", "fratio")
-#: ... and a step's stages and their multipliers.  (A restarted round that took them too: the hopper at N = 20 cost
-#: 11.774 against 11.697 with galerkin4 and 11.187 against 11.154 with gauss4, the push to a target unchanged)
+#: ... and a step's stages and their multipliers, which a restarted round does not take: a one-step march's stages
+#: sit on another branch of the stage rows than the answer's neighbours (docs/notes.md, issue 43's measurements)
 STAGE_VALUES = ("zs", "lam", "lam_sub", "lam_stage")
 
 
@@ -46,18 +47,17 @@ def certify(P: Problem, res):
     the march of the answer's controls from the start.  A branch's answer is marched from the branch's modes
     (:func:`.search._started`: each step's search starts there, and keeps them where they pass its tests), so that
     a step with two solutions -- a slip that turns at its very start, a landing at its very end -- is checked on the
-    side the branch holds.  ``(result, certificate, march distance, solves)``: the
-    certificate is the last one-step distance, the march distance that of the whole march from the initial state
-    (``inf`` where a march stopped)."""
+    side the branch holds.  ``(result, certificate, solves)``: the :class:`~castrajectory.result.Certificate`'s
+    ``local`` is the last one-step distance, its ``march`` that of the whole march from the initial state (``inf``
+    where a march stopped)."""
     cm, prog, q0, N, scales, o = P.cm, P.prog, P.q0, P.N, P.scales, P.o
     rho = float(np.asarray(prog.nlp.parameter_value("rho")).reshape(-1)[0])
     solves, hint, last = 0, None, math.inf
     while True:
         cert, local = _local(P, res.values, hint)
         # (a frictional impact's law (modes T, K): the branch fixes its impulse at the march's value, and the answer's
-        # motion moves the law's; each branch from the last answer's march shrinks that mismatch.  Measured on the
-        # battery's seed 1 hopper goal #19: 2.7e-7, then a turn elsewhere 3.3e-5, then 4.7e-8 solved only to Ipopt's
-        # acceptable level, where the three solves ran out)
+        # motion moves the law's; each branch from the last answer's march shrinks that mismatch, so the re-solves go
+        # on while they contract: resolve_rounds, resolve_contracting in docs/notes.md)
         if (cert <= o.certificate_tol and res.success) or solves >= o.resolve_contracting or \
                 (solves >= o.resolve_rounds and not cert < 0.5 * last):
             break
@@ -86,7 +86,7 @@ def certify(P: Problem, res):
     marched = _distance(discrete_march(cm, q0, p0, N, h, scales, controls=U,
                                        options=o.march_options, starts=_starts(cm, res.values, N, hint)),
                         res.values["q"].reshape(N + 1, cm.n), N, h)
-    return res, cert, marched, solves
+    return res, Certificate(cert, marched), solves
 
 
 def _starts(cm, V, N, hint):
@@ -138,7 +138,7 @@ def _local_marches(P: Problem, V, hint, steps, done):
             continue
         qn = np.asarray(pt["q"], float).reshape(-1, n)[-1]
         worst = max(worst, float(np.max(np.abs(qn - Q[k + 1]))))
-    return worst / max(1.0, float(np.max(np.abs(Q)))), marches
+    return worst / motion_scale(Q), marches
 
 
 def _step_unknowns(cm, V, N) -> np.ndarray:
@@ -204,9 +204,8 @@ def _branch(P: Problem, point, values, bounds, opts, rho, warm=False):
     # N = 80 the other way round.  The small one first, capped, then the homotopy's)
     got = prog._ladder(init, _small(opts, prog.settings.ipopt, P.o.branch_small_iter), branch, [rho], verbose, "branch",
                        "the march's branch")
-    # (one solved only to Ipopt's acceptable level is certify's to check and solve again from: the homotopy's
-    # barrier from the march's point instead spent 3000 iterations on the hopper's first branch at N = 40, where
-    # the small one reached its acceptable level in 456 and the next branch solved in 106)
+    # (one solved only to Ipopt's acceptable level is certify's to check and solve again from, rather than the
+    # homotopy's barrier from the march's point, which leaves it: branch_small_iter in docs/notes.md)
     if got.continuable:
         return got
     again = prog._ladder(init, opts, branch, [rho], verbose, "branch", "the march's branch")
@@ -249,4 +248,4 @@ def _distance(point, Q, N: int, h: float) -> float:
     Qm, k = Qm[at], k[at].astype(int)
     if k.size != N + 1:
         return math.inf
-    return float(np.max(np.abs(Qm - Q[k]))) / max(1.0, float(np.max(np.abs(Q))))
+    return float(np.max(np.abs(Qm - Q[k]))) / motion_scale(Q)

@@ -42,7 +42,7 @@ from ...discretise.contact.control import ContactControlTranscription
 from ...discretise.contact.elements import ContactMechanics
 from ...discretise.contact.transcription import TOUCH_TOL
 from ...discretise.optimal_control import split_controls
-from ...result import NLPResult
+from ...result import Certificate, NLPResult
 from .. import budget, ladder
 from ..nlp import NLP
 from ...result import SUCCESS_STATUSES, ControlResult
@@ -60,9 +60,8 @@ from .strategy import _scales as strategy_scales
 
 class _Program(ContactControlTranscription, ContactNLP):
     program = NLP
-    #: (the certificate's march takes a contact as touching within TOUCH_TOL ℓ: a held contact's gap, at
-    #: a scaled product of 1e-8 with its force, was 2e-9 on the hopper, and the march flew from it.  At 1e-11 the
-    #: products leave gaps below the march's tolerance)
+    #: (the certificate's march takes a contact as touching within TOUCH_TOL ℓ: the products are driven until a
+    #: held contact's gap is below it; complementarity_target in docs/notes.md)
     complementarity_target = ContactControlOptions.complementarity_target
     #: the one-step marches of the last values certified (:func:`.certificate._local`): ``(key, {step: march})``
     local_memo = None
@@ -185,14 +184,13 @@ def _solve_contact_control(system, T, N: int, scheme: str, start, end, running, 
         res, rounds, answers = _continued(P, marched, init, qN, vN), 1, []
     else:
         res, rounds, answers = _timing_rounds(P, init, near=bool(rungs))
-    res, cert, marched, rounds = _certified(P, res, answers, rounds, keep_modes)
+    res, C, rounds = _certified(P, res, answers, rounds, keep_modes)
     on_node = []
-    if not keep_modes and cert <= o.certificate_tol and res.success:
-        res, cert, marched, moved, on_node = _across(P, res, cert, marched)
+    if not keep_modes and C.holds(o.certificate_tol) and res.success:
+        res, C, moved, on_node = _across(P, res, C)
         rounds += moved
-    out = _answer(system, P, res, rounds, controls, cert, _time.perf_counter() - t_all, guess_time, keep_modes,
+    out = _answer(system, P, res, rounds, controls, C, _time.perf_counter() - t_all, guess_time, keep_modes,
                   on_node)
-    out.march_distance = marched
     out.grids = rungs + [N]
     if prior is not None and prior.success and out.success:
         out.cost_estimate = abs(out.cost - prior.cost) / 3.0
@@ -359,27 +357,27 @@ def _prepare(P: Problem, branch: Branch, init: dict, res, held, moves, moving: b
 def _certified(P: Problem, res, answers: List[Attempt], rounds: int, keep_modes: bool):
     """Steps 4 and 5 of the module docstring: the answer certified, re-solved on the march's branches where it does not certify (:func:`.certificate.certify`); where
     it does not certify, the earlier rounds' converged answers in turn, the latest first, each with its own events
-    timed, and the first certified one is the answer.  ``(result, certificate, march distance, rounds)``."""
+    timed, and the first certified one is the answer.  ``(result, certificate, rounds)``."""
     prog, tol = P.prog, P.o.certificate_tol
-    cert = marched = math.nan
+    C = Certificate()
     if res.continuable or res.solver_status in SUCCESS_STATUSES:
         # (also where the homotopy converged short of complementarity, a local minimum of the penalties: its
         # controls, marched, are a motion, and the program on that motion's branch is solved from it)
         answers = [a for a in answers if a.res is not res]
-        res, cert, marched, resolves = certify(P, res)
+        res, C, resolves = certify(P, res)
         rounds = (1 if keep_modes else rounds) + resolves
     kept = prog.parameters()
     for earlier in reversed(answers):
-        if cert <= tol and res.success:
+        if C.holds(tol) and res.success:
             break
         prog.restore(earlier.params)
-        got = certify(P, earlier.res)
-        rounds += got[3]
-        if got[1] <= tol and got[0].success:
-            res, cert, marched = got[:3]
+        got, Cg, resolves = certify(P, earlier.res)
+        rounds += resolves
+        if Cg.holds(tol) and got.success:
+            res, C = got, Cg
             kept = {}
     prog.restore(kept)          # (none certified: the program as the answer reported left it)
-    return res, cert, marched, rounds
+    return res, C, rounds
 
 
 def _elastic(problem, N, guess, options, verbose, path, o: ContactControlOptions, B: budget.Budget,
@@ -537,7 +535,7 @@ def _end_ratio_bounds(cm: ContactMechanics, qN, vN, vref):
     return lo, hi
 
 
-def _answer(system, P: Problem, res: NLPResult, rounds, controls, cert, wall,
+def _answer(system, P: Problem, res: NLPResult, rounds, controls, C: Certificate, wall,
             guess_time, keep_modes: bool = False, on_node=()) -> ContactControlResult:
     cm, prog, q0, N, o, steps = P.cm, P.prog, P.q0, P.N, P.o, P.steps
     n, c = cm.n, cm.c
@@ -566,7 +564,7 @@ def _answer(system, P: Problem, res: NLPResult, rounds, controls, cert, wall,
     out = ContactControlResult(
         success=res.success, solver_status=res.solver_status, message=res.message, iterations=sum(st.iterations for st in steps),
         build_time_s=res.build_time_s, solve_time_s=wall - res.build_time_s, cost=cost, T=N * h, t=times, q=Q, v=v,
-        u=U, t_u=times[:-1] + 0.5 * h, controls=split_controls(U, controls, N), certificate=cert, march_distance=cert,
+        u=U, t_u=times[:-1] + 0.5 * h, controls=split_controls(U, controls, N), certificate=C.local, march_distance=C.march,
         scheme=cm.dm.scheme.name, qs=S, t_sub=t_sub, mu=MU, nu=NU,
         fratio=V["fratio"].reshape(N, -1) if cm.friction else None, impact_times=impact_times,
         complementarity=float(prog.residual(V)), homotopy=steps, timing_rounds=rounds)
@@ -585,24 +583,24 @@ def _answer(system, P: Problem, res: NLPResult, rounds, controls, cert, wall,
             f"the event timed in step {k} sits on the node at t = {t_node:.6g} s: moved across it into step "
             f"{k + side} the optimum costs more, so the program holds it on the node from both sides; its time "
             f"is resolved to the step, h = {h:.3g} s (refine N to resolve it further)")
-    if held and not (res.success and cert <= o.certificate_tol):
+    if held and not (res.success and C.holds(o.certificate_tol)):
         # (an answer that failed otherwise: where its events stopped, for the next attempt's guess)
         out.warnings.extend(f"the event timed in step {k} sits at the {'end' if side > 0 else 'start'} of its step's "
                             f"window (t = {t_sub[k]:.6g} s, β = {B[k]:+.4f}), held by a bound of the transcription"
                             for k, side in held)
-    if res.success and held and cert <= o.certificate_tol:
+    if res.success and held and C.holds(o.certificate_tol):
         where = "; ".join(f"step {k}'s at the {'end' if side > 0 else 'start'} of its window (t = {t_sub[k]:.6g} s, "
                           f"β = {B[k]:+.4f})" for k, side in held)
         out.fail("Event_Pinned",
                  f"an event is held by a bound of the transcription, not of the problem: {where}; the optimum of the "
-                 f"continuous problem wants it beyond, so this motion (certified to {cert:.2g}) is no optimum of "
+                 f"continuous problem wants it beyond, so this motion (certified to {C.local:.2g}) is no optimum of "
                  "it; " + ("keep_modes holds each event in its guess's step: solve without it, or start from a guess "
                            "whose events lie nearer the optimum's" if keep_modes else
                            "moved across its node it did not converge, or could not move: start from a guess whose "
                            "events lie nearer the optimum's, or refine N"))
-    if res.success and not (cert <= o.certificate_tol):
+    if res.success and not C.holds(o.certificate_tol):
         out.fail("Certificate_Failed", f"a step of the optimal controls, marched by the contact march from the answer's "
-                                       f"own node, departs from the answer by {cert:.3g} (relative): not a motion of "
+                                       f"own node, departs from the answer by {C.local:.3g} (relative): not a motion of "
                                        f"the system")
     return out
 

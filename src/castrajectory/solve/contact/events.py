@@ -10,7 +10,7 @@ import numpy as np
 
 from ...discretise.contact.elements import ContactMechanics
 from ...discretise.contact.transcription import TOUCH_TOL
-from ...result import NLPResult
+from ...result import Certificate, NLPResult
 from . import modes as M
 from .certificate import STEP_VALUES, _local, certify
 from .options import ContactControlOptions
@@ -111,9 +111,8 @@ def _move_edge_arrivals(prog, edges, timed, turn) -> None:
 def _kept_moves(P: Problem, res: NLPResult, before: Attempt) -> NLPResult:
     """The answer of the rounds that moved pinned events (:func:`_move_edge_arrivals`) where it is converged,
     complementary, off its windows' edges and no costlier than the answer ``before`` they moved from; else that one,
-    with the program's parameters set back (its pinned events then say so in the answer's warnings).
-    (Measured on the hopper at N = 40, goal 0.7: moved round by round, its pinned landing and lift-off ran away from
-    each other, the rounds spent the budget and ended uncertified at a cost of 14.8 against 11.22)"""
+    with the program's parameters set back (its pinned events then say so in the answer's warnings): moved round
+    by round without that test, two pinned events can run away from each other (docs/notes.md)."""
     prog = P.prog
     c0 = prog.cost(before.res.values)
     if (res.continuable and res.success and not pinned(P, res)
@@ -124,11 +123,10 @@ def _kept_moves(P: Problem, res: NLPResult, before: Attempt) -> NLPResult:
     return before.res
 
 
-def _across(P: Problem, res: NLPResult, cert, marched):
+def _across(P: Problem, res: NLPResult, C: Certificate):
     """A certified answer whose events are pinned at their windows' edges (:func:`pinned`), each event moved across
     its node in turn (:func:`_move_across`).  The cheapest certified answer below the answer's cost is taken and its
-    own pinned events moved, up to ``across_rounds`` times.  ``(result, certificate, march distance, solves, on the
-    node)``: where no move lowers the cost the answer is kept, and its pinned events whose move converged to a
+    own pinned events moved, up to ``across_rounds`` times.  ``(result, certificate, solves, on the node)``: where no move lowers the cost the answer is kept, and its pinned events whose move converged to a
     costlier answer are held on their node (``on the node``, as ``(step, side)``): from either side the program's
     optimum wants the event at the node they share, a local optimum over the event's step.  The others, not moved
     (the horizon's end, a neighbour already holding an event) or whose moved solve failed, stay pinned, and
@@ -154,18 +152,17 @@ def _across(P: Problem, res: NLPResult, cert, marched):
         prog.restore(params if best is None else best.params)
         if best is None:
             break
-        res, cert, marched = best.res, best.cert, best.marched
+        res, C = best.res, best.certificate
     else:
         on_node = []                          # (the rounds ran out: the last answer's events not tried)
-    return res, cert, marched, solves, on_node
+    return res, C, solves, on_node
 
 
 def _move_across(P: Problem, res: NLPResult, edge, c0: float):
     """The certified answer ``res`` with its event pinned at ``edge`` (``(step, side)``) held in the neighbouring step
     instead (:meth:`.state.Branch.moved`), the answer's other events kept: the program solved from the shifted answer's
-    primal values (:func:`_shift`) with a small barrier, then certified (:func:`.certificate.certify`).  (From its
-    multipliers too, the other branch's, the hopper's first move at N = 40 took 1879 iterations where without them it
-    took 96, to the same answer.)  ``(a certified Attempt cheaper than c0 or None, solves, held on its node: the moved
+    primal values (:func:`_shift`) with a small barrier, then certified (:func:`.certificate.certify`); not from its
+    multipliers, which are the other branch's (docs/notes.md).  ``(a certified Attempt cheaper than c0 or None, solves, held on its node: the moved
     solve converged no cheaper)``."""
     cm, prog, N, o = P.cm, P.prog, P.N, P.o
     k, side = edge
@@ -186,9 +183,9 @@ def _move_across(P: Problem, res: NLPResult, edge, c0: float):
     held = bool(got.success and prog.cost(got.values) >= drop)
     if not (got.continuable and prog.cost(got.values) < drop):
         return None, 1, held
-    got, c, m, resolves = certify(P, got)
-    if got.success and c <= o.certificate_tol and prog.cost(got.values) < drop:
-        return Attempt(got, prog.parameters(), c, m), 1 + resolves, held
+    got, C, resolves = certify(P, got)
+    if got.success and C.holds(o.certificate_tol) and prog.cost(got.values) < drop:
+        return Attempt(got, prog.parameters(), C), 1 + resolves, held
     return None, 1 + resolves, held
 
 
@@ -232,9 +229,8 @@ def _restart(P: Problem, init, changed) -> bool:
     (:data:`.certificate.STEP_VALUES`: sub-node, split, forces, impulses, ratios) from their one-step marches
     from the last answer's nodes (those :func:`slip_turns` ran to read its events are not run again), which time those
     events; the nodes stay the answer's.  (The last answer itself violates the new round's rows there: a turn newly
-    held at a sub-node that sat elsewhere, an event no longer held whose step keeps its timed ``β``.  Measured on the
-    hopper at N = 20: from the answer the rounds started at a primal infeasibility of 13.9 and took 54 to 135
-    iterations each.)  Whether any step was restarted."""
+    held at a sub-node that sat elsewhere, an event no longer held whose step keeps its timed ``β``.)  Whether any
+    step was restarted."""
     N, ks = P.N, np.where(changed)[0]
     if not ks.size:
         return False
@@ -326,8 +322,8 @@ def _event_bounds(P: Problem, branch: Branch, init) -> dict:
         out["left_slip"] = (np.where(t, 0.0, -np.inf), np.where(t, 0.0, np.inf))
     # a timed step's sub-node is its arrival's, on the surface, as in the march (its timing row φ(q̃) = 0): the arriving
     # contact closest to the surface at q̃ in the round's start.  (With the sub-node free to stay open, a flight that
-    # lands on the next node kept β free, a control of its own: the hopper's answer at N = 40 landed exactly on a
-    # node by it, which the march, its flight a plain step, missed by 3e-9)
+    # lands on the next node kept β free, a control of its own, which the march, its flight a plain step, does not
+    # have: docs/notes.md)
     gs = np.where(timed, cm.gaps(np.asarray(init["qs"], float).reshape(L, cm.n)), np.inf)
     first = timed & (np.arange(c)[None, :] == np.argmin(gs, axis=1)[:, None])
     # (and a turn's contact is held through its step, closed at q̃_k and q_{k+1}, as the march's W)

@@ -93,10 +93,6 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
     """
     co = co if co is not None else ContactOptions()
     n, c = cm.n, cm.c
-    # (holonomic constraints: the guess leaves their multipliers at 0; the branch solve forms them)
-    lam0 = [np.zeros(cm.m)] if cm.m else []
-    # (friction: the guess's rows carry no friction force; the march resolves friction)
-    lam0 += [np.zeros(2 * cm.c * cm.fd)] if cm.friction else []
     p0 = np.asarray(cm.system.mass_matrix(q0)) @ np.asarray(v0, float)
     gapf = cm.system.gap
     Q = np.zeros((L + 1, n))
@@ -154,7 +150,7 @@ def event_guess(cm: ContactMechanics, q0: np.ndarray, v0: np.ndarray, L: int, h:
         q, v = qn, vn
         Q[k + 1] = q
         k += 1
-    NU = _rest(cm, Q, S, B, MU, event, h, p0, tol, lam0)
+    NU = _rest(cm, Q, S, B, MU, event, h, p0, tol)
     out = {"q": Q.reshape(-1), "qs": S.reshape(-1), "beta": B, "mu": MU.reshape(-1), "nu": NU.reshape(-1),
            "bounced": BOUNCED}
     return out
@@ -218,12 +214,15 @@ def _arrival(cm: ContactMechanics, q, v, h: float, k: int, crossing, rows, tol: 
     return None, qn, vn
 
 
-def _rest(cm: ContactMechanics, Q, S, B, MU, event, h: float, p0, tol: float, lam0) -> np.ndarray:
+def _rest(cm: ContactMechanics, Q, S, B, MU, event, h: float, p0, tol: float) -> np.ndarray:
     """The guess's sub-nodes off the events and its node forces, ``S`` and ``MU`` in place: free sub-nodes (α = ½)
     by a few Newton steps; a resting step's sub-node resting too, with its share of the weight; the node forces
     where the guess touches, by least squares on the node equations, clipped at 0 (returned, ``(L, c)``)."""
     n, c, L = cm.n, cm.c, B.size
     gapf = cm.system.gap
+    # (holonomic constraints: the guess leaves their multipliers at 0, the branch solve forms them; friction: the
+    # guess's rows carry no friction force, the march resolves it)
+    lam0, rho0, rl0 = np.zeros(cm.m), np.zeros(cm.nfr), np.zeros(cm.nfl)
     # free sub-nodes (α = ½) from the nodes: a few Newton steps, all steps at once
     free = ~event
     if np.any(free):
@@ -243,7 +242,7 @@ def _rest(cm: ContactMechanics, Q, S, B, MU, event, h: float, p0, tol: float, la
     # one has no motion at all between the nodes (docs/derivations.md, "Contact trajectories", §2, "A resting ball")
     for k in np.where(~event & (np.min(gq[:-1], axis=1) <= tol) & (np.min(gq[1:], axis=1) <= tol))[0]:
         S[k] = 0.5 * (Q[k] + Q[k + 1])
-        r = np.asarray(cm.sub(Q[k], S[k], Q[k + 1], B[k], np.zeros(c), h, np.zeros(c), *lam0, NO_STAGES, NO_STAGES,
+        r = np.asarray(cm.sub(Q[k], S[k], Q[k + 1], B[k], np.zeros(c), h, np.zeros(c), rl0, lam0, rho0, NO_STAGES, NO_STAGES,
                               NO_CONTROL)).reshape(-1) * h
         Js = np.asarray(gapf(S[k])[1])
         act = np.asarray(gapf(S[k])[0]).reshape(-1) <= tol
@@ -255,9 +254,9 @@ def _rest(cm: ContactMechanics, Q, S, B, MU, event, h: float, p0, tol: float, la
     touching = np.where(np.min(gq, axis=1) <= tol)[0]
     for k in touching:
         if k == 0:
-            r = np.asarray(cm.initial(Q[0], S[0], B[0], p0, np.zeros(c), h, *lam0, NO_STAGES, NO_CONTROL)).reshape(-1)
+            r = np.asarray(cm.initial(Q[0], S[0], B[0], p0, np.zeros(c), h, lam0, rho0, NO_STAGES, NO_CONTROL)).reshape(-1)
         else:
-            r = np.asarray(cm.node(S[k - 1], B[k - 1], Q[k], S[k], B[k], np.zeros(c), h, h, *lam0, NO_STAGES,
+            r = np.asarray(cm.node(S[k - 1], B[k - 1], Q[k], S[k], B[k], np.zeros(c), h, h, lam0, rho0, NO_STAGES,
                                    NO_STAGES, NO_CONTROL, NO_CONTROL)).reshape(-1)
         J = np.asarray(gapf(Q[k])[1])
         act = gq[k] <= tol

@@ -110,8 +110,12 @@ def _chunk(step: _Step, rows, q, p, h, held, fm, k: int, K: int, span: int, U, t
         Qn, Pn, X, Gs, Gn, Rr, SL = (a[:, :K] if a.ndim == 2 else a[:K]
                                      for a in step.chunk(span, q, p, h, held, fm, x0,
                                                          U[k:k + span]))
-    except RuntimeError:
-        return None      # (a singular Newton system: friction rows at zero force, no step before the chunk yet)
+    except RuntimeError as exc:
+        # (a singular Newton system: friction rows at zero force, no step before the chunk yet.  Only CasADi's failed
+        # evaluation is that; a call the chunk's function refuses is a defect, raised)
+        if "Evaluation failed" not in str(exc):
+            raise
+        return None
     NU, MU = X[lay["nu"]], X[lay["mu"]]
     NU[~held], MU[~held] = 0.0, 0.0          # open: their rows ν = μ = 0, exactly
     ok = (Rr <= step.o.chunk_tol * (1.0 + np.max(np.abs(X), axis=0)))

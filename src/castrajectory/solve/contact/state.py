@@ -11,14 +11,13 @@ The loop is ``attempt = solve(branch, start)`` (:func:`.policies.solve_round`), 
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import List, Optional
 
 import numpy as np
 
 from ...discretise.contact.elements import ContactMechanics
-from ...result import HomotopyStep, NLPResult
+from ...result import Certificate, HomotopyStep, NLPResult
 from .options import ContactControlOptions
 
 
@@ -116,9 +115,8 @@ class Round:
 @dataclass
 class Attempt:
     """A converged point of the program (``res``) with the parameters it was solved on (``params``: its branch, the
-    program's :meth:`parameters`), and once certified its certificate and march distance."""
+    program's :meth:`parameters`), and once certified its :class:`~castrajectory.result.Certificate`."""
 
     res: NLPResult
     params: dict
-    cert: float = math.nan
-    marched: float = math.nan
+    certificate: Certificate = field(default_factory=Certificate)

@@ -31,7 +31,7 @@ class _Step:
         self.n, self.c, self.m = cm.n, cm.c, cm.m
         # friction: two ratios ρ per contact (node force, sub-node impulse) at the end of the unknowns, and
         # the friction modes of the previous step (the march sets them: a contact that stuck starts sticking)
-        self.nf = 2 * cm.c * cm.fd if cm.friction else 0
+        self.nf = cm.nfr
         self.fd = cm.fd
         self.fprev = [FREE] * (2 * cm.c)
         #: the control of the step marched (optimal control through contact): the last input of every element
@@ -52,9 +52,9 @@ class _Step:
             qs, ps, hs, hm = ca.MX.sym("q", n), ca.MX.sym("p", n), ca.MX.sym("h"), ca.MX.sym("held", c)
             sc = [ca.MX.sym(name) for name in ("ell", "snu", "smu", "vref")]
             zero = ca.DM.zeros(c)
-            st, sg = ca.MX.sym("stick", 2 * c), ca.MX.sym("sgn", 2 * c)
-            fin = [st, sg] if self.nf else []
-            fz = [st, sg, ca.DM.zeros(2 * c), ca.DM.zeros(2 * c * cm.fd), zero, ca.DM.zeros(c * cm.fd)] if self.nf else []
+            # the friction modes of the chunk (kept through it; inputs with no entries without friction)
+            st, sg = ca.MX.sym("stick", cm.nfs), ca.MX.sym("sgn", cm.nfs)
+            fz = [st, sg, ca.DM.zeros(cm.nfs), ca.DM.zeros(cm.nfr), ca.DM.zeros(cm.nfs // 2), ca.DM.zeros(cm.nfl)]
             xs = ca.MX.sym("x0", cm.nx)
             us = [ca.MX.sym("u", cm.nu)]
             v = ca.solve(cm.system.mass_matrix(qs), ps)
@@ -74,20 +74,25 @@ class _Step:
             qn, qt = x[n:2 * n], x[:n]
             zp = [x[cm.layout["zs"]][cm.s:]]
             slip = cm.slip_row(qs, qt, qn, 0.0, hs, zero) if self.nf else ca.DM.zeros(1)
-            one = ca.Function("chunk_step", [qs, ps, xs, hs, hm] + sc + fin + us,
+            one = ca.Function("chunk_step", [qs, ps, xs, hs, hm] + sc + [st, sg] + us,
                               [qn, cm.p_node_minus(qt, 0.0, qn, hs, *zp, *us), x, cm.gap_row(qt), cm.gap_row(qn), res, slip])
             self._chunks[key] = one.mapaccum("chunk_steps", K, [0, 1, 2], [0, 1, 2])
-        fargs = []
-        if self.nf:
-            fm = fmodes or [FREE] * (2 * self.c)
-            fargs = [np.array([f == STICK for f in fm], float),
-                     np.array([1.0 if f in SLIDING_UP else -1.0 if f == DOWN else 0.0 for f in fm])]
+        fargs = self._friction_modes(fmodes)[:2]
         x0 = np.zeros(self.cm.nx) if x0 is None else x0
         # (the controls of the chunk's steps as columns, one per step: a mapped input)
         uargs = [np.asarray(controls, float).reshape(K, self.cm.nu).T]
         out = self._chunks[key](q, p, x0, h, held.astype(float), self.ell, self.pref / h, self.pref, self.vref, *fargs,
                               *uargs)
         return tuple(np.asarray(a) for a in out)
+
+    def _friction_modes(self, fmodes):
+        """The masks of the friction modes per slot: sticking, the slip's sign of sliding, a fixed ratio (no entries
+        without friction)."""
+        nfs = self.cm.nfs            # (the march keeps a mode per slot also without friction: no entries then)
+        fm = list(fmodes)[:nfs] if fmodes else [FREE] * nfs
+        return (np.array([f == STICK for f in fm], float),
+                np.array([1.0 if f in SLIDING_UP else -1.0 if f == DOWN else 0.0 for f in fm]),
+                np.array([f == FIX for f in fm], float))
 
     def friction_holds(self, fm, rho, slip) -> np.ndarray:
         """Per column (step) of ratios ``rho`` and slips ``slip``: every slot's friction mode holds (sticking
@@ -143,17 +148,15 @@ class _Step:
         args = (q, p, h, self.ell, self.snu, self.smu, self.vref, 0.0 if bfix is None else bfix,
                 t, held, closed, law, node, fixed, np.zeros(c) if mufix is None else mufix, nfixed, release, leftfix,
                 np.zeros(c) if mufixl is None else mufixl, tslip)
-        if self.nf:
-            fm = fmodes or [FREE] * (2 * c)
-            args = args + (np.array([f == STICK for f in fm], float),
-                           np.array([1.0 if f in SLIDING_UP else -1.0 if f == DOWN else 0.0 for f in fm]),
-                           np.array([f == FIX for f in fm], float), np.zeros(2 * c * self.fd) if rfix is None else rfix,
-                           np.array([m in AT_SUB for m in modes], float),
-                           np.zeros(c * self.fd) if rfixl is None else rfixl)
+        stick, sgn, fix = self._friction_modes(fmodes)
+        nfs = self.cm.nfs
+        args = args + (stick, sgn, fix, np.zeros(self.cm.nfr) if rfix is None else rfix,
+                       np.array([m in AT_SUB for m in modes], float)[:nfs // 2],
+                       np.zeros(self.cm.nfl) if rfixl is None else rfixl)
         small = 0
         size0 = 1.0 + float(np.max(np.abs(x)))
-        # (the inputs other than x packed into one vector, once: the compiled step called with its 27 inputs took
-        # 94 us per call on the hopper, 48 us packed, and reading its two outputs 32 us more)
+        # (the inputs other than x packed into one vector, once: a call of two numeric inputs and one output costs half
+        # of one with the step's 28 inputs and two outputs; docs/notes.md)
         args = np.concatenate([np.asarray(a, float).reshape(-1, order="F") for a in (*args, *self.uarg)])
         nx = x.size
         for _ in range(self.o.newton_iter):
@@ -188,8 +191,8 @@ class _Step:
         # 1/α near α = 0 are then held to the rounding of the point, not of their size
         r = r / np.maximum(np.max(np.abs(Jr), axis=1), 1e-300)
         size = 1.0 + float(np.max(np.abs(x)))
-        # (a root ``runaway`` times the start's size is not the step's: Newton from the hopper's node ran to a root
-        # 2.5e11 away, whose rows held relative to that size, and the march took it as the step)
+        # (a root ``runaway`` times the start's size is not the step's: Newton can run to a far root of the friction
+        # rows, whose rows hold relative to that size; docs/notes.md)
         return x, bool(np.max(np.abs(r)) <= self.o.step_tol * size and size <= self.o.runaway * size0)
 
 
