@@ -275,6 +275,8 @@ def test_the_certificate_catches_controls_that_do_not_make_the_motion():
     bad[7] += 1e-6
     C = certify(dm, sol.q, Z, bad, 0.05, sol.t, p[0])
     assert 1e-10 < C.local < 1e-8 and C.march > C.local and not C.holds(1e-10)
+    from castrajectory.result import Certificate
+    assert not Certificate().holds() and not Certificate(float("inf"), 0.0).holds()     # not measured, march stopped
 
 
 def test_pendulum_swing_up_converges_at_second_order():

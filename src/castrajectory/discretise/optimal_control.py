@@ -44,16 +44,29 @@ class ControlTranscription:
     def __init__(self, dm: DiscreteMechanics, N: int, T, start, end, running: Optional[ca.Function],
                  final: Optional[ca.Function], path: Sequence = (), u_bounds=None):
         self.dm, self.N = dm, int(N)
-        n, s, m, st, nu = dm.n, dm.s, dm.m, dm.scheme.stages, dm.nu
         self.free_time = not np.isscalar(T)
         self.T_spec = T
-        self.nlp = nlp = self.program(hessian="exact")
+        self.nlp = self.program(hessian="exact")
         (q0, v0), (qN, vN) = start, end
         self.q0, self.v0, self.qN, self.vN = q0, v0, qN, vN
+        self._variables(T, u_bounds)
+        self._dynamics()
+        self._boundaries()
+        self._constraints()
+        self._paths(path)
+        self._costs(running, final)
+
+    def _variables(self, T, u_bounds) -> None:
+        """The unknowns (nodes, stages, multipliers, controls, a free step length) and the element arguments: every
+        element takes its time and its step's controls (an empty column without controls); the node times are
+        constants (a time-dependent system's final time is fixed; a free one moves only the unread times of a
+        time-independent system)."""
+        dm, nlp, N = self.dm, self.nlp, self.N
+        n, s, m, st, nu = dm.n, dm.s, dm.m, dm.scheme.stages, dm.nu
+        v0, vN = self.v0, self.vN
         nlp.variable("q", (N + 1) * n)
         if s:
             nlp.variable("Z", N * s)
-        interior = np.arange(1, N)
         if m:
             nlp.variable("lam", (N - 1) * m)
             if s:
@@ -76,15 +89,18 @@ class ControlTranscription:
         Q = nlp.index("q").reshape(N + 1, n)
         Zi = nlp.index("Z").reshape(N, s) if s else np.zeros((N, 0), dtype=np.int64)
         Ui = nlp.index("u").reshape(N, nu)
-        none = np.zeros(0)
-        zarg = (lambda rows: X(Zi[rows])) if s else (lambda rows: none)  # noqa: E731
-        # every element takes its time and its step's controls (an empty column without controls); the node
-        # times are constants (a time-dependent system's final time is fixed; a free one moves only the
-        # unread times of a time-independent system)
         self.Q, self.Zi, self.Ui = Q, Zi, Ui
-        uarg = lambda rows: X(Ui[rows]) if nu else np.zeros((np.size(rows), 0) if np.ndim(rows) else 0)  # noqa: E731
-        targ = lambda rows: _node_times(self, rows)  # noqa: E731
+        self._zarg = (lambda rows: X(Zi[rows])) if s else (lambda rows: np.zeros(0))  # noqa: E731
+        self._uarg = lambda rows: X(Ui[rows]) if nu else np.zeros((np.size(rows), 0) if np.ndim(rows) else 0)  # noqa: E731
+        self._targ = lambda rows: _node_times(self, rows)  # noqa: E731
 
+    def _dynamics(self) -> None:
+        """The DEL rows at the interior nodes (the controls of both steps) and the stage rows."""
+        dm, nlp, N = self.dm, self.nlp, self.N
+        s, m, st = dm.s, dm.m, dm.scheme.stages
+        Q, Zi, hh = self.Q, self.Zi, self.hh
+        zarg, uarg, targ, none = self._zarg, self._uarg, self._targ, np.zeros(0)
+        interior = np.arange(1, N)
         # dynamics: the DEL rows at the interior nodes, the controls of both steps
         if N > 1:
             Li = nlp.index("lam").reshape(N - 1, m) if m else None
@@ -97,28 +113,46 @@ class ControlTranscription:
             Ni = nlp.index("nu").reshape(N, st * m) if m else None
             nlp.equal_elements("stage", dm.stage_residual,
                                [X(Q[k]), X(Zi[k]), X(Q[k + 1]), X(Ni) if m else none, hh, targ(k), uarg(k)])
-        # boundary velocities, through the discrete Legendre transforms
+
+    def _boundaries(self) -> None:
+        """Given boundary velocities, through the discrete Legendre transforms."""
+        dm, nlp, N = self.dm, self.nlp, self.N
+        n, m = dm.n, dm.m
+        Q, hh = self.Q, self.hh
+        zarg, uarg, targ, none = self._zarg, self._uarg, self._targ, np.zeros(0)
         sysm = dm.system
-        if v0 is not None:
+        if self.v0 is not None:
             nlp.parameter("p0", n, value=np.zeros(n))
             self._p0_fn = sysm.momentum
             nlp.equal_elements("initial", dm.initial_residual,
                                [X(Q[0]), zarg(0), X(Q[1]), P(nlp.parameter_index("p0")),
                                 X(nlp.index("lam0")) if m else none, hh, targ(0), uarg(0)])
-        if vN is not None:
+        if self.vN is not None:
             nlp.parameter("pN", n, value=np.zeros(n))
             nlp.equal_elements("final", dm.final_residual,
                                [X(Q[N - 1]), zarg(N - 1), X(Q[N]), P(nlp.parameter_index("pN")),
                                 X(nlp.index("lamN")) if m else none, hh, targ(N), uarg(N - 1)])
+
+    def _constraints(self) -> None:
+        """The holonomic constraints at every node with a free entry, and at the stages."""
+        dm, nlp, N = self.dm, self.nlp, self.N
+        n, s, m, st = dm.n, dm.s, dm.m, dm.scheme.stages
+        Q, Zi, hh, targ = self.Q, self.Zi, self.hh, self._targ
         # holonomic constraints at every node with a free entry, and at the stages
         if m:
-            nodes = [k for k in range(N + 1) if not (k == 0 and _all_fixed(q0)) and not (k == N and _all_fixed(qN))]
+            nodes = [k for k in range(N + 1) if not (k == 0 and _all_fixed(self.q0)) and not (k == N and _all_fixed(self.qN))]
             nodes = np.array(nodes)
             nlp.equal_elements("constraint", dm.constraint_rows, [X(Q[nodes]), targ(nodes)])
             if s:
                 for j in range(st):
                     nlp.equal_elements(f"stage_constraint{j}", dm.stage_constraint_rows[j],
                                        [X(Zi[:, j * n:(j + 1) * n]), targ(np.arange(N)), hh])
+
+    def _paths(self, path) -> None:
+        """The path constraints (where they hold: :meth:`_path_nodes`)."""
+        dm, nlp, N, nu = self.dm, self.nlp, self.N, self.dm.nu
+        Q, Ui, hh = self.Q, self.Ui, self.hh
+        zarg, uarg, targ = self._zarg, self._uarg, self._targ
         # path constraints: see _path_nodes
         for j, (fn, lb, ub) in enumerate(path):
             at_nodes, tau = self._path_nodes(fn)
@@ -132,6 +166,12 @@ class ControlTranscription:
                 nlp.inequality_elements(f"path{j}_steps", self._path_element(fn, tau),
                                         [X(Q[k]), zarg(k), X(Q[k + 1]), targ(k), hh, uarg(k)],
                                         lb=np.tile(lb, N * tau.size), ub=np.tile(ub, N * tau.size))
+
+    def _costs(self, running, final) -> None:
+        """The running cost (the scheme's quadrature) and the final cost."""
+        nlp, N = self.nlp, self.N
+        Q, hh = self.Q, self.hh
+        zarg, uarg, targ = self._zarg, self._uarg, self._targ
         # the cost
         if running is not None:
             k = np.arange(N)

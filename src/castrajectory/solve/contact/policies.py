@@ -17,7 +17,8 @@ Adding a policy is one function here and its name in ``STARTS``; a user then lis
 """
 from __future__ import annotations
 
-from typing import Callable, Dict, Optional, Sequence
+from functools import partial
+from typing import Callable, Dict, Optional, Sequence, Tuple
 
 from ...result import NLPResult
 from .state import Problem, Round
@@ -58,16 +59,26 @@ STARTS: Dict[str, Callable[[Problem, Round], Optional[NLPResult]]] = {
     "near": near, "warm": warm, "from_last": from_last, "cold": cold}
 
 
-def solve_round(P: Problem, R: Round, names: Sequence[str]) -> Optional[NLPResult]:
-    """The round solved from the first of the policies ``names`` that converges; else the last one tried (``None``
-    where none applied)."""
+def first_accepted(tries: Sequence[Tuple[str, Callable[[], Optional[NLPResult]]]],
+                   accept: Callable[[NLPResult], bool], record: Callable[[str, NLPResult], None]) -> Optional[NLPResult]:
+    """The loop of both contact paths: each named try in order (``None``: it does not apply), every result recorded;
+    the first that ``accept`` takes is the answer, else the last one tried (``None`` where none applied).  A timing
+    round's starts (:func:`solve_round`) and the initial-value strategy's fallbacks (:func:`.strategy._solve_once`:
+    the guess's branch, then the penalty continuation) are its two uses."""
     got = None
-    for name in names:
-        out = STARTS[name](P, R)
+    for name, attempt in tries:
+        out = attempt()
         if out is None:
             continue
         got = out
-        P.steps.extend(got.homotopy)
-        if got.continuable:
+        record(name, got)
+        if accept(got):
             break
     return got
+
+
+def solve_round(P: Problem, R: Round, names: Sequence[str]) -> Optional[NLPResult]:
+    """The round solved from the first of the policies ``names`` that converges (to Ipopt's tolerance or its acceptable
+    level); else the last one tried (``None`` where none applied)."""
+    return first_accepted([(name, partial(STARTS[name], P, R)) for name in names], lambda got: got.continuable,
+                          lambda name, got: P.steps.extend(got.homotopy))

@@ -245,31 +245,8 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     # step lengths (a refined grid where impacts crowd; h everywhere otherwise)
     H = tn.H
     hv = H[:N]
-    # Node momenta: a node force h ν_k makes the one-sided momenta differ, p_k⁺ = p_k⁻ + h ∇φ(q_k)ᵀ ν_k;
-    # the node's momentum is their mean where the contact is closed (for a body resting on the
-    # ground p_k⁻ = −p_k⁺, so it is 0, not ±m g h/4).  Without a node force p_k⁻ = p_k⁺ (DEL).  At t = 0 the given p_0; at T the
-    # look-ahead step supplies ν_N.
     NL = N + LOOKAHEAD
-    nu_full = H[:NL, None] * res.values["nu"][:NL * c].reshape(NL, c)
-    gN, Jn = (np.asarray(x) for x in sysm.gap.map(N + 1)(q.T))    # gaps (c, N + 1) and Jacobians (c, (N + 1) n)
-    gap = gN.reshape(c, N + 1).T
-    Jn = Jn.reshape(c, N + 1, n).transpose(1, 0, 2)                  # (N + 1, c, n)
-    # only closed contacts (gap within TOUCH_TOL): on an open one ν is interior-point noise below the
-    # complementarity tolerance, left on p⁺ as before
-    closed = gap <= TOUCH_TOL * tn.scales_ell
-    force = np.where(closed, nu_full[:N + 1], 0.0)
-    half = 0.5 * np.einsum("kcn,kc->kn", Jn, force)
-    if cm.friction:
-        # the friction force at the node, ρ h ν along the slip directions D(q_k), splits the momenta too
-        d = cm.fd
-        RHO = res.values["fratio"][:NL * 2 * c * d].reshape(NL, 2 * c * d)[:, :c * d]   # the node forces' ratios
-        Dn = np.asarray(sysm.tangent.map(N + 1)(q.T)).reshape(c * d, N + 1, n).transpose(1, 0, 2)
-        half += 0.5 * np.einsum("kcn,kc->kn", Dn, RHO[:N + 1] * np.repeat(force, d, axis=1))
-    U = tn._controls(res.values)[0]
-    pp = np.asarray(cm.p_node_plus.map(N)(q[:-1].T, S.T, B, hv, *[z.T for z in ZM], U[:N].T)).T
-    pN = np.asarray(cm.p_node_minus(S[-1], B[-1], q[-1], H[N - 1], *[z[-1] for z in ZP], U[N - 1])).reshape(1, -1)
-    p = np.vstack([pp - half[:N], pN + half[N:]])
-    p[0] = p0
+    p, pp, half, force, closed, gap, nu_full = _node_momenta(cm, tn, res, N, q, S, B, ZM, ZP, p0)
     t = np.concatenate([[0.0], np.cumsum(H[:N])])
     if np.all(H == h):
         t = np.linspace(0.0, N * h, N + 1)
@@ -313,6 +290,37 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
         friction_coefficients=cm.mu_f.copy() if cm.friction else None,
         slip_turns=[(float(t_sub[k]), j, kind) for k, j, kind in getattr(tn, "turns", []) if k < N] if cm.friction else None,
         program={"terms": sysm.terms(), "steps": int(tn.L), **tn.nlp.anatomy()})
+
+
+def _node_momenta(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, q, S, B, ZM, ZP, p0):
+    """The node momenta of an answer, ``(p, p⁺, half the node forces' impulse, the node forces, closed, gaps, h ν)``.
+
+    A node force h ν_k makes the one-sided momenta differ, p_k⁺ = p_k⁻ + h ∇φ(q_k)ᵀ ν_k; the node's momentum is their
+    mean where the contact is closed (for a body resting on the ground p_k⁻ = −p_k⁺, so it is 0, not ±m g h/4).
+    Without a node force p_k⁻ = p_k⁺ (DEL).  At t = 0 the given p_0; at T the look-ahead step supplies ν_N."""
+    n, c, sysm, H = cm.n, cm.c, cm.system, tn.H
+    NL = N + LOOKAHEAD
+    nu_full = H[:NL, None] * res.values["nu"][:NL * c].reshape(NL, c)
+    gN, Jn = (np.asarray(x) for x in sysm.gap.map(N + 1)(q.T))    # gaps (c, N + 1) and Jacobians (c, (N + 1) n)
+    gap = gN.reshape(c, N + 1).T
+    Jn = Jn.reshape(c, N + 1, n).transpose(1, 0, 2)                  # (N + 1, c, n)
+    # only closed contacts (gap within TOUCH_TOL): on an open one ν is interior-point noise below the
+    # complementarity tolerance, left on p⁺ as before
+    closed = gap <= TOUCH_TOL * tn.scales_ell
+    force = np.where(closed, nu_full[:N + 1], 0.0)
+    half = 0.5 * np.einsum("kcn,kc->kn", Jn, force)
+    if cm.friction:
+        # the friction force at the node, ρ h ν along the slip directions D(q_k), splits the momenta too
+        d = cm.fd
+        RHO = res.values["fratio"][:NL * 2 * c * d].reshape(NL, 2 * c * d)[:, :c * d]   # the node forces' ratios
+        Dn = np.asarray(sysm.tangent.map(N + 1)(q.T)).reshape(c * d, N + 1, n).transpose(1, 0, 2)
+        half += 0.5 * np.einsum("kcn,kc->kn", Dn, RHO[:N + 1] * np.repeat(force, d, axis=1))
+    U = tn._controls(res.values)[0]
+    pp = np.asarray(cm.p_node_plus.map(N)(q[:-1].T, S.T, B, H[:N], *[z.T for z in ZM], U[:N].T)).T
+    pN = np.asarray(cm.p_node_minus(S[-1], B[-1], q[-1], H[N - 1], *[z[-1] for z in ZP], U[N - 1])).reshape(1, -1)
+    p = np.vstack([pp - half[:N], pN + half[N:]])
+    p[0] = p0
+    return p, pp, half, force, closed, gap, nu_full
 
 
 def _impacts(cm, tn, res, N, q, S, B, MU, ZM, ZP, H, t, t_sub, gap, closed, force, half, pp, p) -> list:

@@ -18,6 +18,7 @@ from .guess import event_guess
 from .march import discrete_march
 from .nlp import ContactNLP
 from .options import ContactOptions
+from .policies import first_accepted
 from .solution import ContactTrajectory, _finish
 
 
@@ -177,11 +178,10 @@ def _solve_once(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str
                         solver_status=needs[0], message=f"{needs[1]}; the answer is the event-located guess, not a "
                         "solution", complementarity_residual=float("nan"))
         return _finish(cm, whole, res, N, h, attempts, guess_time, p0)
-    res = whole.solve_branch(q0, p0, guess, options, verbose, co.branch_max_iter, co.penalties)
-    attempts.append(_attempt("branch", res))
-    if not res.success:
-        res = whole.solve(q0, p0, guess, co.penalties, options, verbose)
-        attempts.append(_attempt("penalty", res))
+    res = first_accepted([("branch", lambda: whole.solve_branch(q0, p0, guess, options, verbose, co.branch_max_iter,
+                                                                co.penalties)),
+                          ("penalty", lambda: whole.solve(q0, p0, guess, co.penalties, options, verbose))],
+                         lambda got: got.success, lambda name, got: attempts.append(_attempt(name, got)))
     return _finish(cm, whole, res, N, h, attempts, guess_time, p0)
 
 
