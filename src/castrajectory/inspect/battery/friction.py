@@ -216,7 +216,7 @@ TWIN_SLACK = 1e-6
 #: the discrete end of the accumulation)
 ORACLE_MARGIN_STEPS, REBOUND_STEPS = 3, 4
 #: the event-driven reference's first arrival is compared only when it is faster than this many times the
-#: slowest arrival the solver lists as an impact (IMPACT_SPEED_STEPS steps of the normal acceleration)
+#: slowest arrival the solver lists as an impact (MarchOptions.impact_speed_steps steps of the normal acceleration)
 ARRIVAL_MARGIN = 2.0
 
 
@@ -283,7 +283,8 @@ def run_impact_friction_scene(sc) -> dict:
     from ...baselines.events import event_driven
     from ...models import collision as col
     from ...solve import trajectory
-    from ...solve.contact import IMPACT_SPEED_STEPS
+    from ...solve.contact import MarchOptions
+    speed_steps = MarchOptions().impact_speed_steps        # (the solver's, at the battery's default settings)
 
     fam, T, N = sc["family"], sc["T"], sc["N"]
     h = T / N
@@ -347,7 +348,7 @@ def run_impact_friction_scene(sc) -> dict:
         else:
             J = np.asarray(system.gap(ev.q)[1])
             an = np.abs(J @ np.asarray(system.acceleration(ev.q, ev.v_before)).reshape(-1))
-            slow = ARRIVAL_MARGIN * IMPACT_SPEED_STEPS * an * h
+            slow = ARRIVAL_MARGIN * speed_steps * an * h
             if all(-float(J[j] @ ev.v_before) > slow[j] for j in ev.contacts):
                 first = "compared"
                 t_ref = abs(imps[0].t - ev.t) if imps and imps[0].contact in ev.contacts else math.inf

@@ -20,7 +20,7 @@ SCHEME_NS = (100, 200, 400)
 #: T + SCHEME_SEPARATION coarsest steps: every impact (and t = 0, T) at least SCHEME_SEPARATION of the
 #: coarsest steps h = T / min(SCHEME_NS) from the next, every arrival at least SCHEME_APPROACH sqrt(g ℓ) fast
 #: (ℓ = 1) and SCHEME_ARRIVAL times faster than the slowest arrival the solver lists as an impact
-#: (IMPACT_SPEED_STEPS steps' worth of the normal acceleration, |J q̈| h: slower is resting contact), and every
+#: (MarchOptions.impact_speed_steps steps' worth of the normal acceleration, |J q̈| h: slower is resting contact), and every
 #: turn short of the contact at least SCHEME_CLEARANCE ℓ away from it; else it is drawn again
 SCHEME_SEPARATION, SCHEME_APPROACH, SCHEME_ARRIVAL, SCHEME_CLEARANCE = 10, 0.1, 2.0, 1e-2
 #: the checks: impact times within max(TIME_C h^p, TIME_FLOOR) s of the reference (h in s), Newton's law
@@ -68,7 +68,8 @@ def screen_scheme_scene(sc):
     """Why a drawn scene is not kept (None when it is): the reference must hold to T and its impacts stay
     resolvable by every grid drawn (see SCHEME_SEPARATION, SCHEME_APPROACH, SCHEME_ARRIVAL, SCHEME_CLEARANCE)."""
     from ...baselines.events import event_driven
-    from ...solve.contact import IMPACT_SPEED_STEPS
+    from ...solve.contact import MarchOptions
+    speed_steps = MarchOptions().impact_speed_steps        # (the solver's, at the battery's default settings)
 
     system, q0, v0 = build_scheme_scene(sc)
     T = sc["T"]
@@ -85,7 +86,7 @@ def screen_scheme_scene(sc):
     for ev in ref.events:
         J = np.asarray(system.gap(ev.q)[1])
         an = np.abs(J @ np.asarray(system.acceleration(ev.q, ev.v_before)).reshape(-1))
-        slow = np.maximum(SCHEME_APPROACH * math.sqrt(G), SCHEME_ARRIVAL * IMPACT_SPEED_STEPS * an * h)
+        slow = np.maximum(SCHEME_APPROACH * math.sqrt(G), SCHEME_ARRIVAL * speed_steps * an * h)
         if any(-float(J[j] @ ev.v_before) < slow[j] for j in ev.contacts):
             return f"a slow arrival at t = {ev.t:.3g} s"
     if _turn_clearance(system, ref, T + sep) < SCHEME_CLEARANCE:

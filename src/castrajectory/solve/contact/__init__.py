@@ -37,5 +37,5 @@ from .guess import event_guess  # noqa: F401
 from .march import discrete_march  # noqa: F401
 from .nlp import ContactNLP  # noqa: F401
 from .options import ContactControlOptions, ContactOptions, MarchOptions  # noqa: F401
-from .solution import IMPACT_SPEED_STEPS, ContactTrajectory, SubNodeImpact  # noqa: F401
+from .solution import ContactTrajectory, SubNodeImpact  # noqa: F401
 from .strategy import solve_contact  # noqa: F401

@@ -51,10 +51,6 @@ KEPT_OUT = PUSHING + (W,)
 #: friction modes that slide with a positive slip velocity (the force against it): up, and on a plane's cone
 SLIDING_UP = (UP, SLIDE)
 
-#: A contact approaching faster than this many steps' worth of its normal acceleration arrives with an
-#: impact (resting contact approaches at about ½ step's worth): touching at a step's first node it takes the
-#: impact there (mode N), and an answer lists its impulse as an impact (solution.py).
-IMPACT_SPEED_STEPS = 2.0
 
 
 def releases(modes) -> np.ndarray:

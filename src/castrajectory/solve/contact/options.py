@@ -44,7 +44,11 @@ class MarchOptions:
       changes tried per solve of a step's normal modes; ``max_combinations``: combinations of modes tried at most
       when the greedy search fails;
     * ``simultaneous_gap``: a contact whose gap at an impact's sub-node is within this (times the length scale) takes
-      part in that impact (a flat landing: one simultaneous impact).
+      part in that impact (a flat landing: one simultaneous impact);
+    * ``impact_speed_steps``: a contact approaching faster than this many steps' worth of its normal acceleration,
+      ``|J q̈| h``, arrives with an impact (resting contact approaches at about half a step's worth): touching at a
+      step's first node it takes the impact there (mode N), and an answer lists its impulse as an impact; slower
+      arrivals are the discrete form of persistent contact.
     """
 
     newton_iter: int = 30
@@ -57,11 +61,12 @@ class MarchOptions:
     friction_rounds: int = 8
     max_combinations: int = 256
     simultaneous_gap: float = 1e-9
+    impact_speed_steps: float = 2.0
 
     def __post_init__(self):
         _integers(self, ("newton_iter", "chunk_steps", "chunk_newton", "mode_rounds", "friction_rounds",
                          "max_combinations"), 1)
-        _positive(self, ("step_tol", "runaway", "chunk_tol", "simultaneous_gap"))
+        _positive(self, ("step_tol", "runaway", "chunk_tol", "simultaneous_gap", "impact_speed_steps"))
 
 
 def _contact_ipopt() -> dict:

@@ -12,7 +12,7 @@ import numpy as np
 from ...discretise.contact.transcription import ALPHA_MIN
 from ...models.impact import (frictional_impact, frictional_impact_plane, sequential_frictional_impact,
                                sequential_impact)
-from .modes import (AT_SUB, CLOSES, DOWN, FIX, FREE, GAP_TIMED, HELD, IMPACT_SPEED_STEPS, KEPT_OUT, PUSHING, SLIDE,
+from .modes import (AT_SUB, CLOSES, DOWN, FIX, FREE, GAP_TIMED, HELD, KEPT_OUT, PUSHING, SLIDE,
                     STICK, UP, C, F, H, I, K, N, O, P, R, T, W, releases, turn_fraction)
 from .step import _Step, restage
 
@@ -92,7 +92,7 @@ def _march_step(step: _Step, q, p, h, g_q, held_prev, tol, finest: bool, start=N
             return got
     # a flight that landed on this node (to rounding) arrives with its impact here: Newton's law at the node
     an = np.abs(np.asarray(step.cm.acc_normal(q, v, *step.uarg)).reshape(-1))
-    arriving = touch & ~held_prev & (-(np.asarray(step.cm.system.gap(q)[1]) @ v) > IMPACT_SPEED_STEPS * an * h)
+    arriving = touch & ~held_prev & (-(np.asarray(step.cm.system.gap(q)[1]) @ v) > step.o.impact_speed_steps * an * h)
     modes0 = [N if arriving[j] else H if (touch[j] and held_prev[j]) else O for j in range(c)]
     modes, tried, crossed = list(modes0), set(), set()
     x, frac, why = x0, None, "rounds"
@@ -240,7 +240,7 @@ def _friction(step: _Step, q, p, h, modes, x, mufix=None, rfix=None, mufixl=None
     # slots: the node's force of each contact (held or released: ν free), then its sub-node impulse (held)
     # (a caught arrival, C, holds its contact from the sub-node on: its impulse has friction like a held one's,
     # against the slip after the sub-node)
-    # (an arrival too slow to be an impact, I below IMPACT_SPEED_STEPS |a_n| h, is the discrete form of persistent
+    # (an arrival too slow to be an impact, I below impact_speed_steps |a_n| h, is the discrete form of persistent
     # contact: its impulse has a held one's friction too, and no impact law, _impact_law)
     # (a contact released at the step's impact: its share of the first part's force slides or sticks as its node slot,
     # ContactMechanics.left_velocity; a K arrival's friction after its sub-node is a held one's, like C's)
@@ -392,12 +392,12 @@ def _slip_turn(step: _Step, q, p, h, modes, x, fmodes):
 
 
 def _slow_arrivals(step: _Step, q, p, h):
-    """Per contact: approaching the surface slower than ``IMPACT_SPEED_STEPS`` steps' worth of its normal
+    """Per contact: approaching the surface slower than ``impact_speed_steps`` steps' worth of its normal
     acceleration at the step's node (the arrivals an answer does not list as impacts, :mod:`.solution`)."""
     cm = step.cm
     v = np.linalg.solve(np.asarray(cm.system.mass_matrix(q)), p)
     an = np.abs(np.asarray(cm.acc_normal(q, v, *step.uarg)).reshape(-1))
-    return -(np.asarray(cm.system.gap(q)[1]) @ v) <= IMPACT_SPEED_STEPS * an * h
+    return -(np.asarray(cm.system.gap(q)[1]) @ v) <= step.o.impact_speed_steps * an * h
 
 
 def _result(step: _Step, x, modes, gn, fmodes=None):

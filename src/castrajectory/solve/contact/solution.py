@@ -10,7 +10,7 @@ from ...result import HomotopyStep, NLPResult, Result
 from ...discretise.contact.elements import ContactMechanics
 from ...discretise.contact.transcription import LOOKAHEAD, TOUCH_TOL
 from .nlp import ContactNLP
-from .modes import IMPACT_SPEED_STEPS
+from .options import ContactOptions
 
 
 
@@ -329,7 +329,7 @@ def _impacts(cm, tn, res, N, q, S, B, MU, ZM, ZP, H, t, t_sub, gap, closed, forc
     place, to the one after it, not the mean."""
     c, sysm = cm.c, cm.system
     tol = tn.settings.impulse_tol * tn.scales_p / tn.scales_ell
-    caught_law = tn.settings.caught_law
+    co = tn.settings
     impacts = []
     # (friction: the ratios of the sub-node impulses and of the node forces, for the tangential impulses)
     fd = cm.fd
@@ -362,12 +362,12 @@ def _impacts(cm, tn, res, N, q, S, B, MU, ZM, ZP, H, t, t_sub, gap, closed, forc
             w = np.where(REL[k], 0.0, MUL[k])
             tang = RS[k, c:].reshape(c, -1) * MU[k][:, None] + FL[k].reshape(c, -1) * w[:, None]
             ratio_k = (tang / np.where(imp_k > 0, imp_k, 1.0)[:, None]).reshape(RS[k, c:].shape)
-        impacts += _impacts_at(cm, k, float(t_sub[k]), S[k], pm, pl, imp_k, tol, H[k], caught_law, at_node=False,
+        impacts += _impacts_at(cm, k, float(t_sub[k]), S[k], pm, pl, imp_k, tol, H[k], co, at_node=False,
                                ratios=ratio_k, leaves=(np.max(gap[k + 1:k + 3], axis=0) > tn.open_gap)
                                & (gap[k] > TOUCH_TOL * tn.scales_ell),
                                held=closed[k + 1] & (gap_sub_k(k) <= TOUCH_TOL * tn.scales_ell))
     for k in np.flatnonzero(np.any(force[1:N] > tol, axis=1)) + 1:
-        at = _impacts_at(cm, k, float(t[k]), q[k], pp[k] - 2 * half[k], pp[k], force[k], tol, H[k], caught_law,
+        at = _impacts_at(cm, k, float(t[k]), q[k], pp[k] - 2 * half[k], pp[k], force[k], tol, H[k], co,
                          at_node=True,
                          ratios=RS[k, :c] if k < N else np.zeros_like(RS[0, :c]),
                          held=closed[k] & closed[k + 1])
@@ -474,7 +474,7 @@ def _held_share(cm: ContactMechanics, x, p_after, held, kept=None) -> np.ndarray
 
 
 def _impacts_at(cm: ContactMechanics, k: int, t: float, x, p_before, p_after, impulses, tol: float, h: float,
-                caught_law: float,
+                co: ContactOptions,
                 at_node: bool, ratios=None, leaves=None, held=None) -> List[SubNodeImpact]:
     """The impacts at one point ``x`` (a sub-node, or a node where a flight landed) with the momenta on either
     side and the contacts' impulses there.  A contact whose impulse meets an arrival faster than a step's worth
@@ -503,7 +503,8 @@ def _impacts_at(cm: ContactMechanics, k: int, t: float, x, p_before, p_after, im
         return []
     vb, va = cm.dm.velocities(np.array([x, x]), np.array([p_before, p_after]))
     Jx = np.asarray(cm.system.gap(x)[1])
-    scale = IMPACT_SPEED_STEPS * np.abs(np.asarray(cm.acc_normal(x, vb, np.zeros(cm.nu))).reshape(-1)) * h
+    caught_law = co.caught_law
+    scale = co.march_options.impact_speed_steps * np.abs(np.asarray(cm.acc_normal(x, vb, np.zeros(cm.nu))).reshape(-1)) * h
     bounce = np.zeros(impulses.size, bool) if leaves is None else \
         np.asarray(leaves, bool) & (Jx @ vb < 0) & (Jx @ va > 0)
     if not any(-float(Jx[j] @ vb) > scale[j] or bounce[j] for j in js):
