@@ -104,7 +104,7 @@ class ContactControlTranscription(ContactTranscription):
         REL = P(nlp.parameter_index("release").reshape(L, c))
         nlp.equal_elements("exact_law", self._exact_law(cm),
                            [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), HA(k), self._argument("mul", c)(k),
-                            self._argument("fleft", cm.nfl)(k), REL, ZM(k), ZP(k), UA(k), BO,
+                            self._argument("fleft", cm.nfl)(k), REL, ZM(k), ZP(k), self._TA(k), UA(k), BO,
                             X(nlp.index("law_plus").reshape(L, c)), X(nlp.index("law_minus").reshape(L, c)),
                             np.array([self.scales_law])])
         nlp.minimize_elements("exact_law_penalty", cm.slack_penalty,
@@ -152,7 +152,7 @@ class ContactControlTranscription(ContactTranscription):
         nlp.equal_elements("final_momentum", self._end_row(cm),
                            [X(S[L - 1]), X(B[L - 1]), X(Q[L]), HA(L - 1), X(nlp.index("nu_end")),
                             P(nlp.parameter_index("pN")), X(nlp.index("fratio_end")) if cm.friction else np.zeros(0),
-                            ZP(L - 1), UA(L - 1)])
+                            ZP(L - 1), self._TA(L - 1), UA(L - 1)])
         nlp.minimize_elements("end_node_penalty", cm.product_penalty,
                               [X(Q[L]), X(nlp.index("nu_end")), rho, np.array([ell * pref / h])])
         nlp.declared_pairs.update({"end_node": c})
@@ -177,7 +177,7 @@ class ContactControlTranscription(ContactTranscription):
                                     lb=np.tile(lb, L), ub=np.tile(ub, L))
         if final is not None:
             nlp.minimize_elements("final", self.final_fn,
-                                  [X(S[L - 1]), X(B[L - 1]), X(Q[L]), HA(L - 1), ZP(L - 1), UA(L - 1)])
+                                  [X(S[L - 1]), X(B[L - 1]), X(Q[L]), HA(L - 1), ZP(L - 1), self._TA(L - 1), UA(L - 1)])
 
 
     def cost(self, V) -> float:
@@ -193,7 +193,7 @@ class ContactControlTranscription(ContactTranscription):
                                                                      *[z.T for z in zm + zp], *[u.T for u in U]))))
         if self.final_fn is not None:
             total += float(self.final_fn(S[-1], B[-1], Q[-1], self.steps(V)[-1], *[z[-1] for z in zp],
-                                         *[u[-1] for u in U]))
+                                         self.step_starts(self.steps(V))[-1], *[u[-1] for u in U]))
         return total
 
     # ------------------------------------------------------------------ a free final time, a free start
@@ -289,13 +289,13 @@ class ContactControlTranscription(ContactTranscription):
         sym, n, c = ca.SX.sym, cm.n, cm.c
         qs, b, q, h, nu, pN = sym("qs", n), sym("b"), sym("q", n), sym("h"), sym("nu", c), sym("pN", n)
         r = sym("r", c if cm.friction else 0)    # the end node's friction ratios (none without friction)
-        zp, u = sym("zp", cm.s), cm._U
-        pm = cm.p_node_minus(qs, b, q, h, zp, u)
+        zp, t, u = sym("zp", cm.s), sym("t"), cm._U        # (t: the last step's start)
+        pm = cm.p_node_minus(qs, b, q, h, zp, t, u)
         J = cm.system.gap(q)[1]
         imp = ca.mtimes(J.T, nu)
         if cm.friction:
             imp = imp + ca.mtimes(cm.system.tangent(q).T, r * nu)
-        return ca.Function("c_end", [qs, b, q, h, nu, pN, r, zp, u], [(pm + h * imp - pN) / h])
+        return ca.Function("c_end", [qs, b, q, h, nu, pN, r, zp, t, u], [(pm + h * imp - pN) / h])
 
     @staticmethod
     def _running(cm: ContactMechanics, running: ca.Function) -> ca.Function:
@@ -329,7 +329,6 @@ class ContactControlTranscription(ContactTranscription):
         """``φ(q_N, q̇_N, T)``, ``q̇_N = M⁻¹p_N⁻`` (the last part's momentum; no holonomic constraints here)."""
         sym, n, s = ca.SX.sym, cm.n, cm.s
         qs, b, q, h = sym("qs", n), sym("b"), sym("q", n), sym("h")
-        zp = [sym("zp", s)]
-        u = [cm._U]
-        v = ca.solve(cm.system.mass_matrix(q), cm.p_node_minus(qs, b, q, h, *zp, *u))
-        return ca.Function("c_final", [qs, b, q, h] + zp + u, [final(q, v, N * h)])
+        zp, t, u = sym("zp", s), sym("t"), cm._U          # (t: the last step's start)
+        v = ca.solve(cm.system.mass_matrix(q), cm.p_node_minus(qs, b, q, h, zp, t, u))
+        return ca.Function("c_final", [qs, b, q, h, zp, t, u], [final(q, v, N * h)])

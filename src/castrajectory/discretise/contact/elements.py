@@ -28,10 +28,6 @@ from ..lagrangians import GUESS_SUBSTEPS, DiscreteMechanics, rk4_step
 #: Weight of Σβ² (the split of impact-free steps), far below the penalties.
 SPLIT_WEIGHT = 1e-6
 
-#: the time the discrete mechanics' elements are given: a contact system is time-independent (refused otherwise,
-#: below), so its elements do not read it
-_T = 0.0
-
 
 class ContactMechanics:
     """CasADi element functions of the contact transcription for one system and scheme."""
@@ -59,7 +55,8 @@ class ContactMechanics:
         self._friction_sizes()
         x = self._symbols()
         self._kinematics = lambda xp, xx, xn, tau_m, tau_p, Zm, Zp: _sub_node_kinematics(  # noqa: E731
-            self._D1, self._D2, self._J, system.mass_matrix, self._C, self.e, xp, xx, xn, tau_m, tau_p, Zm, Zp)
+            self._D1, self._D2, self._J, system.mass_matrix, self._C, self.e, xp, xx, xn, tau_m, tau_p, Zm, Zp,
+            self._t)
         self._step_rows(x)
         self._friction_functions(x)
         self._law_rows(x)
@@ -68,7 +65,7 @@ class ContactMechanics:
         if not self.s and not self.nu:
             self._guess_functions(x)
         self._march_function(x.phi)
-        self.node_law_fn = ca.Function("c_node_law", [x.p0, x.qk, x.qs, x.b, x.h, x.zm, x.U],
+        self.node_law_fn = ca.Function("c_node_law", [x.p0, x.qk, x.qs, x.b, x.h, x.zm, x.t, x.U],
                                        [self.node_law(x.p0, x.qk, x.qs, x.b, x.h, x.zm)])
         self._normal_acceleration(x)
 
@@ -83,7 +80,13 @@ class ContactMechanics:
         self.constraint_row = ca.Function("c_con", [qc], [cfun(qc)[0] if m else ca.SX(0, 1)])
 
     def _momenta(self) -> None:
-        """The controls and the discrete momenta of a part of a step.
+        """The time, the controls and the discrete momenta of a part of a step.
+
+        Time: every element that holds a step's dynamics takes the step's start ``t_k`` (its first part starts there,
+        its second at ``t_k + αh``; the node row's previous part at ``t_k − (1 − α_{k−1})h_{k−1}``), the input before
+        the controls.  A contact system is time-independent (refused above), so no element reads it: the signature is
+        the discrete mechanics' (:class:`~castrajectory.discretise.lagrangians.DiscreteMechanics`), and callers pass
+        the steps' start times.
 
         Controls (optimal control through contact): one value per step, ``u_k``, constant over both parts of step k,
         the last input of every element whose rows hold the forces of a step, zero-size without controls (one
@@ -94,12 +97,14 @@ class ContactMechanics:
         dm = self.dm
         self.nu = dm.nu
         U = self._U = ca.SX.sym("u", dm.nu)
+        self._t = ca.SX.sym("t")
+        # (a, Z, b, the part's length, the part's start time[, its controls])
         if self.system.forced:
-            self._D1 = lambda a, Z, b, tau, u=U: -dm.p_plus(a, Z, b, tau, _T, u)  # noqa: E731
-            self._D2 = lambda a, Z, b, tau, u=U: dm.p_minus(a, Z, b, tau, _T, u)  # noqa: E731
+            self._D1 = lambda a, Z, b, tau, t0, u=U: -dm.p_plus(a, Z, b, tau, t0, u)  # noqa: E731
+            self._D2 = lambda a, Z, b, tau, t0, u=U: dm.p_minus(a, Z, b, tau, t0, u)  # noqa: E731
         else:
-            self._D1 = lambda a, Z, b, tau, u=None: dm.D1(a, Z, b, tau, _T)  # noqa: E731
-            self._D2 = lambda a, Z, b, tau, u=None: dm.D2(a, Z, b, tau, _T)  # noqa: E731
+            self._D1 = lambda a, Z, b, tau, t0, u=None: dm.D1(a, Z, b, tau, t0)  # noqa: E731
+            self._D2 = lambda a, Z, b, tau, t0, u=None: dm.D2(a, Z, b, tau, t0)  # noqa: E731
         self._J = lambda q: self.system.gap(q)[1]  # noqa: E731
 
     def _friction_sizes(self) -> None:
@@ -122,7 +127,7 @@ class ContactMechanics:
         """The symbols of the element functions, one namespace for the methods that build them."""
         n, c, m, s, sym = self.n, self.c, self.m, self.s, ca.SX.sym
         gapf = self.system.gap
-        x = SimpleNamespace(phi=lambda q: gapf(q)[0], U=self._U, Um=sym("um", self.nu))
+        x = SimpleNamespace(phi=lambda q: gapf(q)[0], U=self._U, Um=sym("um", self.nu), t=self._t)
         x.q0, x.qk, x.qs, x.qsm, x.qk1 = sym("q0", n), sym("q", n), sym("qs", n), sym("qsm", n), sym("qk1", n)
         x.b, x.bm, x.h, x.hp = sym("beta"), sym("betam"), sym("h"), sym("hp")
         x.mu, x.nu, x.p0 = sym("mu", c), sym("nu", c), sym("p0", n)
@@ -153,27 +158,27 @@ class ContactMechanics:
         """Every node and sub-node row of the program (the held step's and the march's are the same :meth:`node_row`
         and :meth:`sub_row`), the release rows and the stage rows."""
         D1, D2 = self._D1, self._D2
-        qk, qs, qk1, b, h, zm, zp, U = x.qk, x.qs, x.qk1, x.b, x.h, x.zm, x.zp, x.U
-        self.initial = ca.Function("c_initial", [x.q0, qs, b, x.p0, x.nu, h, x.lam, x.rho, zm, U],
+        qk, qs, qk1, b, h, zm, zp, t, U = x.qk, x.qs, x.qk1, x.b, x.h, x.zm, x.zp, x.t, x.U
+        self.initial = ca.Function("c_initial", [x.q0, qs, b, x.p0, x.nu, h, x.lam, x.rho, zm, t, U],
                                    [self.node_row(x.p0, x.q0, qs, b, x.nu, x.lam, h, x.frn, zm)])
-        self.node = ca.Function("c_node", [x.qsm, x.bm, qk, qs, b, x.nu, x.hp, h, x.lam, x.rho, x.zpm, zm, x.Um, U],
-                                [self.node_row(D2(x.qsm, x.zpm, qk, (1 - x.am) * x.hp, x.Um), qk, qs, b, x.nu, x.lam,
-                                               h, x.frn, zm)])
+        self.node = ca.Function("c_node", [x.qsm, x.bm, qk, qs, b, x.nu, x.hp, h, x.lam, x.rho, x.zpm, zm, t, x.Um, U],
+                                [self.node_row(D2(x.qsm, x.zpm, qk, (1 - x.am) * x.hp, t - (1 - x.am) * x.hp, x.Um),
+                                               qk, qs, b, x.nu, x.lam, h, x.frn, zm)])
         sub_row, x.r = self.sub_row(qk, qs, qk1, b, x.mu, x.lams, h, x.frs, zm, zp, x.mul, x.rll, x.rel)
         # the momenta on either side of q̃
-        x.pm, x.pp = D2(qk, zm, qs, x.a * h), -D1(qs, zp, qk1, (1 - x.a) * h)
-        self.sub = ca.Function("c_sub", [qk, qs, qk1, b, x.mu, h, x.mul, x.rl, x.lams, x.rho, zm, zp, U], [sub_row])
+        x.pm, x.pp = D2(qk, zm, qs, x.a * h, t), -D1(qs, zp, qk1, (1 - x.a) * h, t + x.a * h)
+        self.sub = ca.Function("c_sub", [qk, qs, qk1, b, x.mu, h, x.mul, x.rl, x.lams, x.rho, zm, zp, t, U], [sub_row])
         #: the contacts' normal velocities at the sub-node before its impact, after the released contacts' shares
-        self.release = ca.Function("c_release", [qk, qs, b, h] + x.left + [zm, U],
+        self.release = ca.Function("c_release", [qk, qs, b, h] + x.left + [zm, t, U],
                                    [self.release_row(qk, qs, b, h, x.mul, x.rll, x.rel, zm)])
         if self.friction:
             #: ... and the slip velocities there (against which a released contact's share sticks or slides)
-            self.left_slip = ca.Function("c_left_slip", [qk, qs, b, h] + x.left + [zm, U],
+            self.left_slip = ca.Function("c_left_slip", [qk, qs, b, h] + x.left + [zm, t, U],
                                          [self.left_velocity(qk, qs, b, h, x.mul, x.rll, x.rel, zm)])
         if self.s:
             #: the stage rows of both parts of a step (stage_rows) and the constraints at their stages
             lz = ca.SX.sym("lamz", 2 * self.ms)
-            self.stage = ca.Function("c_stage", [qk, qs, qk1, b, h, zm, zp, lz, U],
+            self.stage = ca.Function("c_stage", [qk, qs, qk1, b, h, zm, zp, lz, t, U],
                                      [self.stage_rows(qk, qs, qk1, b, h, zm, zp, lz)])
             if self.m:
                 self.stage_constraint = ca.Function("c_stage_con", [zm, zp], [self.stage_constraints(zm, zp)])
@@ -207,9 +212,9 @@ class ContactMechanics:
         qk, qs, qk1, b, mu, h, phi = x.qk, x.qs, x.qk1, x.b, x.mu, x.h, x.phi
         ell = ca.SX.sym("delta", self.c)
         self.impact_law, self.law_slack = self._law_functions(
-            "", [qk, qs, qk1, b, mu], [h, ell] + x.left + [x.zm, x.zp], mu * x.r * phi(qk1) / ell, [x.U])
+            "", [qk, qs, qk1, b, mu], [h, ell] + x.left + [x.zm, x.zp], mu * x.r * phi(qk1) / ell, [x.t, x.U])
         # the unweighted law and the next node's gaps, for the residual of real (not caught) impacts
-        self.law_check = ca.Function("c_law_check", [qk, qs, qk1, b, mu, h] + x.left + [x.zm, x.zp, x.U],
+        self.law_check = ca.Function("c_law_check", [qk, qs, qk1, b, mu, h] + x.left + [x.zm, x.zp, x.t, x.U],
                                      [mu * x.r, phi(qk1)])
         self.pair = ca.Function("c_pair", [qk, x.nu], [ca.vertcat(phi(qk), x.nu)])
         self.gap_row = ca.Function("c_gap", [qk], [phi(qk)])
@@ -219,12 +224,14 @@ class ContactMechanics:
     def _momentum_functions(self, x) -> None:
         """The momenta either side of a sub-node (``p_minus``, ``p_plus``) and at the nodes (``p_node_plus``,
         ``p_node_minus``)."""
-        D1, D2, U, h = self._D1, self._D2, x.U, x.h
-        self.p_minus = ca.Function("p_minus_sub", [x.qk, x.qs, x.b, h, x.zm, U], [x.pm])
-        self.p_plus = ca.Function("p_plus_sub", [x.qs, x.qk1, x.b, h, x.zp, U], [x.pp])
-        self.p_node_plus = ca.Function("p_node_plus", [x.qk, x.qs, x.b, h, x.zm, U], [-D1(x.qk, x.zm, x.qs, x.a * h)])
-        self.p_node_minus = ca.Function("p_node_minus", [x.qsm, x.bm, x.qk, h, x.zp, U],
-                                        [D2(x.qsm, x.zp, x.qk, (1 - x.am) * h)])
+        D1, D2, t, U, h = self._D1, self._D2, x.t, x.U, x.h
+        self.p_minus = ca.Function("p_minus_sub", [x.qk, x.qs, x.b, h, x.zm, t, U], [x.pm])
+        self.p_plus = ca.Function("p_plus_sub", [x.qs, x.qk1, x.b, h, x.zp, t, U], [x.pp])
+        self.p_node_plus = ca.Function("p_node_plus", [x.qk, x.qs, x.b, h, x.zm, t, U],
+                                       [-D1(x.qk, x.zm, x.qs, x.a * h, t)])
+        # (the step's second part, from its sub-node to the node that ends it: t is the step's start)
+        self.p_node_minus = ca.Function("p_node_minus", [x.qsm, x.bm, x.qk, h, x.zp, t, U],
+                                        [D2(x.qsm, x.zp, x.qk, (1 - x.am) * h, t + x.am * h)])
 
     def _guess_functions(self, x) -> None:
         """The event-located guess's functions (a two-point scheme without controls; a scheme with stages guesses with
@@ -243,10 +250,10 @@ class ContactMechanics:
         Rh = ca.vertcat(self.node_row(p0, qk, qs, 0.0, nu * mask, zm0, h),
                         self.sub_row(qk, qs, qk1, 0.0, mu * mask, zm0, h)[0],
                         mask * phi(qs) + (1 - mask) * mu, mask * phi(qk1) + (1 - mask) * nu)
-        self.held_step = ca.Function("held_step", [xh, qk, p0, mask, h], [Rh, ca.jacobian(Rh, xh)])
+        self.held_step = ca.Function("held_step", [xh, qk, p0, mask, h, x.t], [Rh, ca.jacobian(Rh, xh)])
         z = ca.SX(0, 1)
-        F = self._D2(qk, z, qs, 0.5 * h) + self._D1(qs, z, qk1, 0.5 * h)
-        self.free_sub = ca.Function("free_sub", [qk, qs, qk1, h], [F, ca.jacobian(F, qs)])
+        F = self._D2(qk, z, qs, 0.5 * h, x.t) + self._D1(qs, z, qk1, 0.5 * h, x.t + 0.5 * h)
+        self.free_sub = ca.Function("free_sub", [qk, qs, qk1, h, x.t], [F, ca.jacobian(F, qs)])
         v, tau = sym("v", n), sym("tau")
         acc = self.system.acceleration
         y, dt = ca.vertcat(qk, v), tau / GUESS_SUBSTEPS
@@ -299,8 +306,8 @@ class ContactMechanics:
         a, ms = 0.5 + b, self.ms
         sr = self.dm.stage_residual
         l1, l2 = (lz[:ms], lz[ms:]) if self.m else (ca.SX(0, 1), ca.SX(0, 1))
-        U = self._U
-        return ca.vertcat(sr(qk, zm, qs, l1, a * h, _T, U) * a, sr(qs, zp, qn, l2, (1 - a) * h, _T, U) * (1 - a))
+        U, t = self._U, self._t
+        return ca.vertcat(sr(qk, zm, qs, l1, a * h, t, U) * a, sr(qs, zp, qn, l2, (1 - a) * h, t + a * h, U) * (1 - a))
 
     def stage_constraints(self, zm, zp):
         """``c(Z_j) = 0`` at every stage of both parts of a step."""
@@ -343,7 +350,7 @@ class ContactMechanics:
         multipliers (no entries without constraints); ``zm`` the stages of the step's first part (none
         for a two-point scheme).  The transcription's initial and node rows, the held step and the march
         step are all this row."""
-        row = (p_in + self._D1(qk, self._z if zm is None else zm, qs, (0.5 + b) * h)) / h + ca.mtimes(self._J(qk).T, nu)
+        row = (p_in + self._D1(qk, self._z if zm is None else zm, qs, (0.5 + b) * h, self._t)) / h + ca.mtimes(self._J(qk).T, nu)
         if rho is not None:   # friction: the tangential force ρ ν along the slip directions D(q_k)
             row = row + ca.mtimes(self._D(qk).T, rho * self._per_component(nu))
         return row - ca.mtimes(self._C(qk).T, lam)
@@ -381,7 +388,7 @@ class ContactMechanics:
 
     def _before(self, qk, qs, b, h, mul, rl=None, rel=None, zm=None):
         """The velocity at the sub-node before its impact, ``Π(q̃)(p̃⁻ + S⁻_rel)`` (the released contacts' shares)."""
-        pm = self._D2(qk, self._z if zm is None else zm, qs, (0.5 + b) * h) + self._left(qs, rel * mul, rl)
+        pm = self._D2(qk, self._z if zm is None else zm, qs, (0.5 + b) * h, self._t) + self._left(qs, rel * mul, rl)
         return _tangent_velocity(self.system.mass_matrix(qs), self._C(qs), pm)
 
     def release_row(self, qk, qs, b, h, mul, rl=None, rel=None, zm=None):
@@ -403,7 +410,7 @@ class ContactMechanics:
         −D₁L_d(q_k, q̃_k, αh)`` (the node row makes ``p_k⁺ − p_in`` the node's impulse ``h∇φᵀν``).  A flight
         that lands exactly on a node (to rounding) has its impact there: the sub-nodes, strictly inside
         their steps, cannot time it, and the node's force ``ν`` would otherwise stop the arrival plastically."""
-        pp = -self._D1(qk, self._z if zm is None else zm, qs, (0.5 + b) * h)
+        pp = -self._D1(qk, self._z if zm is None else zm, qs, (0.5 + b) * h, self._t)
         return ca.mtimes(self._J(qk), _tangent_velocity(self.system.mass_matrix(qk), self._C(qk), pp + self.e * p_in))
 
     @property
@@ -502,7 +509,7 @@ class ContactMechanics:
                                                  sgn[:c] * release, leftfix, rfixl, vref, self.mu_f))
         self.march_step = ca.Function("march_step", [x, qk, p, h, ell, snu, smu, vref, bfix, t, held, closed, law, node,
                                                       fixed, mufix, nfixed, release, leftfix, mufixl, tslip, stick, sgn,
-                                                      fix, rfix, arrive, rfixl, self._U],
+                                                      fix, rfix, arrive, rfixl, self._t, self._U],
                                       [R, ca.jacobian(R, x)])
 
     def friction_rows(self, slip, rho, stick, sgn, fix, rfix, vref, muf=None):
@@ -561,7 +568,7 @@ class ContactMechanics:
         self.slack_penalty = ca.Function("c_slack_pen", [sp, sm, rho], [rho * ca.sum1(sp + sm)])
 
 
-def _sub_node_kinematics(D1, D2, J, Mf, C, e, xp, x, xn, tau_m, tau_p, Zm, Zp):
+def _sub_node_kinematics(D1, D2, J, Mf, C, e, xp, x, xn, tau_m, tau_p, Zm, Zp, t0):
     """Momenta on both sides of a sub-node ``x`` between ``xp`` and ``xn`` (sub-intervals ``tau_m``,
     ``tau_p``), ``p̃⁻ = D₂L_d(xp, x)`` and ``p̃⁺ = −D₁L_d(x, xn)``, and Newton's law residual
     ``r = ∇φ(x) Π(x) (p̃⁺ + e p̃⁻)`` (zero for every contact that obeys the law).
@@ -569,8 +576,8 @@ def _sub_node_kinematics(D1, D2, J, Mf, C, e, xp, x, xn, tau_m, tau_p, Zm, Zp):
     ``Π = M⁻¹ − M⁻¹Cᵀ(CM⁻¹Cᵀ)⁻¹CM⁻¹`` maps a momentum to the velocity tangent to the holonomic
     constraints (``M⁻¹`` without them): the law acts on the velocities the constraints allow, and for
     ``e = 1`` their kinetic energy ``½ v̄ᵀMv̄`` is the same on both sides of the impact."""
-    pm = D2(xp, Zm, x, tau_m)
-    pp = -D1(x, Zp, xn, tau_p)
+    pm = D2(xp, Zm, x, tau_m, t0)
+    pp = -D1(x, Zp, xn, tau_p, t0 + tau_m)
     return pm, pp, ca.mtimes(J(x), _tangent_velocity(Mf(x), C(x), pp + e * pm))
 
 

@@ -94,6 +94,11 @@ CLOSING_FRACTION = 0.125
 LOOKAHEAD = 1
 
 
+def _rows_of(values: np.ndarray):
+    """``rows -> element argument`` of one number per step (``(E, 1)`` for an array of rows, ``(1,)`` for one)."""
+    return lambda rows: values[rows][:, None] if np.ndim(rows) else np.array([values[rows]])
+
+
 def _v_zeno(cm: ContactMechanics, h: float, scales) -> float:
     """Slow-arrival speed under which the guess lets the body be caught (event_guess).
 
@@ -223,29 +228,31 @@ class ContactTranscription:
         # the stages of a step's first part (ZM) and second part (ZP), none for a two-point scheme
         ZM, ZP = self._argument("zs", 2 * s, slice(0, s)), self._argument("zs", 2 * s, slice(s, 2 * s))
         Hc = self.H.reshape(-1, 1)
-        # the step lengths as element arguments (numbers; an unknown h for a free final time, _step_argument)
+        # the step lengths as element arguments (numbers; an unknown h for a free final time, _step_argument), and the
+        # steps' start times (numbers: a contact system's elements do not read them)
         HA = self._HA = self._step_argument(nlp, Hc)
+        TA = self._TA = _rows_of(self.step_starts())
         k = np.arange(L)
         fn0, p0arg = self._initial_element(nlp)
         nlp.equal_elements("initial", fn0,
-                           [X(Q[0]), X(S[0]), X(B[0]), p0arg, X(NU[0]), HA(0), LAM(0), RHO(0), ZM(0), UA(0)])
+                           [X(Q[0]), X(S[0]), X(B[0]), p0arg, X(NU[0]), HA(0), LAM(0), RHO(0), ZM(0), TA(0), UA(0)])
         if L > 1:
             i = np.arange(1, L)
             nlp.equal_elements("node", cm.node, [X(S[i - 1]), X(B[i - 1]), X(Q[i]), X(S[i]), X(B[i]),
                                                  X(NU[i]), HA(i - 1), HA(i), LAM(i), RHO(i), ZP(i - 1), ZM(i),
-                                                 UA(i - 1), UA(i)])
+                                                 TA(i), UA(i - 1), UA(i)])
         nlp.equal_elements("sub", cm.sub, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), HA(k), MUL(k), FL(k),
-                                           LAMS(k), RHO(k), ZM(k), ZP(k), UA(k)])
+                                           LAMS(k), RHO(k), ZM(k), ZP(k), TA(k), UA(k)])
         # the normal (and slip) velocities before each sub-node's impact, after its first part's closing impulses:
         # zero for a contact released there (its share; the bounds are the march's modes, ContactNLP.solve_modes)
         nlp.inequality_elements("release", cm.release, [X(Q[k]), X(S[k]), X(B[k]), HA(k), MUL(k), FL(k), REL, ZM(k),
-                                                        UA(k)], lb=-np.inf, ub=np.inf)
+                                                        TA(k), UA(k)], lb=-np.inf, ub=np.inf)
         if cm.friction:
             nlp.inequality_elements("left_slip", cm.left_slip, [X(Q[k]), X(S[k]), X(B[k]), HA(k), MUL(k), FL(k), REL,
-                                                                ZM(k), UA(k)], lb=-np.inf, ub=np.inf)
+                                                                ZM(k), TA(k), UA(k)], lb=-np.inf, ub=np.inf)
         if s:
             nlp.equal_elements("stage", cm.stage, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), HA(k), ZM(k), ZP(k),
-                                                   self._argument("lam_stage", 2 * cm.ms)(k), UA(k)])
+                                                   self._argument("lam_stage", 2 * cm.ms)(k), TA(k), UA(k)])
             if m:
                 nlp.equal_elements("stage_constraint", cm.stage_constraint, [ZM(k), ZP(k)])
 
@@ -286,7 +293,7 @@ class ContactTranscription:
         LL = P(nlp.parameter_index("law_length").reshape(L, c))
         nlp.equal_elements("impact_law", cm.law_slack,
                            [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), X(SP[k]), X(SM[k]), HA(k), LL,
-                            MUL(k), FL(k), REL, ZM(k), ZP(k), np.array([self.scales_law]), UA(k)])
+                            MUL(k), FL(k), REL, ZM(k), ZP(k), np.array([self.scales_law]), self._TA(k), UA(k)])
 
     def _penalties(self) -> None:
         """The exact (ℓ1) penalties: the complementarity products and the impact law's slacks, and the split's weight."""
@@ -305,6 +312,12 @@ class ContactTranscription:
         # the pairs those penalties hold, per contact: gap ⟂ node force, sub-node gap ⟂ impulse, Newton's
         # law ⟂ impulse (the slacks), and the end node's gap ⟂ the last node force
         nlp.declared_pairs.update({"node": L * cm.c, "sub": L * cm.c, "impact_law": L * cm.c, "end": cm.c})
+
+    def step_starts(self, H=None) -> np.ndarray:
+        """The steps' start times ``t_k`` (k = 0..L−1) for the step lengths ``H`` (the grid's by default): the elements'
+        time argument."""
+        H = self.H if H is None else np.asarray(H, float)
+        return np.concatenate([[0.0], np.cumsum(H)[:-1]])
 
     def _argument(self, name: str, width: int, cols: slice = slice(None)):
         """``rows -> element argument`` of the per-step unknowns ``name`` (``width`` entries per step, the columns
@@ -366,9 +379,10 @@ class ContactTranscription:
         B = values["beta"].reshape(L)
         zm, zp = self._stages(values)
         U = self._controls(values)
+        T0 = self.step_starts(H)
         raw, nxt = (np.asarray(v).reshape(c, L).T for v in cm.law_check.map(L)(Q[:-1].T, S.T, Q[1:].T, B, MU.T, H,
                                                                                *self._law_extras(values), *[z.T for z in zm + zp],
-                                                                               *[u.T for u in U]))
+                                                                               T0[None, :], *[u.T for u in U]))
         nxt2 = np.vstack([nxt[1:], nxt[-1:]])
         leaves = (nxt > self.open_gap) | (nxt2 > self.open_gap)
         # ... if the contact arrived faster than the grid resolves (v_z = a h / e): a slower arrival
@@ -377,7 +391,7 @@ class ContactTranscription:
         ks = np.where(np.any(leaves & (MU > 0), axis=1))[0]
         if ks.size:
             pm = np.asarray(cm.p_minus.map(ks.size)(Q[ks].T, S[ks].T, B[ks], H[ks], *[z[ks].T for z in zm],
-                                                    *[u[ks].T for u in U])).T
+                                                    T0[None, ks], *[u[ks].T for u in U])).T
             for i, k in enumerate(ks):
                 J = np.asarray(cm.system.gap(S[k])[1])
                 vn = J @ np.linalg.solve(np.asarray(cm.system.mass_matrix(S[k])), pm[i])
@@ -390,10 +404,10 @@ class ContactTranscription:
             if not (nxt[k, j] > self.open_gap or nxt2[k, j] > self.open_gap):
                 continue
             p_in = np.asarray(cm.p_node_minus(S[k - 1], B[k - 1], Q[k], H[k - 1], *[z[k - 1] for z in zp],
-                                              *[u[k - 1] for u in U])).reshape(-1)
+                                              T0[k - 1], *[u[k - 1] for u in U])).reshape(-1)
             J = np.asarray(cm.system.gap(Q[k])[1])[j]
             if -(J @ np.linalg.solve(np.asarray(cm.system.mass_matrix(Q[k])), p_in)) > self.v_zeno:
-                r = float(np.asarray(cm.node_law_fn(p_in, Q[k], S[k], B[k], H[k], *[z[k] for z in zm],
+                r = float(np.asarray(cm.node_law_fn(p_in, Q[k], S[k], B[k], H[k], *[z[k] for z in zm], T0[k],
                                                     *[u[k] for u in U])).reshape(-1)[j])
                 raw[k, j] = max(abs(raw[k, j]), abs(H[k] * NU[k, j] * r))
                 leaves[k, j] = True
@@ -432,7 +446,8 @@ class ContactTranscription:
         zm, zp = self._stages(values)
         law = np.asarray(cm.impact_law.map(L)(Q[:-1].T, S.T, Q[1:].T, B, MU.T, H,
                                               self._law_length.T, *self._law_extras(values),
-                                              *[z.T for z in zm + zp], *[u.T for u in self._controls(values)])).reshape(c, L).T
+                                              *[z.T for z in zm + zp], self.step_starts(H)[None, :],
+                                              *[u.T for u in self._controls(values)])).reshape(c, L).T
         # Newton's law of every impact after which the body leaves, unweighted (_raw_law)
         raw, leaves = self._raw_law(values)
         law = np.where(self.law_exempt, 0.0, law)

@@ -123,7 +123,7 @@ def _local_marches(P: Problem, V, hint, steps, done):
     h, p0, U = _start_of(prog, V, q0)
     Q, S, B = V["q"].reshape(N + 1, n), V["qs"].reshape(N, n), V["beta"].reshape(N)
     zp = _zparts(prog, V, 1)
-    pin = np.asarray(cm.p_node_minus.map(N)(S.T, B, Q[1:].T, h, *zp, U.T)).T
+    pin = np.asarray(cm.p_node_minus.map(N)(S.T, B, Q[1:].T, h, *zp, prog.step_starts(np.full(N, h))[None, :], U.T)).T
     starts = _starts(cm, V, N, hint)
     worst, marches = 0.0, [None] * N
     for k in steps:

@@ -424,7 +424,7 @@ def _march_end(cm, prog, point, values):
     zp = cm.stage_parts(np.asarray(point.get("zs", np.zeros((N, 0)))).reshape(N, -1)[-1])[1]
     U = [prog._controls(values)[0][-1]]
     pg = np.asarray(cm.p_node_minus(np.asarray(point["qs"]).reshape(N, n)[-1], float(np.asarray(point["beta"])[-1]),
-                                    Qg[-1], h, *zp, *U)).reshape(-1)
+                                    Qg[-1], h, *zp, (N - 1) * h, *U)).reshape(-1)
     return Qg[-1], pg
 
 
@@ -555,8 +555,9 @@ def _answer(system, P: Problem, res: NLPResult, rounds, controls, C: Certificate
                            + [float(times[k]) for k in range(N) if node[k, j] and NU[k, j] > 0.0]) for j in range(c)]
     # velocities: the mean of the one-sided momenta at each node (the node's impulse split between them)
     ua = [U.T]
-    pp = np.asarray(cm.p_node_plus.map(N)(Q[:-1].T, S.T, B, h, *_zparts(prog, V, 0), *ua)).T
-    pm = np.asarray(cm.p_node_minus.map(N)(S.T, B, Q[1:].T, h, *_zparts(prog, V, 1), *ua)).T
+    T0 = prog.step_starts(np.full(N, h))[None, :]
+    pp = np.asarray(cm.p_node_plus.map(N)(Q[:-1].T, S.T, B, h, *_zparts(prog, V, 0), T0, *ua)).T
+    pm = np.asarray(cm.p_node_minus.map(N)(S.T, B, Q[1:].T, h, *_zparts(prog, V, 1), T0, *ua)).T
     p = np.vstack([p0[None, :], 0.5 * (pp[1:] + pm[:-1]), pm[-1:]])
     if prog.end_velocity:            # the end node's momentum after its own force: the given final one
         p[-1] = np.asarray(prog.nlp.parameter_value("pN"), float).reshape(-1)

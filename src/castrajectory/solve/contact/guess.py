@@ -53,16 +53,16 @@ def _hold(cm: ContactMechanics, q, v, active, iterations: int = 4):
     return q, v
 
 
-def _held_step(cm: ContactMechanics, q, p, active, h, v, iterations: int = 20):
-    """One step of the discrete motion with the ``active`` contacts held closed (``ContactMechanics.held_step``,
-    Newton from the free flight): ``(q̃, q_{k+1}, ν, μ, p_{k+1}⁻)``, or ``None`` if Newton does not converge
+def _held_step(cm: ContactMechanics, q, p, active, h, v, t, iterations: int = 20):
+    """One step (starting at the time ``t``) of the discrete motion with the ``active`` contacts held closed
+    (``ContactMechanics.held_step``, Newton from the free flight): ``(q̃, q_{k+1}, ν, μ, p_{k+1}⁻)``, or ``None`` if Newton does not converge
     or a held contact would pull (``ν`` or ``μ`` < 0: it is released, the caller flies freely)."""
     n, c = cm.n, cm.c
     mask = active.astype(float)
     x = np.concatenate([q + 0.5 * h * v, q + h * v, np.zeros(c), np.zeros(c)])
     scale = 1.0 + float(np.max(np.abs(p)))
     for _ in range(iterations):
-        r, Jr = cm.held_step(x, q, p, mask, h)
+        r, Jr = cm.held_step(x, q, p, mask, h, t)
         r = np.asarray(r).reshape(-1)
         try:
             dx = np.linalg.solve(np.asarray(Jr), -r)
@@ -71,7 +71,7 @@ def _held_step(cm: ContactMechanics, q, p, active, h, v, iterations: int = 20):
         x = x + dx
         if np.max(np.abs(dx)) <= 1e-12 * (1.0 + float(np.max(np.abs(x)))):
             break
-    r = np.asarray(cm.held_step(x, q, p, mask, h)[0]).reshape(-1)
+    r = np.asarray(cm.held_step(x, q, p, mask, h, t)[0]).reshape(-1)
     # momentum rows (divided by h) and gap rows (lengths) each to their own scale
     length = 1.0 + float(np.max(np.abs(q)))
     if not np.all(np.isfinite(x)) or np.max(np.abs(r[:2 * n])) > 1e-9 * scale / h or \
@@ -80,7 +80,7 @@ def _held_step(cm: ContactMechanics, q, p, active, h, v, iterations: int = 20):
     qs, qn, nu, mu = x[:n], x[n:2 * n], x[2 * n:2 * n + c], x[2 * n + c:]
     if np.any(nu[active] < 0) or np.any(mu[active] < 0):
         return None
-    p_next = np.asarray(cm.p_node_minus(qs, 0.0, qn, h, NO_STAGES, NO_CONTROL)).reshape(-1)
+    p_next = np.asarray(cm.p_node_minus(qs, 0.0, qn, h, NO_STAGES, t, NO_CONTROL)).reshape(-1)
     return qs, qn, nu, np.where(active, mu, 0.0), p_next
 
 
@@ -230,7 +230,7 @@ def _rest(cm: ContactMechanics, Q, S, B, MU, event, h: float, p0, tol: float) ->
         F = cm.free_sub.map(kk.size)
         Z = 0.5 * (Q[kk] + Q[kk + 1])
         for _ in range(4):
-            r, Jr = F(Q[kk].T, Z.T, Q[kk + 1].T, h)
+            r, Jr = F(Q[kk].T, Z.T, Q[kk + 1].T, h, (kk * h)[None, :])
             r = np.asarray(r).T
             Jr = np.asarray(Jr).reshape(n, kk.size, n).transpose(1, 0, 2)
             Z = Z - np.linalg.solve(Jr, r[..., None])[..., 0]
@@ -243,7 +243,7 @@ def _rest(cm: ContactMechanics, Q, S, B, MU, event, h: float, p0, tol: float) ->
     for k in np.where(~event & (np.min(gq[:-1], axis=1) <= tol) & (np.min(gq[1:], axis=1) <= tol))[0]:
         S[k] = 0.5 * (Q[k] + Q[k + 1])
         r = np.asarray(cm.sub(Q[k], S[k], Q[k + 1], B[k], np.zeros(c), h, np.zeros(c), rl0, lam0, rho0, NO_STAGES, NO_STAGES,
-                              NO_CONTROL)).reshape(-1) * h
+                              k * h, NO_CONTROL)).reshape(-1) * h
         Js = np.asarray(gapf(S[k])[1])
         act = np.asarray(gapf(S[k])[0]).reshape(-1) <= tol
         if np.any(act):
@@ -254,10 +254,10 @@ def _rest(cm: ContactMechanics, Q, S, B, MU, event, h: float, p0, tol: float) ->
     touching = np.where(np.min(gq, axis=1) <= tol)[0]
     for k in touching:
         if k == 0:
-            r = np.asarray(cm.initial(Q[0], S[0], B[0], p0, np.zeros(c), h, lam0, rho0, NO_STAGES, NO_CONTROL)).reshape(-1)
+            r = np.asarray(cm.initial(Q[0], S[0], B[0], p0, np.zeros(c), h, lam0, rho0, NO_STAGES, 0.0, NO_CONTROL)).reshape(-1)
         else:
             r = np.asarray(cm.node(S[k - 1], B[k - 1], Q[k], S[k], B[k], np.zeros(c), h, h, lam0, rho0, NO_STAGES,
-                                   NO_STAGES, NO_CONTROL, NO_CONTROL)).reshape(-1)
+                                   NO_STAGES, k * h, NO_CONTROL, NO_CONTROL)).reshape(-1)
         J = np.asarray(gapf(Q[k])[1])
         act = gq[k] <= tol
         sol = np.linalg.lstsq(J[act].T, -r, rcond=None)[0]
@@ -274,13 +274,13 @@ def _while_held(cm: ContactMechanics, q, v, p_held, active, h: float, k: int, ro
     S, B, MU, event = rows
     Mf, gapf = cm.system.mass_matrix, cm.system.gap
     pk = p_held if p_held is not None else np.asarray(Mf(q)) @ v
-    step = _held_step(cm, q, pk, active, h, v)
+    step = _held_step(cm, q, pk, active, h, v, k * h)
     if step is not None:
         phn = np.asarray(gapf(step[1])[0]).reshape(-1)
         closing = ~active & (phn < -tol)
         if np.any(closing):
             # another contact closes during the held step: caught too, held from the step's middle
-            step = _held_step(cm, q, pk, active | closing, h, v)
+            step = _held_step(cm, q, pk, active | closing, h, v, k * h)
             if step is not None:
                 phn = np.asarray(gapf(step[1])[0]).reshape(-1)
                 active = active | closing

@@ -63,7 +63,7 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales,
     g_q = np.asarray(cm.system.gap(q)[0]).reshape(-1)
     held_prev = g_q <= tol
     rows["q"].append(q)
-    k, span = 0, 8
+    k, span, t = 0, 8, 0.0
     while k < L:
         touch = g_q <= tol
         # (with friction the held contacts' slots keep the modes they ended the previous step in: sticking or
@@ -74,7 +74,7 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales,
             act = [bool(held[j % cm.c]) and cm.mu_f[j % cm.c] > 0 for j in range(2 * cm.c)]
             fm = [(step.fprev[i] if step.fprev[i] not in (FREE, FIX) else STICK) if act[i] else FREE
                   for i in range(2 * cm.c)]
-        step.uarg = [U[k]]
+        step.uarg, step.t0 = [U[k]], t
         if L - k >= 2 and np.all(~touch | held_prev) and starts is None:
             got = _chunk(step, rows, q, p, h, held, fm, k, min(span, L - k), span, U, tol)
             if got is not None:
@@ -82,14 +82,14 @@ def discrete_march(cm: ContactMechanics, q0, p0, L: int, h: float, scales,
                 if i:
                     q, p, g_q = after
                     held_prev = held.copy()
-                    k += i
+                    k, t = k + i, t + i * h
                     continue
         got = _one_step(step, rows, q, p, h, k, g_q, held_prev, tol, max_splits,
                         starts[k] if starts is not None else None, trace)
         if got is None:
             return None
         q, p, g_q, held_prev = got
-        k += 1
+        k, t = k + 1, t + h
     return _arrays(cm, rows)
 
 
@@ -148,6 +148,7 @@ def _one_step(step: _Step, rows, q, p, h, k: int, g_q, held_prev, tol: float, ma
     pending = [h]
     while pending:
         hk = pending.pop(0)
+        t_part = step.t0                # (this part's start; a halved step's second part starts after its first)
         out = _march_step(step, q, p, hk, g_q, held_prev, tol, finest=hk < h / 2 ** max_splits * 1.5,
                           start=start if hk == h else None)
         if out == "split":
@@ -162,7 +163,8 @@ def _one_step(step: _Step, rows, q, p, h, k: int, g_q, held_prev, tol: float, ma
         step.fprev = list(fmodes)
         qn = out["q"]
         p = np.asarray(cm.p_node_minus(out["qs"], out["beta"], qn, hk,
-                                       *cm.stage_parts(out["zs"])[1], *step.uarg)).reshape(-1)
+                                       *cm.stage_parts(out["zs"])[1], t_part, *step.uarg)).reshape(-1)
+        step.t0 = t_part + hk
         held_prev = np.array([m in _modes.CLOSES for m in modes])
         q, g_q = qn, gn
     return q, p, g_q, held_prev

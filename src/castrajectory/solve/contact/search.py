@@ -346,7 +346,7 @@ def _slip_turn(step: _Step, q, p, h, modes, x, fmodes):
     fm = list(fmodes)
     qn = x[n:2 * n]
     pn = np.asarray(cm.p_node_minus(x[:n], float(x[2 * n]), qn, h, *cm.stage_parts(x[cm.layout["zs"]])[1],
-                                    *step.uarg)).reshape(-1)
+                                    step.t0, *step.uarg)).reshape(-1)
     v0 = cm.dm.velocities(q[None, :], p[None, :])[0]
     v1 = cm.dm.velocities(qn[None, :], pn[None, :])[0]
     s0 = np.asarray(cm.system.tangent(q)).reshape(-1, n) @ v0
@@ -557,7 +557,7 @@ def _before_impact(step: _Step, q, p, h, x, modes):
             return None
         qs, b = x[:n], float(x[2 * n])
         # the momentum before the impact: p̃⁻ and the released contacts' shares (ContactMechanics.release_row)
-        pm = np.asarray(cm.p_minus(q, qs, b, h, *cm.stage_parts(x[cm.layout["zs"]])[0], *step.uarg)).reshape(-1)
+        pm = np.asarray(cm.p_minus(q, qs, b, h, *cm.stage_parts(x[cm.layout["zs"]])[0], step.t0, *step.uarg)).reshape(-1)
         sh = x[cm.layout["mul"]] * releases(modes)
         if np.any(sh):
             pm = pm + np.asarray(cm.system.gap(qs)[1]).T @ sh

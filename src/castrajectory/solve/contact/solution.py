@@ -315,9 +315,10 @@ def _node_momenta(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, 
         RHO = res.values["fratio"][:NL * 2 * c * d].reshape(NL, 2 * c * d)[:, :c * d]   # the node forces' ratios
         Dn = np.asarray(sysm.tangent.map(N + 1)(q.T)).reshape(c * d, N + 1, n).transpose(1, 0, 2)
         half += 0.5 * np.einsum("kcn,kc->kn", Dn, RHO[:N + 1] * np.repeat(force, d, axis=1))
-    U = tn._controls(res.values)[0]
-    pp = np.asarray(cm.p_node_plus.map(N)(q[:-1].T, S.T, B, H[:N], *[z.T for z in ZM], U[:N].T)).T
-    pN = np.asarray(cm.p_node_minus(S[-1], B[-1], q[-1], H[N - 1], *[z[-1] for z in ZP], U[N - 1])).reshape(1, -1)
+    U, T0 = tn._controls(res.values)[0], tn.step_starts()
+    pp = np.asarray(cm.p_node_plus.map(N)(q[:-1].T, S.T, B, H[:N], *[z.T for z in ZM], T0[None, :N], U[:N].T)).T
+    pN = np.asarray(cm.p_node_minus(S[-1], B[-1], q[-1], H[N - 1], *[z[-1] for z in ZP], T0[N - 1],
+                                    U[N - 1])).reshape(1, -1)
     p = np.vstack([pp - half[:N], pN + half[N:]])
     p[0] = p0
     return p, pp, half, force, closed, gap, nu_full
@@ -346,10 +347,10 @@ def _impacts(cm, tn, res, N, q, S, B, MU, ZM, ZP, H, t, t_sub, gap, closed, forc
     FL = FL[..., 0] if fd == 1 else FL
     gap_subs = np.asarray(sysm.gap.map(N)(S.T)[0]).reshape(c, N).T
     gap_sub_k = lambda k: gap_subs[k]  # noqa: E731  (the gaps at step k's sub-node)
-    U = tn._controls(res.values)[0]
+    U, T0 = tn._controls(res.values)[0], tn.step_starts()
     for k in np.flatnonzero(np.any((MU > tol) | (MUL > tol), axis=1)):
-        pm = np.asarray(cm.p_minus(q[k], S[k], B[k], H[k], *[z[k] for z in ZM], U[k])).reshape(-1)
-        pl = np.asarray(cm.p_plus(S[k], q[k + 1], B[k], H[k], *[z[k] for z in ZP], U[k])).reshape(-1)
+        pm = np.asarray(cm.p_minus(q[k], S[k], B[k], H[k], *[z[k] for z in ZM], T0[k], U[k])).reshape(-1)
+        pl = np.asarray(cm.p_plus(S[k], q[k + 1], B[k], H[k], *[z[k] for z in ZP], T0[k], U[k])).reshape(-1)
         sh = np.where(REL[k], MUL[k], 0.0)
         if np.any(sh):
             pm = pm + np.asarray(sysm.gap(S[k])[1]).T @ sh

@@ -37,6 +37,8 @@ class _Step:
         #: the control of the step marched (optimal control through contact): the last input of every element
         #: that holds the step's forces (an empty one without controls)
         self.uarg = [np.zeros(0)]
+        #: the start time of the step marched (the march sets it; the input before the controls)
+        self.t0 = 0.0
 
     def chunk(self, K: int, q, p, h, held, fmodes=None, x0=None, controls=None):
         """``K`` steps from ``(q, p)`` in one call, the ``held`` contacts held (mode H) and the others
@@ -57,6 +59,7 @@ class _Step:
             fz = [st, sg, ca.DM.zeros(cm.nfs), ca.DM.zeros(cm.nfr), ca.DM.zeros(cm.nfs // 2), ca.DM.zeros(cm.nfl)]
             xs = ca.MX.sym("x0", cm.nx)
             us = [ca.MX.sym("u", cm.nu)]
+            ts = ca.MX.sym("t")             # the step's start (a mapped input, one per step of the chunk)
             v = ca.solve(cm.system.mass_matrix(qs), ps)
             qm_, qn_ = qs + 0.5 * hs * v, qs + hs * v
             # the flight's guess of the positions (and stages), the previous step's forces, ratios, multipliers
@@ -65,24 +68,25 @@ class _Step:
                            ca.DM.zeros(cm.layout["mul"].stop - cm.layout["mul"].start + self.nf // 2))
             for _ in range(self.o.chunk_newton):
                 r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero, zero, zero, zero, zero, zero, zero, zero,
-                               zero, *fz, *us)
+                               zero, *fz, ts, *us)
                 x = x - ca.solve(J, r)
             # the size of one more Newton step: the rows' residual in units of the unknowns
             r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero, zero, zero, zero, zero, zero, zero, zero, zero,
-                           *fz, *us)
+                           *fz, ts, *us)
             res = ca.mmax(ca.fabs(ca.solve(J, r)))
             qn, qt = x[n:2 * n], x[:n]
             zp = [x[cm.layout["zs"]][cm.s:]]
             slip = cm.slip_row(qs, qt, qn, 0.0, hs, zero) if self.nf else ca.DM.zeros(1)
-            one = ca.Function("chunk_step", [qs, ps, xs, hs, hm] + sc + [st, sg] + us,
-                              [qn, cm.p_node_minus(qt, 0.0, qn, hs, *zp, *us), x, cm.gap_row(qt), cm.gap_row(qn), res, slip])
+            one = ca.Function("chunk_step", [qs, ps, xs, hs, hm] + sc + [st, sg, ts] + us,
+                              [qn, cm.p_node_minus(qt, 0.0, qn, hs, *zp, ts, *us), x, cm.gap_row(qt), cm.gap_row(qn), res, slip])
             self._chunks[key] = one.mapaccum("chunk_steps", K, [0, 1, 2], [0, 1, 2])
         fargs = self._friction_modes(fmodes)[:2]
         x0 = np.zeros(self.cm.nx) if x0 is None else x0
         # (the controls of the chunk's steps as columns, one per step: a mapped input)
         uargs = [np.asarray(controls, float).reshape(K, self.cm.nu).T]
+        ts = (self.t0 + h * np.arange(K))[None, :]       # (the chunk's steps' start times, one column each)
         out = self._chunks[key](q, p, x0, h, held.astype(float), self.ell, self.pref / h, self.pref, self.vref, *fargs,
-                              *uargs)
+                              ts, *uargs)
         return tuple(np.asarray(a) for a in out)
 
     def _friction_modes(self, fmodes):
@@ -157,7 +161,7 @@ class _Step:
         size0 = 1.0 + float(np.max(np.abs(x)))
         # (the inputs other than x packed into one vector, once: a call of two numeric inputs and one output costs half
         # of one with the step's 28 inputs and two outputs; docs/notes.md)
-        args = np.concatenate([np.asarray(a, float).reshape(-1, order="F") for a in (*args, *self.uarg)])
+        args = np.concatenate([np.asarray(a, float).reshape(-1, order="F") for a in (*args, self.t0, *self.uarg)])
         nx = x.size
         for _ in range(self.o.newton_iter):
             out = self.packed(x, args).full().reshape(-1)
