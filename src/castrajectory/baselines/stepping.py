@@ -46,6 +46,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 from typing import Optional, Tuple
+from types import SimpleNamespace
 
 import casadi as ca
 import numpy as np
@@ -278,23 +279,10 @@ def implicit_euler(system: LagrangianSystem, q0, qd0, T: float, N: int) -> Stepp
 
 
 # ----------------------------------------------------------------------------- variational integrator
-def march(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str = "midpoint") -> Stepped:
-    """The variational integrator of ``scheme`` (see :mod:`castrajectory.discretise.lagrangians`) marched step by step.
-
-    Step 0 solves the discrete Legendre condition
-    ``p0 + D₁L_d(q0, Z0, q1) = 0`` (with ``p0 = ∂L/∂q̇(q0, q̇0)``) for ``(Z0, q1)``;
-    step k ≥ 1 solves the DEL equation at node k for ``(Z_k, q_{k+1})``.  With
-    stages (galerkin4) the stage equations ``∂L_d/∂Z_k = 0`` join in; with
-    constraints the multipliers ``λ_k`` (and stage ``ν_k``) are unknowns too,
-    and ``c(q_{k+1}) = 0`` (and ``c(Z_k) = 0``) close the system.  Newton
-    starts from linear extrapolation.  Velocities come from the nodal momenta
-    ``p_k⁺ = −D₁L_d(q_k, q_{k+1})`` (``p_N⁻ = D₂L_d(q_{N−1}, q_N)``).
-    """
-    q0, qd0, T, N = _check(system, q0, qd0, T, N)
-    one_of("scheme", scheme, tuple(SCHEMES))
-    h = T / N
-    t0 = time.perf_counter()
-    dm = DiscreteMechanics(system, scheme)
+def _vi_functions(dm: DiscreteMechanics, h: float, N: int) -> SimpleNamespace:
+    """The variational integrator's step functions: the first step's Newton solve ``first((q0, p0)) -> y0``, the march
+    of the others ``march_fn`` (a mapaccum of N − 1 steps over the state ``S = (q_{k−1}, y_{k−1}, t_k)``), and the rows
+    ``r0``, ``r`` with their unknowns ``y = (Z, q_next, lam, nu)`` and parameters, for the corrections."""
     n, s, m, ns = dm.n, dm.s, dm.m, dm.scheme.stages
     nmult = m + m * ns  # node multipliers lam, stage multipliers nu
 
@@ -329,6 +317,29 @@ def march(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str = "mi
     guess = ca.vertcat(Zg, 2 * qk_ - qm_, mult_)
     step = ca.Function("vi_step", [Sx], [ca.vertcat(qk_, newton(guess, Sx), Sx[n + ny] + h)])
     march_fn = step.mapaccum("vi_march", N - 1)
+    return SimpleNamespace(first=first, march_fn=march_fn, r0=r0, r=r, y=y, par0=par0, S=S, nmult=nmult)
+
+
+def march(system: LagrangianSystem, q0, qd0, T: float, N: int, scheme: str = "midpoint") -> Stepped:
+    """The variational integrator of ``scheme`` (see :mod:`castrajectory.discretise.lagrangians`) marched step by step.
+
+    Step 0 solves the discrete Legendre condition
+    ``p0 + D₁L_d(q0, Z0, q1) = 0`` (with ``p0 = ∂L/∂q̇(q0, q̇0)``) for ``(Z0, q1)``;
+    step k ≥ 1 solves the DEL equation at node k for ``(Z_k, q_{k+1})``.  With
+    stages (galerkin4) the stage equations ``∂L_d/∂Z_k = 0`` join in; with
+    constraints the multipliers ``λ_k`` (and stage ``ν_k``) are unknowns too,
+    and ``c(q_{k+1}) = 0`` (and ``c(Z_k) = 0``) close the system.  Newton
+    starts from linear extrapolation.  Velocities come from the nodal momenta
+    ``p_k⁺ = −D₁L_d(q_k, q_{k+1})`` (``p_N⁻ = D₂L_d(q_{N−1}, q_N)``).
+    """
+    q0, qd0, T, N = _check(system, q0, qd0, T, N)
+    one_of("scheme", scheme, tuple(SCHEMES))
+    h = T / N
+    t0 = time.perf_counter()
+    dm = DiscreteMechanics(system, scheme)
+    n, s, m = dm.n, dm.s, dm.m
+    vi = _vi_functions(dm, h, N)
+    first, march_fn, r0, r, y, par0, S, nmult = vi.first, vi.march_fn, vi.r0, vi.r, vi.y, vi.par0, vi.S, vi.nmult
     build = time.perf_counter() - t0
 
     t0 = time.perf_counter()

@@ -91,7 +91,7 @@ class ControlTranscription:
         Ui = nlp.index("u").reshape(N, nu)
         self.Q, self.Zi, self.Ui = Q, Zi, Ui
         self._zarg = (lambda rows: X(Zi[rows])) if s else (lambda rows: np.zeros(0))  # noqa: E731
-        self._uarg = lambda rows: X(Ui[rows]) if nu else np.zeros((np.size(rows), 0) if np.ndim(rows) else 0)  # noqa: E731
+        self._uarg = lambda rows: X(Ui[rows])  # noqa: E731  (an OptimalControl refuses a system without controls)
         self._targ = lambda rows: _node_times(self, rows)  # noqa: E731
 
     def _dynamics(self) -> None:
@@ -150,7 +150,7 @@ class ControlTranscription:
 
     def _paths(self, path) -> None:
         """The path constraints (where they hold: :meth:`_path_nodes`)."""
-        dm, nlp, N, nu = self.dm, self.nlp, self.N, self.dm.nu
+        dm, nlp, N = self.dm, self.nlp, self.N
         Q, Ui, hh = self.Q, self.Ui, self.hh
         zarg, uarg, targ = self._zarg, self._uarg, self._targ
         # path constraints: see _path_nodes
@@ -159,7 +159,7 @@ class ControlTranscription:
             if at_nodes:
                 k = np.arange(N + 1)
                 ku = np.minimum(k, N - 1)
-                args = [X(Q[k]), X(Ui[ku][:, :dm.nu1]) if nu else np.zeros(0), targ(k)]
+                args = [X(Q[k]), X(Ui[ku][:, :dm.nu1]), targ(k)]
                 nlp.inequality_elements(f"path{j}", fn, args, lb=np.tile(lb, N + 1), ub=np.tile(ub, N + 1))
             if tau.size:
                 k = np.arange(N)
@@ -230,7 +230,7 @@ class ControlTranscription:
         tau = np.asarray(dm.scheme.nodes, float)
         rows = []
         for i in nodes:
-            ui = u[(i % dm.nqu) * dm.nu1:(i % dm.nqu + 1) * dm.nu1] if nu else ca.SX(0, 1)
+            ui = u[(i % dm.nqu) * dm.nu1:(i % dm.nqu + 1) * dm.nu1]
             rows.append(fn(qs[i], ui, t + tau[i] * h))
         return ca.Function("path_steps", [a, Z, b, t, h, u], [ca.vertcat(*rows)])
 

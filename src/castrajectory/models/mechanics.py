@@ -625,15 +625,14 @@ class LagrangianSystem:
     def force(self) -> ca.Function:
         """The non-conservative force ``Q(q, q̇, t)``."""
         if self.controls:  # a controlled system's force takes the controls after the time: Q(q, q̇, t, u)
-            return self._get("Q", lambda: ca.Function("Q", [self.q, self.qd, self.t, self.control_vector],
-                                                      [self.force_expr()]))
+            return self.actuated_force
         return self._get("Q", lambda: self._timed(ca.Function("Q", [self.q, self.qd, self.t], [self.force_expr()])))
 
     @property
     def actuated_force(self) -> ca.Function:
         """``Q(q, q̇, t, u)`` with the controls ``u`` an input whether or not the system has any (an empty column
         without controls, an unread ``t`` without time): the one signature the discrete elements call."""
-        return self._get("Qu", lambda: ca.Function("Qu", [self.q, self.qd, self.t, self.control_vector],
+        return self._get("Qu", lambda: ca.Function("Q", [self.q, self.qd, self.t, self.control_vector],
                                                    [self.force_expr()]))
 
     @property

@@ -301,34 +301,9 @@ class NLP(Program):
             f_total = f_total + ca.Function("f0", [ps], [f_expr])(Pm)
             g_expr_by_slice = {}
         elif expr_rows or self._f is not None:
-            ge = ca.vertcat(*[g for _, g in expr_rows]) if expr_rows else ca.SX(0, 1)
-            rows_of_ge = np.concatenate([np.arange(s.start, s.stop) for s, _ in expr_rows]) if expr_rows \
-                else np.zeros(0, dtype=np.int64)
-            le = ca.SX.sym("le", ge.numel())
-            sf = ca.SX.sym("sf")
-            # Differentiate with respect to the variables the expressions use (positions zpos, increasing),
-            # not all of them: the cost then does not grow with the size of the element families.
-            z, zpos = self._used_variables(ca.vertcat(f_expr, ge))
-            Xz = _gather(Xm, zpos)
-            Je = ca.jacobian(ge, z)
-            ge_grad = ca.gradient(f_expr, z)
-            fe = ca.Function("expr", [z, ps],
-                             [f_expr, ge, _nz(Je), _nz(ge_grad)])
-            fv, gv, jv, gfv = fe(Xz, Pm)
+            fv, g_expr_by_slice = self._expression_derivatives(Xm, Pm, lam_f, lam_g, ps, expr_rows, f_expr,
+                                                               exact_hessian, jac, hess, grad)
             f_total = f_total + fv
-            jr, jc = (np.asarray(v, dtype=np.int64) for v in Je.sparsity().get_triplet())
-            jac.append(Contribution(jv, rows_of_ge[jr], zpos[jc]))
-            if exact_hessian:
-                He = ca.triu(ca.hessian(sf * f_expr + ca.dot(le, ge), z)[0])
-                fh = ca.Function("expr_hess", [z, ps, sf, le], [_nz(He)])
-                lam_e = lam_g[rows_of_ge.tolist()] if rows_of_ge.size else ca.MX(0, 1)
-                hr, hc = (np.asarray(v, dtype=np.int64) for v in He.sparsity().get_triplet())
-                # He is the upper triangle in z; zpos is increasing, so it maps to the global upper triangle.
-                hess.append(Contribution(fh(Xz, Pm, lam_f, lam_e), zpos[hr], zpos[hc]))
-            gr, _ = ge_grad.sparsity().get_triplet()
-            grad.append(Contribution(gfv, zpos[np.asarray(gr, dtype=np.int64)], np.zeros(len(gr), dtype=np.int64)))
-            g_expr_by_slice = {s.start: gv[i0:i0 + (s.stop - s.start)]
-                               for (s, _), i0 in zip(expr_rows, np.cumsum([0] + [s.stop - s.start for s, _ in expr_rows]))}
         else:
             g_expr_by_slice = {}
 
@@ -360,6 +335,39 @@ class NLP(Program):
                                     ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"]),
         }
         return Xm, Pm, f_total, G, funcs
+
+    def _expression_derivatives(self, Xm, Pm, lam_f, lam_g, ps, expr_rows, f_expr, exact_hessian, jac, hess, grad):
+        """The expression part of the program (rows and objective written as expressions, not element families):
+        ordinary SX automatic differentiation, its Jacobian, Hessian and gradient contributions appended to ``jac``,
+        ``hess`` and ``grad``.  ``(the objective's value, the rows' values by their first row)``."""
+        ge = ca.vertcat(*[g for _, g in expr_rows]) if expr_rows else ca.SX(0, 1)
+        rows_of_ge = np.concatenate([np.arange(s.start, s.stop) for s, _ in expr_rows]) if expr_rows \
+            else np.zeros(0, dtype=np.int64)
+        le = ca.SX.sym("le", ge.numel())
+        sf = ca.SX.sym("sf")
+        # Differentiate with respect to the variables the expressions use (positions zpos, increasing),
+        # not all of them: the cost then does not grow with the size of the element families.
+        z, zpos = self._used_variables(ca.vertcat(f_expr, ge))
+        Xz = _gather(Xm, zpos)
+        Je = ca.jacobian(ge, z)
+        ge_grad = ca.gradient(f_expr, z)
+        fe = ca.Function("expr", [z, ps],
+                         [f_expr, ge, _nz(Je), _nz(ge_grad)])
+        fv, gv, jv, gfv = fe(Xz, Pm)
+        jr, jc = (np.asarray(v, dtype=np.int64) for v in Je.sparsity().get_triplet())
+        jac.append(Contribution(jv, rows_of_ge[jr], zpos[jc]))
+        if exact_hessian:
+            He = ca.triu(ca.hessian(sf * f_expr + ca.dot(le, ge), z)[0])
+            fh = ca.Function("expr_hess", [z, ps, sf, le], [_nz(He)])
+            lam_e = lam_g[rows_of_ge.tolist()] if rows_of_ge.size else ca.MX(0, 1)
+            hr, hc = (np.asarray(v, dtype=np.int64) for v in He.sparsity().get_triplet())
+            # He is the upper triangle in z; zpos is increasing, so it maps to the global upper triangle.
+            hess.append(Contribution(fh(Xz, Pm, lam_f, lam_e), zpos[hr], zpos[hc]))
+        gr, _ = ge_grad.sparsity().get_triplet()
+        grad.append(Contribution(gfv, zpos[np.asarray(gr, dtype=np.int64)], np.zeros(len(gr), dtype=np.int64)))
+        g_expr_by_slice = {s.start: gv[i0:i0 + (s.stop - s.start)]
+                           for (s, _), i0 in zip(expr_rows, np.cumsum([0] + [s.stop - s.start for s, _ in expr_rows]))}
+        return fv, g_expr_by_slice
 
     def _build_assembled(self, options, verbose, key):
         """Build the solver from element derivatives (see :mod:`castrajectory.solve.assembly`)."""

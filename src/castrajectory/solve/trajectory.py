@@ -306,6 +306,56 @@ COARSE_TOL = 1e-7
 WINDOW_MAX_ITER = 10
 
 
+def _window_guess(tn: TrajectoryNLP, guess, current, pK, K: int, L: int, omega: float, guess_substeps):
+    """A horizon window's guess (:func:`_solve_level`): the motion integrated from the window's start state ``(q_K,
+    p_K)`` where the step resolves it, else the level's guess shifted to the window's start, with the multipliers
+    solved so far (``current``: the nodes, node and stage multipliers assembled so far)."""
+    dm, N, h = tn.dm, tn.N, tn.h
+    n, s, m, st = dm.n, dm.s, dm.m, dm.scheme.stages
+    Qc, Lc, Nc = current
+    tK = tn.t0 + K * h
+    if h * omega <= GUESS_SUBSTEPS * GUESS_H_OMEGA:  # the motion from the window's start state
+        vK = dm.velocities(Qc[K][None, :], pK[None, :], tK)[0]
+        wg = _flow_guess(dm, Qc[K], vK, h, L, tK, guess_substeps)
+        if wg is not None:
+            return wg
+    shift = Qc[K] - np.asarray(guess["q"]).reshape(N + 1, n)[K]
+    wg = {"q": (np.asarray(guess["q"]).reshape(N + 1, n)[K:K + L + 1] + shift).reshape(-1)}
+    wg["q"][:n] = Qc[K]
+    if s:
+        wg["Z"] = (np.asarray(guess["Z"]).reshape(N, s)[K:K + L] + np.tile(shift, st)).reshape(-1)
+    if m:
+        wg["lam"] = Lc[K:K + L].reshape(-1).copy()
+        if s:
+            wg["nu"] = Nc[K:K + L].reshape(-1).copy()
+    return wg
+
+
+def _take_window(tn: TrajectoryNLP, r: NLPResult, guess, current, K: int, L: int) -> np.ndarray:
+    """A converged window's values written into the assembly ``current`` (nodes, stages, node and stage multipliers;
+    the nodes after it follow the level's guess, shifted to the window's end); the momentum ``p_{K+L}⁻`` at its end,
+    the next window's start."""
+    dm, N, h = tn.dm, tn.N, tn.h
+    n, s, m, st = dm.n, dm.s, dm.m, dm.scheme.stages
+    Qc, Zc, Lc, Nc = current
+    qw = r.values["q"].reshape(L + 1, n)
+    Qc[K + 1:K + L + 1] = qw[1:]
+    Qc[K + L + 1:] = np.asarray(guess["q"]).reshape(N + 1, n)[K + L + 1:] + \
+        (qw[-1] - np.asarray(guess["q"]).reshape(N + 1, n)[K + L])
+    if s:
+        Zc[K:K + L] = r.values["Z"].reshape(L, s)
+    if m:
+        lw = r.values["lam"].reshape(L, m).copy()
+        if K > 0:
+            lw[0] /= 2.0  # window start weight w vs interior node weight 2w
+        Lc[K:K + L] = lw
+        if s:
+            Nc[K:K + L] = r.values["nu"].reshape(L, st * m)
+    Zlast = Zc[K + L - 1] if s else np.zeros(0)
+    return np.asarray(dm.p_minus(Qc[K + L - 1], Zlast, Qc[K + L], h, tn.t0 + (K + L - 1) * h,
+                                 np.zeros(0))).reshape(-1)
+
+
 def _solve_level(tn: TrajectoryNLP, guess, options, verbose, log: List[Level], allow_windows: bool,
                  final: bool = True, omega: float = math.inf, windows_first: bool = False,
                  windows_after_failure: bool = True, first_max_iter: int = None,
@@ -356,40 +406,12 @@ def _solve_level(tn: TrajectoryNLP, guess, options, verbose, log: List[Level], a
             new_build = False
         w = cache[L]
         w.set_start(Qc[K], pK, tK)
-        wg = None
-        if h * omega <= GUESS_SUBSTEPS * GUESS_H_OMEGA:  # the motion from the window's start state
-            vK = dm.velocities(Qc[K][None, :], pK[None, :], tK)[0]
-            wg = _flow_guess(dm, Qc[K], vK, h, L, tK, guess_substeps)
-        if wg is None:  # the level's guess, shifted to the window's start
-            shift = Qc[K] - np.asarray(guess["q"]).reshape(N + 1, n)[K]
-            wg = {"q": (np.asarray(guess["q"]).reshape(N + 1, n)[K:K + L + 1] + shift).reshape(-1)}
-            wg["q"][:n] = Qc[K]
-            if s:
-                wg["Z"] = (np.asarray(guess["Z"]).reshape(N, s)[K:K + L] + np.tile(shift, st)).reshape(-1)
-            if m:
-                wg["lam"] = Lc[K:K + L].reshape(-1).copy()
-                if s:
-                    wg["nu"] = Nc[K:K + L].reshape(-1).copy()
+        wg = _window_guess(tn, guess, (Qc, Lc, Nc), pK, K, L, omega, guess_substeps)
         r = w.solve(wg, options=window_opts, verbose=verbose)
         log.append(Level(N, K + L, r.solver_status, r.iterations, r.build_time_s if new_build else 0.0, r.solve_time_s,
                          w.function_time_s))
         if r.success:
-            qw = r.values["q"].reshape(L + 1, n)
-            Qc[K + 1:K + L + 1] = qw[1:]
-            Qc[K + L + 1:] = np.asarray(guess["q"]).reshape(N + 1, n)[K + L + 1:] + \
-                (qw[-1] - np.asarray(guess["q"]).reshape(N + 1, n)[K + L])
-            if s:
-                Zc[K:K + L] = r.values["Z"].reshape(L, s)
-            if m:
-                lw = r.values["lam"].reshape(L, m).copy()
-                if K > 0:
-                    lw[0] /= 2.0  # window start weight w vs interior node weight 2w
-                Lc[K:K + L] = lw
-                if s:
-                    Nc[K:K + L] = r.values["nu"].reshape(L, st * m)
-            Zlast = Zc[K + L - 1] if s else np.zeros(0)
-            pK = np.asarray(dm.p_minus(Qc[K + L - 1], Zlast, Qc[K + L], h, tn.t0 + (K + L - 1) * h,
-                                       np.zeros(0))).reshape(-1)
+            pK = _take_window(tn, r, guess, (Qc, Zc, Lc, Nc), K, L)
             K, L = K + L, min(2 * L, cap)
         else:
             L //= 2

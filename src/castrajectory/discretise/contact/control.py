@@ -61,10 +61,9 @@ class ContactControlTranscription(ContactTranscription):
 
     def _control_blocks(self):
         """``(Q, S, B, k, Hc, rho, HA, UA, ZM, ZP)``: the index blocks and arguments the control problem's rows take."""
-        nlp, L, s = self.nlp, self.L, self.cm.s
         Q, S, B = self._blocks()[:3]
-        return (Q, S, B, np.arange(L), self.H.reshape(-1, 1), P(nlp.parameter_index("rho")), self._HA, self._UA,
-                self._argument("zs", 2 * s, slice(0, s)), self._argument("zs", 2 * s, slice(s, 2 * s)))
+        return (Q, S, B, np.arange(self.L), self.H.reshape(-1, 1), P(self.nlp.parameter_index("rho")), self._HA,
+                self._UA, self._ZM, self._ZP)
 
     def _launch_and_law(self) -> None:
         """The launch and the catch pairs, and Newton's law of a bounce, exactly (see the comments)."""

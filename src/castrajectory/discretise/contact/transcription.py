@@ -226,7 +226,7 @@ class ContactTranscription:
         nlp.parameter("release", L * c, value=0.0)
         REL = P(nlp.parameter_index("release").reshape(L, c))
         # the stages of a step's first part (ZM) and second part (ZP), none for a two-point scheme
-        ZM, ZP = self._argument("zs", 2 * s, slice(0, s)), self._argument("zs", 2 * s, slice(s, 2 * s))
+        ZM, ZP = self._ZM, self._ZP = self._argument("zs", 2 * s, slice(0, s)), self._argument("zs", 2 * s, slice(s, 2 * s))
         Hc = self.H.reshape(-1, 1)
         # the step lengths as element arguments (numbers; an unknown h for a free final time, _step_argument), and the
         # steps' start times (numbers: a contact system's elements do not read them)
@@ -278,11 +278,10 @@ class ContactTranscription:
     def _contact_rows(self) -> None:
         """The holonomic constraints at the nodes and sub-nodes, the gaps, and Newton's law with its slacks."""
         cm, nlp, L = self.cm, self.nlp, self.L
-        c, s = cm.c, cm.s
+        c = cm.c
         Q, S, B, MU, _, SP, SM = self._blocks()
         k = np.arange(L)
-        HA, UA = self._HA, self._UA
-        ZM, ZP = self._argument("zs", 2 * s, slice(0, s)), self._argument("zs", 2 * s, slice(s, 2 * s))
+        HA, UA, ZM, ZP = self._HA, self._UA, self._ZM, self._ZP
         MUL, FL = self._argument("mul", c), self._argument("fleft", cm.nfl)
         REL = P(nlp.parameter_index("release").reshape(L, c))
         if cm.m:

@@ -271,6 +271,40 @@ def spin_drop_oracle(sc, h: float):
     return out
 
 
+def _impact_friction_system(sc):
+    """``(system, q0, v0)`` of a bouncing friction scene."""
+    from ...models import collision as col
+    fam = sc["family"]
+    if fam == "spin-drop":
+        system = col.rolling_body(sc["body"], 1.0, sc["radius"], sc["mu"], G, restitution=sc["e"])
+        return (system, np.array([0.0, sc["radius"] + sc["height"], 0.0]),
+                np.array([sc["vx"], 0.0, sc["omega"]]))
+    if fam == "rectangle-friction":
+        system = col.rectangle_drop(1.0, sc["width"], sc["height"], G, sc["e"], friction=sc["mu"])
+    else:
+        system = col.bowl(1.0, sc["width"], sc["height"], G, sc["e"], sc["radius"], friction=sc["mu"])
+    return system, np.array([sc["x"], sc["y"], sc["angle"]]), np.array([sc["vx"], sc["vy"], sc["omega"]])
+
+
+def _first_arrival(system, ref, imps, T: float, h: float):
+    """The first impact against the event-driven reference ``ref``: ``(how it was compared, its time error)`` --
+    "none" (no reference impact in the horizon: the answer lists none either), "near T", "slow" (an arrival too slow
+    to be an impact on the grid: the solver's ``MarchOptions.impact_speed_steps`` at the battery's defaults) or
+    "compared" (its time error, ``inf`` where the answer's first impact is at another contact); NaN where not timed."""
+    from ...solve.contact import MarchOptions
+    ev = ref.events[0] if ref.events else None
+    if ev is None or ev.t > T:
+        return "none", (math.inf if imps and imps[0].t <= T - ORACLE_MARGIN_STEPS * h else 0.0)
+    if ev.t > T - ORACLE_MARGIN_STEPS * h:
+        return "near T", math.nan
+    J = np.asarray(system.gap(ev.q)[1])
+    an = np.abs(J @ np.asarray(system.acceleration(ev.q, ev.v_before)).reshape(-1))
+    slow = ARRIVAL_MARGIN * MarchOptions().impact_speed_steps * an * h
+    if all(-float(J[j] @ ev.v_before) > slow[j] for j in ev.contacts):
+        return "compared", (abs(imps[0].t - ev.t) if imps and imps[0].contact in ev.contacts else math.inf)
+    return "slow", math.nan
+
+
 def run_impact_friction_scene(sc) -> dict:
     """One bouncing friction scene (``spin-drop``, ``rectangle-friction``, ``bowl-friction``) solved and checked:
     no penetration; the Coulomb residuals of the held contacts (the cone everywhere, maximal dissipation and
@@ -281,23 +315,11 @@ def run_impact_friction_scene(sc) -> dict:
     the flight before the first impact does not depend on μ), unless that arrival is too slow to be an impact on
     the grid (``first_arrival`` says "slow"); the complementarity residual as the old battery's."""
     from ...baselines.events import event_driven
-    from ...models import collision as col
     from ...solve import trajectory
-    from ...solve.contact import MarchOptions
-    speed_steps = MarchOptions().impact_speed_steps        # (the solver's, at the battery's default settings)
 
     fam, T, N = sc["family"], sc["T"], sc["N"]
     h = T / N
-    if fam == "spin-drop":
-        system = col.rolling_body(sc["body"], 1.0, sc["radius"], sc["mu"], G, restitution=sc["e"])
-        q0 = np.array([0.0, sc["radius"] + sc["height"], 0.0])
-        v0 = np.array([sc["vx"], 0.0, sc["omega"]])
-    elif fam == "rectangle-friction":
-        system = col.rectangle_drop(1.0, sc["width"], sc["height"], G, sc["e"], friction=sc["mu"])
-        q0, v0 = np.array([sc["x"], sc["y"], sc["angle"]]), np.array([sc["vx"], sc["vy"], sc["omega"]])
-    else:
-        system = col.bowl(1.0, sc["width"], sc["height"], G, sc["e"], sc["radius"], friction=sc["mu"])
-        q0, v0 = np.array([sc["x"], sc["y"], sc["angle"]]), np.array([sc["vx"], sc["vy"], sc["omega"]])
+    system, q0, v0 = _impact_friction_system(sc)
     t0 = time.perf_counter()
     tr = trajectory.solve_initial_value(system, q0, v0, T, N)
     wall = time.perf_counter() - t0
@@ -337,24 +359,8 @@ def run_impact_friction_scene(sc) -> dict:
     ref = event_driven(system, q0, v0, T)
     out.update(reference_error=reference_error(tr, ref, T, h, ell), reference_reason=ref.reason)
     if fam != "spin-drop":
-        ev = ref.events[0] if ref.events else None
-        out.setdefault("oracle_impacts", int(ev is not None))
-        t_ref = math.nan
-        if ev is None or ev.t > T:
-            first = "none"      # then the answer lists none either
-            t_ref = math.inf if imps and imps[0].t <= T - ORACLE_MARGIN_STEPS * h else 0.0
-        elif ev.t > T - ORACLE_MARGIN_STEPS * h:
-            first = "near T"
-        else:
-            J = np.asarray(system.gap(ev.q)[1])
-            an = np.abs(J @ np.asarray(system.acceleration(ev.q, ev.v_before)).reshape(-1))
-            slow = ARRIVAL_MARGIN * speed_steps * an * h
-            if all(-float(J[j] @ ev.v_before) > slow[j] for j in ev.contacts):
-                first = "compared"
-                t_ref = abs(imps[0].t - ev.t) if imps and imps[0].contact in ev.contacts else math.inf
-            else:
-                first = "slow"
-        out["first_arrival"] = first
+        out.setdefault("oracle_impacts", int(bool(ref.events)))
+        out["first_arrival"], t_ref = _first_arrival(system, ref, imps, T, h)
         if not math.isnan(t_ref):
             terr = t_ref if math.isnan(terr) else max(terr, t_ref)
     out["impact_time_error"] = terr
