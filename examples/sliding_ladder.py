@@ -4,8 +4,9 @@ A uniform rod of length L and mass m leans against the wall x = 0 at the angle �
 let go from rest.  While both ends touch, it has one degree of freedom: its centre moves on the circle
 of radius L/2 about the corner, and θ̈ = −(3g / 2L) cos θ, θ̇² = (3g/L)(sin θ₀ − sin θ).  The wall's force
 vanishes, and the top leaves the wall, when sin θ = (2/3) sin θ₀ (the classical lift-off).  Until then
-both contacts are *held*, and the contact forces act at the nodes: every scheme is second order there
-today, which the error estimate has to find out by itself (its three grids show it).
+both contacts are *held*: their forces act at the scheme's stages, so the held phase has the scheme's order, and
+the lift-off is timed inside its step where the wall's force reaches zero (``problems/sliding_ladder.py`` is the
+same scene with its closed form).
 
     castrajectory system examples/sliding_ladder.py --scheme galerkin4 --n 400
 """

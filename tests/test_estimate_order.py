@@ -39,35 +39,45 @@ def within10(est, true):
 
 
 @pytest.mark.parametrize("scheme", list(ct.schemes()))
-def test_held_contact_estimate_measures_second_order_for_every_scheme(scheme):
-    """Wherever a contact is held, every scheme is second order today: the grids must show it."""
-    N = 40 if ct.schemes()[scheme] > 4 else 80
+def test_held_contact_estimate_measures_the_schemes_order_for_every_scheme(scheme):
+    """A held contact acts at the scheme's stages (docs/derivations.md, "Contact trajectories", §7): the ladder held on
+    the wall and the floor converges at the scheme's order, and the grids show it (measured: midpoint and trapezoid on
+    N = 80, order 2.00, 2.22e-6 for a true 2.22e-6; the fourth-order schemes on N = 20, 3.99, 4.42e-9 for 4.40e-9; the
+    sixth-order ones 5.99, 1.45e-13 for 1.21e-13; the higher orders at the solver's floor, 5.4e-14 for 5.8e-14).
+    Every scheme was second order here before."""
+    order = ct.schemes()[scheme]
+    N = 80 if order == 2 else 20
     r = ct.simulate(LADDER["system"](), LADDER["q0"], LADDER["qd0"], T=0.4, N=N, scheme=scheme)
     assert r.success, r.message
     true = float(np.max(np.abs(r.q[:, 2] - _ladder_theta(r.t))))
     e = r.error_estimate
-    assert e.reliable and e.regime == "asymptotic"
-    assert e.observed_order == pytest.approx(2.0, abs=0.1) and e.order_used <= 2.1
+    assert e.reliable
+    if order <= 6:
+        assert e.regime == "asymptotic" and e.observed_order == pytest.approx(order, abs=0.3)
+    else:
+        assert true < 1e-12
     assert within10(e.errors["q"], true), (e.errors["q"], true)
     # the constraint the ladder obeys while it holds both contacts: its centre is L/2 from the corner
     x, y = r.q[:, 0], r.q[:, 1]
-    assert np.max(np.abs(np.hypot(x, y) - 0.5 * LADDER["L"])) <= 10 * e.errors["q"]
+    assert np.max(np.abs(np.hypot(x, y) - 0.5 * LADDER["L"])) <= max(10 * e.errors["q"], 1e-13)
 
 
-def test_rtol_on_held_contact_is_met_only_where_the_true_error_is_below_it():
-    """The issue's case: galerkin8 with rtol 1e-6 stopped at once, at an estimate of 2.8e-9 for a true 2e-7."""
-    r = ct.simulate(LADDER["system"](), LADDER["q0"], LADDER["qd0"], T=0.4, N=40, scheme="galerkin8", rtol=1e-6)
+def test_rtol_on_held_contact_is_met_where_the_true_error_is_below_it():
+    """galerkin4 asked for 1e-9 from N = 10: the grids' fourth order predicts the grid, and the answer's true error
+    is below the tolerance.  (When a held contact was second order, galerkin8 with rtol 1e-6 stopped at once, at an
+    estimate of 2.8e-9 for a true 2e-7.)"""
+    r = ct.simulate(LADDER["system"](), LADDER["q0"], LADDER["qd0"], T=0.4, N=10, scheme="galerkin4", rtol=1e-9)
     assert r.success, r.message
     e = r.error_estimate
     true = float(np.max(np.abs(r.q[:, 2] - _ladder_theta(r.t))))
-    assert e.relative <= 1e-6 and e.observed_order == pytest.approx(2.0, abs=0.1)
-    assert true <= 3.0 * 1e-6 * e.scales["q"], (true, e.scales["q"])
+    assert e.relative <= 1e-9 and len(r.t) - 1 > 10
+    assert true <= 3.0 * 1e-9 * e.scales["q"], (true, e.scales["q"])
 
 
 def test_rtol_says_at_once_when_the_observed_order_cannot_reach_it():
-    """A second-order answer asked for 1e-12 within n_max = 400: the grids' order predicts the grid
+    """A second-order answer (midpoint) asked for 1e-12 within n_max = 400: the grids' order predicts the grid
     needed, and the run fails without solving past N."""
-    r = ct.simulate(LADDER["system"](), LADDER["q0"], LADDER["qd0"], T=0.4, N=40, scheme="galerkin8", rtol=1e-12,
+    r = ct.simulate(LADDER["system"](), LADDER["q0"], LADDER["qd0"], T=0.4, N=40, scheme="midpoint", rtol=1e-12,
                     n_max=400)
     assert not r.success and r.status == "Tolerance_Not_Reached"
     assert "predicts N" in r.message and r.error_estimate.levels[-1] == 40

@@ -13,14 +13,15 @@ from typing import List, Optional
 from .scene import (
     SCENES, ArgumentParser, Outcome, accuracy, add_accuracy, add_control_flags, add_plot, add_scheme,
     add_trajectory_flags,
-    check_animation_path, contact_outcome, control_outcome, finite_flags, fmt, friction_lines, friction_summary,
-    ipopt_options, jsonable, run_scene, scene_parser, solve_trajectory,
+    check_animation_path, contact_intervals, contact_outcome, control_outcome, finite_flags, fmt, friction_lines,
+    friction_summary, interval_lines, ipopt_options, jsonable, run_scene, scene_parser, solve_trajectory, state_keys,
     status_line, stdout_to_stderr, table, trajectory_outcome)
 
 #: The problem scripts' plumbing, re-exported from :mod:`.scene`, and the console command.
 __all__ = ["SCENES", "ArgumentParser", "Outcome", "accuracy", "add_accuracy", "add_control_flags", "add_plot",
-           "add_scheme", "add_trajectory_flags", "check_animation_path", "contact_outcome", "control_outcome", "finite_flags", "fmt",
-           "friction_lines", "friction_summary", "ipopt_options", "jsonable", "run_scene",
+           "add_scheme", "add_trajectory_flags", "check_animation_path", "contact_intervals", "contact_outcome",
+           "control_outcome", "finite_flags", "fmt", "friction_lines", "friction_summary", "interval_lines",
+           "ipopt_options", "jsonable", "run_scene", "state_keys",
            "scene_parser", "solve_trajectory", "status_line",
            "stdout_to_stderr", "table", "trajectory_outcome", "main"]
 

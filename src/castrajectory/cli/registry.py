@@ -138,6 +138,34 @@ SCENES: List[Scene] = [
     Scene("sliding_block", "contact", report=(
         Entry("sliding_block", ("--incline", "0.3", "--v0", "2", "--n", "200"),
               "sliding block launched up a 0.3 rad incline, μ = 0.5: it stops and sticks (Coulomb friction)", True),
+    ), stability=(
+        # a held contact over a long horizon on coarse steps: the block stays at rest to rounding (measured 0 m)
+        Case("contact", "long resting contact (a block at rest for 10⁴ s on 10⁴ steps)", "sliding_block",
+             ("--v0", "0", "--T", "10000", "--n", "10000"),
+             contact_check((("error_vs_exact", 1e-12),), "position against rest (m)")),
+    )),
+    Scene("sliding_ladder", "contact", report=(
+        Entry("sliding_ladder", (), "a ladder sliding down a frictionless wall: both contacts held at the stages, its "
+              "lift-off from the wall timed inside its step (galerkin4)", True),
+    ), stability=(
+        # the wall's force reaches zero with the gap growing as (t − t*)³ after it (measured galerkin4, N = 50:
+        # lift-off 3.7e-11 s, θ before it 3.3e-10 rad)
+        Case("contact", "grazing release: the ladder leaves the wall, its gap growing as (t − t*)³", "sliding_ladder",
+             ("--n", "50"), contact_check((("lift_off_error", 4e-9), ("theta_error", 3e-8)),
+                                         "lift-off time (s), θ before it (rad)")),
+    )),
+    Scene("disk_in_bowl", "contact", report=(
+        Entry("disk_in_bowl", (), "a disk rolling in a bowl (μ = 1): the held contact's force and friction at the "
+              "stages, fourth order with galerkin4", True),
+        Entry("disk_in_bowl_slip", ("--mu", "0.05", "--T", "3", "--n", "300"),
+              "the same disk with μ = 0.05: it slides, its slip reverses twice, stops and starts again, each event "
+              "timed inside its step"),
+    ), stability=(
+        # stick–slip at a small μ (measured galerkin4, N = 300: configuration 5.1e-10 m, events 1.8e-10 s)
+        Case("contact", "stick–slip at μ = 0.05: two reversals, a stop and a start in 3 s", "disk_in_bowl",
+             ("--mu", "0.05", "--T", "3", "--n", "300"),
+             contact_check((("error_vs_reference", 5e-8), ("slip_event_error", 2e-8)),
+                           "configuration (m), slip events (s)")),
     )),
     Scene("rolling_ball", "contact", report=(
         Entry("rolling_ball", ("--n", "200"), "a sphere launched sliding at 2 m/s without spin, μ = 0.3: it rolls "

@@ -188,6 +188,7 @@ def trajectory_outcome(title: str, system, run, extra: Optional[dict] = None,
              f"final state: {final}",
              energy_line,
              *(extra_lines or []),
+             *interval_lines(system, run),
              status_line(run.status, run)]
 
     state = state_keys(system, run)
@@ -241,6 +242,34 @@ def state_keys(system, run) -> dict:
             releases = getattr(getattr(run, "detail", None), "releases", None)
         if releases is not None:
             out["releases"] = [{**r.as_dict(), "name": names[r.contact]} for r in releases]
+        iv = contact_intervals(system, run)
+        if iv is not None:
+            out["contact_intervals"] = {name: [{"from": a, "to": b, "state": st} for a, b, st in pieces]
+                                        for name, pieces in iv.items()}
+    return out
+
+
+def contact_intervals(system, run) -> Optional[dict]:
+    """A contact answer's intervals of one state per contact, by the contact's name (``None`` for any other)."""
+    iv = getattr(run, "intervals", None)
+    if iv is None:
+        iv = getattr(getattr(run, "detail", None), "intervals", None)
+    if iv is None or system.contact is None:
+        return None
+    return dict(zip(system.contact.names, iv))
+
+
+def interval_lines(system, run) -> List[str]:
+    """One summary line per contact: its states over time, each with its interval (``contact floor: held 0–0.42 s,
+    open 0.42–0.5 s``), at most eight intervals shown."""
+    iv = contact_intervals(system, run)
+    if not iv:
+        return []
+    out = []
+    for name, pieces in iv.items():
+        shown = ", ".join(f"{st} {a:.6g}–{b:.6g} s" for a, b, st in pieces[:8])
+        more = f" (+{len(pieces) - 8} more)" if len(pieces) > 8 else ""
+        out.append(f"contact {name}: {shown}{more}")
     return out
 
 
@@ -328,12 +357,14 @@ def contact_outcome(title: str, system, tr, data: dict, lines: List[str], ground
         f"lowest gap {min(tr.gap.min(), tr.gap_sub.min()):.2e}; complementarity residual "
         f"{tr.complementarity_residual:.1e}; energy {tr.energy[0]:.8g} -> {tr.energy[-1]:.8g}",
         f"relaxation (penalty) steps: {len(tr.homotopy)}; attempts: {len(tr.attempts)}",
+        *interval_lines(system, tr),
         status_line(tr.status, tr)]
 
     def plot(path):
         ser = series if series is not None else {"smallest gap": tr.gap.min(axis=1)}
-        # impulses per node (Λ_k, all contacts summed) at the node times
-        fig = plotting.contact_plot(tr.t, ser, tr.t, tr.node_impulse.sum(axis=1), ylabel=ylabel, title=title)
+        # impulses per node (Λ_k, all contacts summed) at the node times; each contact's states over time
+        fig = plotting.contact_plot(tr.t, ser, tr.t, tr.node_impulse.sum(axis=1), ylabel=ylabel, title=title,
+                                    intervals=contact_intervals(system, tr))
         fig.savefig(path)
 
     def animate(path):

@@ -621,27 +621,38 @@ def impacts_axes(ax, outlines, times, ground=None, path=None, contacts=None, gro
         ax.legend(handles=handles, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2)
 
 
+#: the colours of the contact states on the intervals' timeline (contact_plot)
+STATE_COLOURS = {"open": "0.88", "held": "C0", "stick": "C2", "slide+": "C1", "slide-": "C3", "slide": "C1"}
+
+
 def contact_plot(t, series: Dict[str, np.ndarray], t_impulse, impulses, reference: Optional[Dict[str, tuple]] = None,
-                 ylabel: str = "height", title: Optional[str] = None, impacts: Optional[dict] = None) -> Figure:
+                 ylabel: str = "height", title: Optional[str] = None, impacts: Optional[dict] = None,
+                 intervals: Optional[Dict[str, list]] = None) -> Figure:
     """A contact trajectory: curves against time (with analytic references) over a stem plot of impulses.
 
     ``series`` maps labels to values at ``t``; ``reference`` maps labels to
     ``(t_ref, y_ref)`` drawn dashed; ``impulses`` (at ``t_impulse``) go in the
     lower panel.  ``impacts`` (the keyword arguments of :func:`impacts_axes`:
     ``outlines``, ``times``, ``ground``, ...) adds a panel on the left with the
-    body drawn at its impacts over the ground; it is the figure's first axes.
+    body drawn at its impacts over the ground; it is the figure's first axes.  ``intervals`` (contact name ->
+    ``[(from, to, state), ...]``, :attr:`ContactTrajectory.intervals`) adds a timeline of each contact's states
+    (open, held, stick, slide) under the impulses.
     """
+    rows = 3 if intervals else 2
+    ratios = [2, 1, 0.25 + 0.25 * len(intervals)] if intervals else [2, 1]
     if impacts is None:
-        fig = Figure(figsize=(6.4, 5.2), layout="constrained")
-        ax, bx = fig.subplots(2, 1, sharex=True, height_ratios=[2, 1])
+        fig = Figure(figsize=(6.4, 5.2 + (1.0 if intervals else 0.0)), layout="constrained")
+        axes = fig.subplots(rows, 1, sharex=True, height_ratios=ratios)
+        ax, bx = axes[0], axes[1]
     else:
-        fig = Figure(figsize=(13.0, 5.2), layout="constrained")
-        grid = fig.add_gridspec(2, 2, width_ratios=[1.15, 1.0], height_ratios=[2, 1])
+        fig = Figure(figsize=(13.0, 5.2 + (1.0 if intervals else 0.0)), layout="constrained")
+        grid = fig.add_gridspec(rows, 2, width_ratios=[1.15, 1.0], height_ratios=ratios)
         sx = fig.add_subplot(grid[:, 0])
         impacts_axes(sx, **impacts)
         sx.set_title("the body at its impacts", fontsize=10)
         ax = fig.add_subplot(grid[0, 1])
         bx = fig.add_subplot(grid[1, 1], sharex=ax)
+        axes = [ax, bx] + ([fig.add_subplot(grid[2, 1], sharex=ax)] if intervals else [])
         ax.tick_params(labelbottom=False)
     t = _as_time(t, "contact_plot")
     for label, y in series.items():
@@ -661,9 +672,29 @@ def contact_plot(t, series: Dict[str, np.ndarray], t_impulse, impulses, referenc
         bx.vlines(ti, 0.0, mu, color="C3", lw=1.2)
         bx.plot(ti, mu, "o", color="C3", ms=3)
     bx.set_ylabel("impulse")
-    bx.set_xlabel("t")
     bx.grid(True, alpha=0.3)
+    if intervals:
+        bx.tick_params(labelbottom=False)
+        _intervals_axes(axes[2], intervals)
+    else:
+        bx.set_xlabel("t")
     return fig
+
+
+def _intervals_axes(ax, intervals: Dict[str, list]) -> None:
+    """One bar per contact, coloured by its state over each interval (:data:`STATE_COLOURS`)."""
+    names = list(intervals)
+    seen = set()
+    for row, name in enumerate(names):
+        for a, b, state in intervals[name]:
+            label = state if state not in seen else None
+            seen.add(state)
+            ax.broken_barh([(a, b - a)], (row - 0.4, 0.8), facecolors=STATE_COLOURS.get(state, "0.5"), label=label)
+    ax.set_yticks(range(len(names)))
+    ax.set_yticklabels(names, fontsize=8)
+    ax.set_ylim(-0.6, len(names) - 0.4)
+    ax.set_xlabel("t")
+    ax.legend(fontsize=7, ncol=6, loc="upper center", bbox_to_anchor=(0.5, -0.45), frameon=False)
 
 
 # ----------------------------------------------------------------------------- rigid bodies in 3-D

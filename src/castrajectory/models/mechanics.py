@@ -699,8 +699,9 @@ class LagrangianSystem:
         same sign and scale as the discrete multipliers of the trajectory NLP.  Empty without constraints."""
         return self._get("index1", self._index1)[1]
 
-    def _index1_exprs(self):
-        """The index-1 system's ``(q̈, λ)`` as expressions of ``(q, q̇, t)``."""
+    def dynamics_exprs(self):
+        """``(M, f)`` as expressions of ``(q, q̇, t)`` and the controls: the Euler–Lagrange equations
+        ``M q̈ = f`` without the constraints' forces, ``f = ∂L/∂q − (∂²L/∂q̇∂q) q̇ − ∂²L/∂q̇∂t + Q``."""
         def build():
             L = self.lagrangian_expr()
             dLdqd = ca.gradient(L, self.qd)
@@ -710,6 +711,13 @@ class LagrangianSystem:
                 f = f - ca.jacobian(dLdqd, self.t)
             if self.force_terms:
                 f = f + self.force_expr()
+            return M, f
+        return self._get("dynamics_expr", build)
+
+    def _index1_exprs(self):
+        """The index-1 system's ``(q̈, λ)`` as expressions of ``(q, q̇, t)``."""
+        def build():
+            M, f = self.dynamics_exprs()
             if self.nc:
                 c = self.constraint_expr()
                 C = ca.jacobian(c, self.q)

@@ -422,6 +422,38 @@ def sphere_on_floor(mass: float, radius: float, mu: float, g: float = 9.81, rest
                             contact=Contact([c[2] - R], restitution, ["floor"], friction=mu, slip=[slip]))
 
 
+def sphere_in_bowl(mass: float, radius: float, bowl: float, mu: float, g: float = 9.81) -> LagrangianSystem:
+    """A uniform sphere inside a spherical bowl of radius ``bowl`` centred at the origin: ``q = (c, quat)`` on SO(3),
+    the gap ``(R_b − r) − |c| ≥ 0`` with Coulomb friction ``mu`` on its tangent plane: the contact point
+    ``c + r n`` (``n = c/|c|``) slips at ``ċ + ω × (r n)``, along the tangents ``t₁ ∝ e_x − (e_x·n) n`` and
+    ``t₂ = n × t₁`` (smooth away from ``n ∥ e_x``, so for a sphere near the bowl's bottom).  Rolling is nonholonomic
+    here: its slip is not the rate of a function of q."""
+    from .mechanics import velocity
+    m, r, Rb = positive("mass", mass), positive("radius", radius), positive("bowl", bowl)
+    if Rb <= r:
+        raise InputError(f"the bowl's radius must exceed the sphere's (got {Rb:g} <= {r:g})")
+    g = finite("g", g)
+    q = ca.SX.sym("q", 7)
+    c, quat = q[:3], q[3:]
+    qd = velocity(q)
+    w = angular_velocity(quat, qd[3:], frame="space")
+    dist = ca.norm_2(c)
+    n = c / dist
+    ex = ca.DM([1.0, 0.0, 0.0])
+    t1 = ex - ca.dot(ex, n) * n
+    t1 = t1 / ca.norm_2(t1)
+    t2 = ca.cross(n, t1)
+    point_velocity = qd[:3] + ca.cross(w, r * n)
+    slip = ca.vertcat(ca.dot(t1, point_velocity), ca.dot(t2, point_velocity))
+    inertia = Inertia(0.4 * m * r * r, 0.4 * m * r * r, 0.4 * m * r * r)
+    terms = [Gravity(g, heights=[c[2]], masses=[m])] if g != 0.0 else []
+    marks = [c + ca.mtimes(rotation(quat), ca.DM(r * np.array(d, float))) for d in
+             [(1, 0, 0), (-1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 0, 1), (0, 0, -1)]]
+    return LagrangianSystem(q, RigidBody(quat, inertia, center=c, mass=m), terms, [unit_norm(quat)],
+                            names=["x", "y", "z"] + QUAT_NAMES, points_expr=marks,
+                            contact=Contact([(Rb - r) - dist], 0.0, ["bowl"], friction=mu, slip=[slip]))
+
+
 def heavy_top(mass: float, inertia: Inertia, distance: float, g: float = 9.81) -> LagrangianSystem:
     """A symmetric top with its pivot fixed at the origin, the centre of mass at ``distance``
     along the body axis ``e₃``, gravity ``g`` along ``−e_z`` (z up).

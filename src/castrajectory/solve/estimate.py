@@ -17,8 +17,9 @@ on N = 2000 midpoint steps: 14 rad estimated, 8.1 true; such an answer is ``Not_
 The order is measured, not assumed
 ---------------------------------
 A scheme reaches its nominal order only where the solution is smooth enough and the grids are in the
-asymptotic range: wherever a contact is held, every scheme is second order today; a coarse grid on a
-fast motion is not yet asymptotic; a solve at its tolerance's floor does not converge at all.  So the
+asymptotic range: an event the march leaves untimed (a release or a slip's change at a node: the optimal
+control's march, a step whose timed solve failed) lowers it; a coarse grid on a fast motion is not yet asymptotic;
+a solve at its tolerance's floor does not converge at all.  So the
 answer on ``N`` is compared with ``N/2`` *and* ``N/4`` (Roache's grid convergence index, ASME V&V 20):
 with the differences ``d_c = |u(N/4) − u(N/2)|`` and ``d_f = |u(N/2) − u(N)|`` the grids show the order
 
@@ -168,8 +169,8 @@ class ErrorEstimate:
             out.append(f"the error estimate is unreliable ({self.regime}): {self.note}")
         elif self.regime == "asymptotic" and self.observed_order < LOW_ORDER * self.order:
             out.append(f"the grids show order {self.observed_order:.2f}, below half the scheme's nominal {self.order:g}: "
-                       f"the estimate divides by it, which is right where the order is reduced (a held contact is "
-                       f"second order) and pessimistic where a high order is not yet asymptotic")
+                       f"the estimate divides by it, which is right where the order is reduced (an event left untimed "
+                       f"in its step) and pessimistic where a high order is not yet asymptotic")
         if not (self.relative <= WARN_RELATIVE):
             out.append(f"the estimated error is {self.relative:.3g} of the answer's scale (more than "
                        f"{WARN_RELATIVE:.0%}): the answer is not converged on this grid; refine n or ask for --rtol")

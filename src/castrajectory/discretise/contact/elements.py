@@ -46,6 +46,10 @@ class ContactMechanics:
         #: constraint multipliers at those stages (none for the two-point schemes)
         self.s = dm.s
         self.ms = dm.scheme.stages * dm.m if self.s else 0
+        #: the contact forces at the stages of each part of a step, one per stage and contact (none for the two-point
+        #: schemes): a contact held through a part has its gap closed at the part's stages and its force there
+        #: (stage_rows), as the holonomic constraints have theirs
+        self.sc = dm.scheme.stages * self.c if self.s else 0
         #: the two-point functions of the event-located guess (the fallback's guess flies with RK4 and holds
         #: contacts with the midpoint's rows; the stages then start on the straight lines, stage_guess)
         self.guide = self if not self.s else ContactMechanics(system, "midpoint")
@@ -64,6 +68,7 @@ class ContactMechanics:
         self._momentum_functions(x)
         if not self.s and not self.nu:
             self._guess_functions(x)
+        self._held_force_function()
         self._march_function(x.phi)
         self.node_law_fn = ca.Function("c_node_law", [x.p0, x.qk, x.qs, x.b, x.h, x.zm, x.t, x.U],
                                        [self.node_law(x.p0, x.qk, x.qs, x.b, x.h, x.zm)])
@@ -122,6 +127,11 @@ class ContactMechanics:
         self.nfr, self.nfl = (2 * c * d, c * d) if self.friction else (0, 0)
         #: friction slots per step, two per contact (node force, sub-node impulse; none without friction)
         self.nfs = 2 * c if self.friction else 0
+        #: the friction ratios at the stages of both parts of a step, per stage, contact and component (ρ^Z: the
+        #: tangential force ρ^Z λ^c at a held contact's stage; none without friction or stages)
+        self.nfz = 2 * self.sc * d if self.friction else 0
+        if self.s:
+            self._cdot, self._aint = _control_quadrature(self.dm.scheme)
 
     def _symbols(self) -> SimpleNamespace:
         """The symbols of the element functions, one namespace for the methods that build them."""
@@ -135,6 +145,9 @@ class ContactMechanics:
         # transcription's DEL rows); λ, λ̃ are inputs of every element that holds them, with no entries without
         # constraints (one signature: a caller passes an empty column, and the rows are the same)
         x.lam, x.lams = sym("lam", m), sym("lams", m)
+        # the held contacts' forces at the stages of the step's two parts (none for a two-point scheme), and their
+        # friction ratios (none without friction)
+        x.lc, x.rz = sym("lamc", 2 * self.sc), sym("rhoz", self.nfz)
         x.a, x.am = 0.5 + x.b, 0.5 + x.bm
         # the stages of the step's two parts (Z⁻ on [q_k, q̃_k], Z⁺ on [q̃_k, q_{k+1}]) and of the previous
         # step's second part (Z⁺_{k−1}, for the node row): inputs of every element, empty for a two-point scheme
@@ -178,10 +191,18 @@ class ContactMechanics:
         if self.s:
             #: the stage rows of both parts of a step (stage_rows) and the constraints at their stages
             lz = ca.SX.sym("lamz", 2 * self.ms)
-            self.stage = ca.Function("c_stage", [qk, qs, qk1, b, h, zm, zp, lz, t, U],
-                                     [self.stage_rows(qk, qs, qk1, b, h, zm, zp, lz)])
+            self.stage = ca.Function("c_stage", [qk, qs, qk1, b, h, zm, zp, lz, x.lc, x.rz, t, U],
+                                     [self.stage_rows(qk, qs, qk1, b, h, zm, zp, lz, x.lc, x.rz)])
             if self.m:
                 self.stage_constraint = ca.Function("c_stage_con", [zm, zp], [self.stage_constraints(zm, zp)])
+            #: the gaps at the stages of both parts, ``[φ(Z⁻_j); φ(Z⁺_j)]`` (stage by stage, each with its contacts)
+            self.stage_gap = ca.Function("c_stage_gap", [zm, zp], [self.stage_gaps(zm, zp)])
+            #: ... and the rows that hold a contact there (:meth:`stage_holds`)
+            self.stage_hold = ca.Function("c_stage_hold", [qk, qs, qk1, zm, zp], [self.stage_holds(qk, qs, qk1, zm, zp)])
+            rho_p, scale = ca.SX.sym("rho"), ca.SX.sym("scale")
+            #: ``ρ Σ_j φ(Z_j)·λ^c_j / scale``: the stages' complementarity penalty
+            self.stage_penalty = ca.Function("c_stage_pen", [zm, zp, x.lc, rho_p, scale],
+                                             [rho_p * ca.dot(self.stage_gaps(zm, zp), x.lc) / scale])
 
     def _friction_functions(self, x) -> None:
         """The slip velocities the friction opposes, [node part; sub-node part] (:meth:`slip`), and on a tangent plane
@@ -192,14 +213,30 @@ class ContactMechanics:
         c, d = self.c, self.fd
         qk, qs, qk1, b, h, rho = x.qk, x.qs, x.qk1, x.b, x.h, x.rho
         arrive = ca.SX.sym("arrive", c)
-        self.slip_row = ca.Function("c_slip", [qk, qs, qk1, b, h, arrive], [self.slip(qk, qs, qk1, b, h, arrive)])
+        zm, zp = x.zm, x.zp
+        self.slip_row = ca.Function("c_slip", [qk, qs, qk1, b, h, arrive, zm, zp],
+                                    [self.slip(qk, qs, qk1, b, h, arrive, zm, zp)])
+        if self.s:
+            #: at the stages of both parts: the contact point's displacement from its part's start over the part's
+            #: length (a sticking stage's row), and its slip velocity there (a sliding stage's direction), each
+            #: ``2 · stages · c · d`` (:meth:`stage_slips`)
+            chi, vel = self.stage_slips(qk, qs, qk1, b, h, zm, zp)
+            self.stage_slip_row = ca.Function("c_stage_slip", [qk, qs, qk1, b, h, zm, zp], [chi])
+            self.stage_vel_row = ca.Function("c_stage_vel", [qk, qs, qk1, b, h, zm, zp], [vel])
+            if d == 2:
+                one = ca.DM.ones(2 * self.sc)
+                muz = self._stage_mu()
+                self.stage_cone_row = ca.Function("c_stage_cone", [x.rz], [ca.DM(muz ** 2) - ca.transpose(
+                    ca.sum1(ca.reshape(x.rz, d, -1) ** 2))])
+                self.stage_slide_row = ca.Function("c_stage_slide", [qk, qs, qk1, b, h, zm, zp, x.rz], [
+                    self.friction_rows(vel, x.rz, 0 * one, one, 0 * one, ca.DM.zeros(self.nfz), 1.0, muz)])
         if d == 2:
             R2 = ca.reshape(rho, d, -1)
             muf2 = np.concatenate([self.mu_f, self.mu_f])
             self.cone_row = ca.Function("c_cone", [rho], [ca.DM(muf2 ** 2) - ca.transpose(ca.sum1(R2 * R2))])
             one = ca.DM.ones(2 * c)
-            self.slide_row = ca.Function("c_slide", [qk, qs, qk1, b, h, arrive, rho], [self.friction_rows(
-                self.slip(qk, qs, qk1, b, h, arrive), rho, 0 * one, one, 0 * one, ca.DM.zeros(2 * c * d), 1.0)])
+            self.slide_row = ca.Function("c_slide", [qk, qs, qk1, b, h, arrive, zm, zp, rho], [self.friction_rows(
+                self.slip(qk, qs, qk1, b, h, arrive, zm, zp), rho, 0 * one, one, 0 * one, ca.DM.zeros(2 * c * d), 1.0)])
 
     def _law_rows(self, x) -> None:
         """Newton's law on the normal velocity at the sub-node, weighted by ``W = φ(q_{k+1})/δ``: the law holds unless
@@ -263,6 +300,89 @@ class ContactMechanics:
         self.flow = ca.Function("flow", [qk, v, tau], [y[:n], y[n:], phi(y[:n])])
         self._flights: Dict[int, ca.Function] = {}
 
+    def _held_force_function(self) -> None:
+        """``contact_forces(q, p, held, stick, u)``: the contacts' normal forces ``λ`` and the sticking ones' friction
+        forces ``t`` (``c`` then ``c·d`` entries) of the continuous motion at ``(q, p)``, with the contacts ``held``
+        (mask) kept closed and those ``stick`` (mask) kept from slipping -- the index-1 system
+        ``M q̈ = f + Ĵᵀλ + D_Sᵀt − Cᵀλ_c``, ``∇φ_H q̈ + (∇φ_H q̇)_q q̇ = 0``, ``D_S q̈ + (D_S q̇)_q q̇ = 0``,
+        ``C q̈ + (C q̇)_q q̇ = 0``, where a held contact that slides with friction pushes along
+        ``Ĵ_j = ∇φ_j − μ_j ŝ_jᵀ D_j`` (Coulomb's force against its slip direction ``ŝ_j``), at the velocity
+        ``q̇ = Π M⁻¹p`` that keeps the held contacts, the sticking ones and the constraints (the projection of
+        :func:`_tangent_velocity` with those rows).  Zero for a contact not held (not sticking).  ``held_force(q, p,
+        held, u)`` is its normal part with nothing sticking; ``cone_margin(q, p, held, stick, sgn, u)`` a sticking
+        contact's distance from its cone, ``μ_f λ − |t|`` (in the plane ``μ_f λ + sgn t``, ``sgn`` the sign of the slip
+        it would start).  A release's time is where its force reaches zero, a stick's end where its margin does
+        (``docs/derivations.md``, "Held contacts at the stages"): the state at a sub-node is the scheme's, of its
+        order, and so is the time where a smooth function of it vanishes."""
+        system, n, c, m, d = self.system, self.n, self.c, self.m, self.fd
+        q, qd = system.q, system.qd
+        M, f = system.dynamics_exprs()
+        uvec = system.control_vector
+        held, stick, p = ca.SX.sym("held", c), ca.SX.sym("stick", c), ca.SX.sym("p", n)
+        J = system.gap(q)[1]
+        rows_c = [self._C(q), ca.mtimes(ca.diag(held), J)]
+        reg = [ca.SX(m, m), ca.diag(1 - held)]
+        if self.friction:
+            Dm = self._D(q)
+            srep = self._per_component(stick)
+            rows_c.append(ca.mtimes(ca.diag(srep), Dm))
+            reg.append(ca.diag(1 - srep))
+        G, R = ca.vertcat(*rows_c), ca.diagcat(*reg)
+        MiGt = ca.solve(M, G.T)
+        vfree = ca.solve(M, p)
+        v = vfree - ca.mtimes(MiGt, ca.solve(ca.mtimes(G, MiGt) + R, ca.mtimes(G, vfree)))
+        Gf = G
+        if self.friction:
+            # a held contact sliding with friction pushes along ∇φ_j − μ_j ŝ_jᵀ D_j (its slip direction at v)
+            S = ca.reshape(ca.mtimes(Dm, v), d, c)
+            norm = ca.sqrt(ca.sum1(S * S) + 1e-300)
+            slide = held * (1 - stick) * ca.DM(self.mu_f)
+            rows = []
+            for j in range(c):
+                Dj = Dm[j * d:(j + 1) * d, :] if d > 1 else Dm[j, :]
+                sj = S[:, j] / norm[j]
+                rows.append(J[j, :] - slide[j] * ca.mtimes(sj.T, Dj))
+            Gf = ca.vertcat(self._C(q), ca.mtimes(ca.diag(held), ca.vertcat(*rows)), rows_c[2])
+        A = ca.mtimes(G, ca.solve(M, Gf.T)) + R
+        gdot = ca.jtimes(ca.mtimes(G, qd), q, qd)
+        rhs = ca.substitute(ca.vertcat(f, gdot), qd, v)
+        U = ca.SX.sym("u", self.nu)
+        bvec = ca.mtimes(G, ca.solve(M, rhs[:n])) + rhs[n:]
+        if self.nu:
+            A, bvec = ca.substitute(A, uvec, U), ca.substitute(bvec, uvec, U)
+        # the index-1 system's matrix and right-hand side (expressions), and its solve a linear-solve node: the masked
+        # system holds every contact and slip component, and solved symbolically it grew as their number cubed
+        kkt = self._kkt = ca.Function("c_kkt", [q, p, held, stick, U], [A, bvec])
+        qm, pm_, hm, sm, um = (ca.MX.sym(nm, k) for nm, k in (("q", n), ("p", n), ("held", c), ("stick", c),
+                                                               ("u", self.nu)))
+        Am, bm = kkt(qm, pm_, hm, sm, um)
+        out = -ca.solve(Am, bm)[m:]
+        self.contact_forces = ca.Function("c_contact_forces", [qm, pm_, hm, sm, um], [out])
+        self.held_force = ca.Function("c_held_force", [qm, pm_, hm, um], [self.contact_forces(qm, pm_, hm, 0 * sm, um)[:c]])
+        sgn = ca.MX.sym("sgn", c)
+        if self.friction:
+            lam_n, tt = out[:c], ca.reshape(out[c:], d, c)
+            margin = (ca.DM(self.mu_f) * lam_n + sgn * ca.transpose(tt) if d == 1 else
+                      ca.DM(self.mu_f) * lam_n - ca.transpose(ca.sqrt(ca.sum1(tt * tt) + 1e-300)))
+            self.cone_margin = ca.Function("c_cone_margin", [qm, pm_, hm, sm, sgn, um], [margin])
+        # ... at a step's sub-node, with the momentum p̃⁻ that ends the step's first part (the release row of mode E, the
+        # stick's end of mode G)
+        qk, qs, b, h, zm, t = (ca.MX.sym(nm, k) for nm, k in (("q", n), ("qs", n), ("beta", 1), ("h", 1),
+                                                              ("zm", self.s), ("t", 1)))
+        sq, sz, sqs, sb, sh = (ca.SX.sym(nm, k) for nm, k in (("q", n), ("zm", self.s), ("qs", n), ("beta", 1),
+                                                                ("h", 1)))
+        pm_fn = ca.Function("c_pm", [sq, sz, sqs, sb, sh, self._t, self._U],
+                            [self._D2(sq, sz if self.s else self._z, sqs, (0.5 + sb) * sh, self._t, self._U)])
+        pm = pm_fn(qk, zm, qs, b, h, t, um)
+        #: ``[λ; margin]`` at the sub-node: the normal forces (a release's row, mode E) and the sticking contacts' cone
+        #: margins (a stick's end, mode G; zeros without friction), with the contacts held and sticking through the
+        #: first part
+        if self.friction:
+            timed = ca.vertcat(self.contact_forces(qs, pm, hm, sm, um)[:c], self.cone_margin(qs, pm, hm, sm, sgn, um))
+        else:
+            timed = ca.vertcat(self.held_force(qs, pm, hm, um), ca.MX.zeros(c))
+        self.timed_force = ca.Function("c_timed_force", [qk, qs, b, h, zm, hm, sm, sgn, t, um], [timed])
+
     def _normal_acceleration(self, x) -> None:
         """The contacts' normal accelerations ``J(q) q̈`` (under the step's control: the march's test of an arrival at a
         node)."""
@@ -298,16 +418,81 @@ class ContactMechanics:
         Z = np.asarray(Z)
         return [Z[..., :self.s]], [Z[..., self.s:]]
 
-    def stage_rows(self, qk, qs, qn, b, h, zm, zp, lz):
+    def stage_rows(self, qk, qs, qn, b, h, zm, zp, lz, lc, rz=None):
         """The stationarity of the action in the stages of both parts of a step, with the forces on the
-        stages and the constraint forces there: each part's ``(∂L_d/∂Z + f^Z)/h − (τ/h) w ∇c(Z)ᵀν_Z``
+        stages, the constraint forces and the held contacts' forces there: each part's
+        ``(∂L_d/∂Z + f^Z)/h − (τ/h) w_j ∇c(Z_j)ᵀν_j + (τ/h) w_j ∇φ(Z_j)ᵀλ^c_j``
         (:attr:`DiscreteMechanics.stage_residual`, over the part's length τ, scaled by τ/h so every
-        row of a step is a momentum per ``h``)."""
-        a, ms = 0.5 + b, self.ms
+        row of a step is a momentum per ``h``; ``w_j`` the constraint quadrature's weight of stage j).  ``λ^c_j ≥ 0``
+        is the contact's force at the stage: the scheme's quadrature of its virtual work ``∫ λ ∇φ(q)·δq dt`` over a
+        part that holds it, whose ends carry the node force ν and the sub-node's impulse μ (``docs/derivations.md``,
+        "Held contacts at the stages").  With friction ``rz`` holds the ratios ``ρ^Z_j`` of the tangential forces
+        there, ``w_j D(Z_j)ᵀ(ρ^Z_j λ^c_j)``."""
+        a, ms, sc = 0.5 + b, self.ms, self.sc
         sr = self.dm.stage_residual
         l1, l2 = (lz[:ms], lz[ms:]) if self.m else (ca.SX(0, 1), ca.SX(0, 1))
         U, t = self._U, self._t
-        return ca.vertcat(sr(qk, zm, qs, l1, a * h, t, U) * a, sr(qs, zp, qn, l2, (1 - a) * h, t + a * h, U) * (1 - a))
+        r1, r2 = (rz[:self.nfz // 2], rz[self.nfz // 2:]) if self.nfz else (None, None)
+        return ca.vertcat((sr(qk, zm, qs, l1, a * h, t, U) + self._stage_forces(zm, lc[:sc], r1)) * a,
+                          (sr(qs, zp, qn, l2, (1 - a) * h, t + a * h, U) + self._stage_forces(zp, lc[sc:], r2)) * (1 - a))
+
+    def _stage_forces(self, Z, lc, rz=None):
+        """``w_j [∇φ(Z_j)ᵀλ^c_j + D(Z_j)ᵀ(ρ^Z_j λ^c_j)]`` at each stage of one part (stage by stage; the friction where
+        ``rz`` is given)."""
+        n, c, cd = self.n, self.c, self.c * self.fd
+        w = self.dm.scheme.stage_weights
+        out = []
+        for j in range(self.dm.scheme.stages):
+            Zj, lj = Z[j * n:(j + 1) * n], lc[j * c:(j + 1) * c]
+            f = ca.mtimes(self._J(Zj).T, lj)
+            if rz is not None:
+                f = f + ca.mtimes(self._D(Zj).T, rz[j * cd:(j + 1) * cd] * self._per_component(lj))
+            out.append(w[j] * f)
+        return ca.vertcat(*out)
+
+    def _stage_mu(self) -> np.ndarray:
+        """The friction coefficient of every stage slot (both parts, stage by stage, each contact)."""
+        return np.tile(self.mu_f, 2 * self.dm.scheme.stages)
+
+    def part_slips(self, qa, Z, qb, tau):
+        """The contact points' slip over one part ``[q_a, q_b]`` of length τ, on its polynomial path through the
+        control points ``X = (q_a, Z_1 … Z_s, q_b)``: the slip velocities ``s_i = D(X_i) Ẋ_i`` at the control points
+        (``Ẋ_i`` the path's rate there), and the displacements from the part's start to each control point after it,
+        ``χ_j = ∫_0^{c_j} s dσ``, by the interpolatory quadrature of ``s`` on the control points (Lobatto's at the
+        part's end).  Returns ``(χ_1/τ … χ_s/τ, χ_end/τ)`` and ``(s_1 … s_s)`` as lists (``c · d`` each):
+        displacements over the part's length, in the units of a velocity.  For a rolling contact whose slip is
+        integrable, ``D = ∇ψ``, ``χ_j = ψ(Z_j) − ψ(q_a)`` to the quadrature's order: sticking holds ψ at the stages as
+        a holonomic constraint holds its own (``docs/derivations.md``, "Held contacts at the stages")."""
+        n, st = self.n, self.dm.scheme.stages
+        X = [qa] + [Z[j * n:(j + 1) * n] for j in range(st)] + [qb]
+        rates = [sum(float(self._cdot[i, m]) * X[m] for m in range(st + 2)) / tau for i in range(st + 2)]
+        sv = [ca.mtimes(self._D(X[i]), rates[i]) for i in range(st + 2)]
+        chi = [sum(float(self._aint[j, i]) * sv[i] for i in range(st + 2)) for j in range(st + 1)]
+        return chi, sv[1:-1]
+
+    def stage_slips(self, qk, qs, qn, b, h, zm, zp):
+        """``(χ, s)`` at the stages of both parts of a step (:meth:`part_slips`; first part, then second, stage by
+        stage, each ``c · d``)."""
+        a = 0.5 + b
+        c1, v1 = self.part_slips(qk, zm, qs, a * h)
+        c2, v2 = self.part_slips(qs, zp, qn, (1 - a) * h)
+        return ca.vertcat(*(c1[:-1] + c2[:-1])), ca.vertcat(*(v1 + v2))
+
+    def stage_gaps(self, zm, zp):
+        """``[φ(Z⁻_j); φ(Z⁺_j)]``: the gaps at every stage of both parts of a step."""
+        n, st, gap = self.n, self.dm.scheme.stages, self.system.gap
+        return ca.vertcat(*[gap(Z[j * n:(j + 1) * n])[0] for Z in (zm, zp) for j in range(st)])
+
+    def stage_holds(self, qk, qs, qn, zm, zp):
+        """The rows that hold a contact at the stages of a part: each stage's gap less the straight line between the
+        part's end gaps at the stage's time, ``φ(Z_j) − (1 − c_j) φ(a) − c_j φ(b)`` (``[q_k, q̃_k]``, then
+        ``[q̃_k, q_{k+1}]``).  A part that starts and ends on the surface (its end rows hold both) has its gap zero at
+        the stages; one that starts inside the touching band (a node left a rounding's depth inside by an impact's
+        cascade) is brought onto the surface along it, without a pull at the stages."""
+        n, ct, gap = self.n, self.dm.scheme.stage_times, self.system.gap
+        g = [gap(x)[0] for x in (qk, qs, qn)]
+        return ca.vertcat(*[gap(Z[j * n:(j + 1) * n])[0] - (1 - float(c)) * g[i] - float(c) * g[i + 1]
+                            for i, Z in enumerate((zm, zp)) for j, c in enumerate(ct)])
 
     def stage_constraints(self, zm, zp):
         """``c(Z_j) = 0`` at every stage of both parts of a step."""
@@ -321,7 +506,7 @@ class ContactMechanics:
         Q = np.asarray(Q, float)
         return np.asarray(self.gap_row.map(Q.shape[0])(Q.T)).reshape(self.c, -1).T
 
-    def slip(self, qk, qs, qn, b, h, arrive):
+    def slip(self, qk, qs, qn, b, h, arrive, zm=None, zp=None):
         """The slip velocities per contact that the step's friction opposes (maximal dissipation: the friction
         force opposes its slip, or the slip vanishes): for the node's force, the first part of the step,
         ``D(q̄₁)(q̃_k − q_k)/(αh)``; for the sub-node's impulse of a contact held through the step, the whole
@@ -331,10 +516,16 @@ class ContactMechanics:
         opposes (the contact point moved freely before it).  ``q̄₁, q̄₂`` are the parts' midpoints: the contact
         point's displacement over a part is then its midpoint rule, exact to O(h³), where ``D`` at the part's start
         left an O(h²) drift that the tangential impulses fought with O(1) of the wrong share (a pivot's sub-node
-        slot slid ten steps before the cone was reached, and the motion converged at first order)."""
+        slot slid ten steps before the cone was reached, and the motion converged at first order).  A scheme with
+        stages takes each part's displacement by its own quadrature on the part's path (:meth:`part_slips`), of the
+        scheme's order."""
         a = 0.5 + b
-        first = ca.mtimes(self._D(0.5 * (qk + qs)), qs - qk)
-        second = ca.mtimes(self._D(0.5 * (qs + qn)), qn - qs)
+        if self.s:
+            first = a * h * self.part_slips(qk, zm, qs, a * h)[0][-1]
+            second = (1 - a) * h * self.part_slips(qs, zp, qn, (1 - a) * h)[0][-1]
+        else:
+            first = ca.mtimes(self._D(0.5 * (qk + qs)), qs - qk)
+            second = ca.mtimes(self._D(0.5 * (qs + qn)), qn - qs)
         arr = self._per_component(arrive)
         sub = arr * second / ((1 - a) * h) + (1 - arr) * (first + second) / h
         return ca.vertcat(first / (a * h), sub)
@@ -420,7 +611,8 @@ class ContactMechanics:
             n, c, m = self.n, self.c, self.m
             sizes = [("qs", n), ("q", n), ("beta", 1), ("nu", c), ("mu", c), ("lam", m), ("lam_sub", m),
                      ("fratio", self.nfr), ("zs", 2 * self.s),
-                     ("lam_stage", 2 * self.ms), ("mul", c), ("fleft", self.nfl)]
+                     ("lam_stage", 2 * self.ms), ("mul", c), ("fleft", self.nfl), ("lam_cstage", 2 * self.sc),
+                     ("fstage", self.nfz)]
             out, o = {}, 0
             for name, size in sizes:
                 out[name] = slice(o, o + size)
@@ -433,6 +625,15 @@ class ContactMechanics:
         """The number of unknowns of one march step."""
         self.layout
         return self._nx
+
+    def _timed_forces_mx(self, qk, qs, b, h, zm, held, tlift, tgrip, stick, sgn, t, U):
+        """The timing rows of the contact forces at a step's sub-node (MX): a release's normal force (``tlift``, mode E)
+        and a stick's cone margin (``tgrip``, mode G), of the continuous motion with the contacts held (and, with
+        friction, sticking: the node slots) through the step's first part; ``0`` for a contact with neither mask."""
+        c = self.c
+        timed = self.timed_force(qk, qs, b, h, zm, held, stick[:c] if self.friction else ca.MX.zeros(c),
+                                 sgn[c:] if self.friction else ca.MX.zeros(c), t, U)
+        return ca.dot(tlift, timed[:c]) + ca.dot(tgrip, timed[c:])
 
     def _march_function(self, phi):
         """One step of the transcription's own rows, each contact in a mode given by masks (the march).
@@ -474,13 +675,24 @@ class ContactMechanics:
         # (tslip: a held contact whose slip stops or turns at the sub-node, which it times: its slip velocity there,
         # after its share of the first part's force, vanishes -- planar friction)
         tslip = sym("tslip", c)
+        # (tlift: a held contact released at the sub-node, which it times: its force there, held_force with the contacts
+        # held through the first part, vanishes; its share of the first part's force is then zero)
+        tlift = sym("tlift", c)
+        # (tgrip: a held contact that sticks through the first part and slides from the sub-node on, which it times: its
+        # friction force there reaches the cone, cone_margin with the first part's held and sticking contacts; the force
+        # is continuous there, so no share)
+        tgrip = sym("tgrip", c)
+        # the friction's modes per slot (below)
+        nfs = self.nfs
+        stick, sgn, fix, rfix = sym("stick", nfs), sym("sgn", nfs), sym("fix", nfs), sym("rfix", self.nfr)
         mul = x[L["mul"]]
         rl = x[L["fleft"]] if self.friction else None
         sub_row, r = self.sub_row(qk, qs, qn, b, mu, lams, h, rho_s, zm, zp, mul, rl, release)
         free = 1 - held - node - nfixed
         other = 1 - closed - law - fixed
         R = ca.vertcat(self.node_row(p, qk, qs, b, nu, lam, h, rho_n, zm), sub_row,
-                       (1 - ca.sum1(t) - ca.sum1(tslip)) * (b - bfix) + ca.dot(t, phi(qs)) / ell
+                       (1 - ca.sum1(t) - ca.sum1(tslip) - ca.sum1(tlift) - ca.sum1(tgrip)) * (b - bfix)
+                       + ca.dot(t, phi(qs)) / ell
                        + (ca.dot(tslip, self.left_velocity(qk, qs, b, h, mul, rl, release, zm)) / vref
                           if self.friction and self.fd == 1 else 0),
                        held * phi(qs) / ell + node * self.node_law(p, qk, qs, b, h, zm) / vref
@@ -490,35 +702,104 @@ class ContactMechanics:
                        + (1 - release - leftfix) * mul / smu,
                        con(qs), con(qn))
         if self.s:
-            R = ca.vertcat(R, self.stage_rows(qk, qs, qn, b, h, zm, zp, x[L["lam_stage"]]))
+            lc = x[L["lam_cstage"]]
+            rz = x[L["fstage"]] if self.nfz else None
+            R = ca.vertcat(R, self.stage_rows(qk, qs, qn, b, h, zm, zp, x[L["lam_stage"]], lc, rz))
             if m:
                 R = ca.vertcat(R, self.stage_constraints(zm, zp))
+            # a contact held through a part (its first: held; its second: closed) has its gap closed at the part's
+            # stages and its force there free; elsewhere its stage forces vanish
+            st = self.dm.scheme.stages
+            hold = ca.vertcat(*([held] * st + [closed] * st))
+            R = ca.vertcat(R, hold * self.stage_holds(qk, qs, qn, zm, zp) / ell + (1 - hold) * lc / snu)
         # the friction's modes per slot: inputs of the step whether or not it has friction (no entries without)
         # (per contact: stick (the slip vanishes), slide (ρ = −sgn μ_f, sgn the slip's sign), or no friction force
         # (ρ = 0: an open contact, or a frictionless one); fix: ρ = rfix, a ratio decided outside the step, the
         # frictional impact law's tangential impulse; a tangent plane, d = 2: sgn is the mask of sliding, whose rows
         # are ρ + μ_f s/|s| = 0, the ratio against the slip's direction on the circular cone, see friction_rows)
-        nfs = self.nfs
-        stick, sgn, fix, rfix = sym("stick", nfs), sym("sgn", nfs), sym("fix", nfs), sym("rfix", self.nfr)
         arrive, rfixl = sym("arrive", nfs // 2), sym("rfixl", self.nfl)
         if self.friction:
-            R = ca.vertcat(R, self.friction_rows(self.slip(qk, qs, qn, b, h, arrive), rho, stick, sgn, fix, rfix, vref))
+            R = ca.vertcat(R, self.friction_rows(self.slip(qk, qs, qn, b, h, arrive, zm, zp), rho, stick, sgn, fix, rfix,
+                                                 vref))
+            if self.nfz:
+                # the stages' friction: each part's stages in the mode of its slot (the first part's the node's, the
+                # second's the sub-node's): sticking, the contact point's displacement from the part's start vanishes
+                # there; sliding, the ratio opposes the stage's slip velocity at the cone's edge; otherwise none
+                st = self.dm.scheme.stages
+                chi, vel = self.stage_slips(qk, qs, qn, b, h, zm, zp)
+                zs = lambda v: ca.vertcat(*([v[:c]] * st + [v[c:]] * st))  # noqa: E731
+                R = ca.vertcat(R, self.friction_rows(chi, rz, zs(stick), zs(sgn), ca.DM.zeros(2 * self.sc),
+                                                     ca.DM.zeros(self.nfz), vref, self._stage_mu(), slide_slip=vel))
             # the first part's closing impulses μ⁻: a released contact's share sticks or slides as its node slot did
             # through that part, against the slip velocity before the impact; a law's (leftfix) ratio is fixed (rfixl)
             R = ca.vertcat(R, self.friction_rows(self.left_velocity(qk, qs, b, h, mul, rl, release, zm), rl, stick[:c] * release,
                                                  sgn[:c] * release, leftfix, rfixl, vref, self.mu_f))
-        self.march_step = ca.Function("march_step", [x, qk, p, h, ell, snu, smu, vref, bfix, t, held, closed, law, node,
-                                                      fixed, mufix, nfixed, release, leftfix, mufixl, tslip, stick, sgn,
-                                                      fix, rfix, arrive, rfixl, self._t, self._U],
-                                      [R, ca.jacobian(R, x)])
+        ins = [x, qk, p, h, ell, snu, smu, vref, bfix, t, held, closed, law, node, fixed, mufix, nfixed, release, leftfix,
+               mufixl, tslip, tlift, tgrip, stick, sgn, fix, rfix, arrive, rfixl, self._t, self._U]
+        self.march_step = ca.Function("march_step", ins, [R, ca.jacobian(R, x)])
+        #: (the step's rows without the timed forces, and where the timing row sits in them: march_step_timed)
+        self._march_rows = ca.Function("march_rows", ins, [R])
+        self._timing_row = 2 * n
 
-    def friction_rows(self, slip, rho, stick, sgn, fix, rfix, vref, muf=None):
+    @property
+    def timed_force_rows(self) -> ca.Function:
+        """:attr:`timed_force` as an expression (its index-1 system solved symbolically): the element of the program's
+        rows, which are formed in SX (:mod:`.transcription`, only for a program whose march timed a release or a stick's
+        end)."""
+        if "timed rows" not in self._derived:
+            f = self.timed_force
+            ins = [ca.SX.sym(f"a{i}", f.sparsity_in(i)) for i in range(f.n_in())]
+            qk, qs, b, h, zm, held, stick, sgn, t, U = ins
+            n, c, d, m = self.n, self.c, self.fd, self.m
+            sq, sz, sqs, sb, sh = (ca.SX.sym(nm, k) for nm, k in (("q", n), ("zm", self.s), ("qs", n), ("beta", 1),
+                                                                    ("h", 1)))
+            pm = ca.Function("c_pm", [sq, sz, sqs, sb, sh, self._t, self._U],
+                             [self._D2(sq, sz if self.s else self._z, sqs, (0.5 + sb) * sh, self._t, self._U)])(
+                qk, zm, qs, b, h, t, U)
+            A, bb = self._kkt(qs, pm, held, stick if self.friction else 0 * held, U)
+            out = -ca.solve(A, bb)[m:]
+            lam = out[:c]
+            if self.friction:
+                tt = ca.reshape(out[c:], d, c)
+                margin = (ca.DM(self.mu_f) * lam + sgn * ca.transpose(tt) if d == 1 else
+                          ca.DM(self.mu_f) * lam - ca.transpose(ca.sqrt(ca.sum1(tt * tt) + 1e-300)))
+            else:
+                margin = ca.SX.zeros(c)
+            self._derived["timed rows"] = ca.Function("c_timed_force_rows", ins, [ca.vertcat(lam, margin)])
+        return self._derived["timed rows"]
+
+    @property
+    def march_step_timed(self) -> ca.Function:
+        """The march step with the timing rows of the contact forces (modes E and G, :meth:`_timed_forces`) added to
+        its sub-node's timing row: the same inputs and outputs as :attr:`march_step`, built on first use (only a step
+        that times a release or a stick's end evaluates it).  It is an MX function whose index-1 system is one linear
+        solve node (:attr:`contact_forces`), not an expression: inlined, the masked system of every contact and slip
+        component made the march step of a box on eight corners with friction 2.8 million nodes."""
+        if "timed" not in self._derived:
+            base = self._march_rows
+            ins = [ca.MX.sym(f"a{i}", base.sparsity_in(i)) for i in range(base.n_in())]
+            n, L = self.n, self.layout
+            # (the inputs by position, as _march_function lists them)
+            xx, qk, h, snu, held, tlift, tgrip, stick, sgn, t, U = (ins[i] for i in (0, 1, 3, 5, 10, 21, 22, 23, 24, 29,
+                                                                                      30))
+            zm = xx[L["zs"]][:self.s] if self.s else ca.MX(0, 1)
+            extra = self._timed_forces_mx(qk, xx[L["qs"]], xx[2 * n], h, zm, held, tlift, tgrip, stick, sgn, t, U) / snu
+            e = ca.DM.zeros(base.sparsity_out(0).numel())
+            e[self._timing_row] = 1.0
+            R = base(*ins) + e * extra
+            self._derived["timed"] = ca.Function("march_step_timed", ins, [R, ca.jacobian(R, xx)])
+        return self._derived["timed"]
+
+    def friction_rows(self, slip, rho, stick, sgn, fix, rfix, vref, muf=None, slide_slip=None):
         """The friction's rows of a step, per slot (contact and part; masks per slot, values per component):
         sticking, the slip vanishes; sliding, the ratio opposes the slip at the cone's edge -- in the plane
         ``ρ = −sgn μ_f`` (sgn the slip's sign), on a tangent plane ``ρ + μ_f s/|s| = 0`` (sgn then the mask of
-        sliding); ``fix``, ``ρ = rfix``; otherwise no friction force, ``ρ = 0``."""
+        sliding); ``fix``, ``ρ = rfix``; otherwise no friction force, ``ρ = 0``.  ``slide_slip``: the slip whose
+        direction a sliding slot opposes, where it is not the one a sticking slot holds (a stage's velocity against
+        its displacement)."""
         d = self.fd
         muf = np.concatenate([self.mu_f, self.mu_f]) if muf is None else np.asarray(muf, float)
+        ss = slip if slide_slip is None else slide_slip
         if d == 1:
             slide = sgn * sgn
             return stick * slip / vref + slide * (rho + sgn * ca.DM(muf)) + fix * (rho - rfix) \
@@ -527,10 +808,10 @@ class ContactMechanics:
         # |s| per slot, smoothed below 1e-12 of the velocity scale (Newton's derivative at s = 0); the sliding
         # row is ρ + μ_f s/|s| (ρ on the cone's edge against the slip: written as ρ|s| + μ_f s it would leave ρ
         # free as s → 0, and a slot whose slip had vanished kept |ρ| = 3.5 μ_f in our trials)
-        S = ca.reshape(slip, d, -1)
+        S = ca.reshape(ss, d, -1)
         norm = ca.transpose(ca.sqrt(ca.sum1(S * S) + (1e-12 * vref) ** 2))
         slide = sgn
-        return rep(stick) * slip / vref + rep(slide) * (rho + ca.DM(np.repeat(muf, d)) * slip / rep(norm)) \
+        return rep(stick) * slip / vref + rep(slide) * (rho + ca.DM(np.repeat(muf, d)) * ss / rep(norm)) \
             + rep(fix) * (rho - rfix) + (1 - rep(stick) - rep(slide) - rep(fix)) * rho
 
     def flights(self, K: int) -> ca.Function:
@@ -566,6 +847,24 @@ class ContactMechanics:
                                            [rho * ca.dot(self.system.gap(q)[0], lam) / scale])
         #: ``ρ Σ (s⁺ + s⁻)``
         self.slack_penalty = ca.Function("c_slack_pen", [sp, sm, rho], [rho * ca.sum1(sp + sm)])
+
+
+def _control_quadrature(S):
+    """On a step's control points ``c_0 = 0 < c_1 … < c_r = 1`` (of the scheme ``S``): the Lagrange basis' rates
+    there, ``R[i, m] = ℓ_m'(c_i)``, and the integration matrix ``A[j, i] = ∫_0^{c_{j+1}} ℓ_i(σ) dσ`` (``j = 0 … r − 1``:
+    the control points after the first; its last row is the interpolatory quadrature on the control points)."""
+    from numpy.polynomial import polynomial as Pn
+    c = np.asarray(S.control, float)
+    r1 = c.size
+    R = np.zeros((r1, r1))
+    A = np.zeros((r1 - 1, r1))
+    for i in range(r1):
+        others = np.delete(c, i)
+        coef = Pn.polyfromroots(others) / np.prod(c[i] - others)
+        R[:, i] = Pn.polyval(c, Pn.polyder(coef))
+        integral = Pn.polyint(coef)
+        A[:, i] = Pn.polyval(c[1:], integral) - Pn.polyval(0.0, integral)
+    return R, A
 
 
 def _sub_node_kinematics(D1, D2, J, Mf, C, e, xp, x, xn, tau_m, tau_p, Zm, Zp, t0):

@@ -122,8 +122,11 @@ class ContactTranscription:
 
     program = Program
 
-    def __init__(self, cm: ContactMechanics, L: int, h: float, scales, steps=None, u_bounds=None):
+    def __init__(self, cm: ContactMechanics, L: int, h: float, scales, steps=None, u_bounds=None, lifts: bool = False):
         self.cm, self.L, self.h = cm, L, h
+        #: the program holds releases and stick ends timed at their sub-nodes (the march's modes E and G): the rows of
+        #: the contacts' forces at the sub-nodes (only where one is timed: a program without one carries none)
+        self.has_lifts = bool(lifts)
         # step lengths h_k (a grid refined where impacts crowd, see solve.contact.march); h by default
         self.H = np.full(L, float(h)) if steps is None else np.asarray(steps, float).reshape(L)
         ell, pref, vref, aref = scales
@@ -140,6 +143,9 @@ class ContactTranscription:
         self.release = np.zeros((L, cm.c))
         #: the held contacts whose slip stops or turns at their step's sub-node (step, contact, "stop" or "turn")
         self.turns = []
+        #: the held contacts released at their step's sub-node, timed by their force (step, contact), and the sticking
+        #: ones that start to slide there (the same)
+        self.lifts, self.grips = [], []
         # weight length of the law where the guess has no bounce: W = φ(q_{k+1})/δ with δ = ℓ
         # (law_lengths sets a shorter δ at the guess's bounces)
         self.delta = ell
@@ -195,6 +201,12 @@ class ContactTranscription:
             nlp.variable("zs", L * 2 * s)
             if m:
                 nlp.variable("lam_stage", L * 2 * cm.ms)
+            # the contacts' forces at the stages (held through a part: its gap closed there, ContactMechanics.stage_rows)
+            nlp.variable("lam_cstage", L * 2 * cm.sc, lb=0.0)
+            # ... and their friction ratios, |ρ^Z| ≤ μ_f
+            if cm.nfz:
+                muz = np.repeat(cm._stage_mu(), cm.fd)
+                nlp.variable("fstage", L * cm.nfz, lb=np.tile(-muz, L), ub=np.tile(muz, L))
         # controls (optimal control through contact): one value per step, an input of every row that holds the
         # step's forces (ContactMechanics); a system without controls passes an empty one (the same signature)
         if cm.nu:
@@ -252,7 +264,9 @@ class ContactTranscription:
                                                                 ZM(k), TA(k), UA(k)], lb=-np.inf, ub=np.inf)
         if s:
             nlp.equal_elements("stage", cm.stage, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), HA(k), ZM(k), ZP(k),
-                                                   self._argument("lam_stage", 2 * cm.ms)(k), TA(k), UA(k)])
+                                                   self._argument("lam_stage", 2 * cm.ms)(k),
+                                                   self._argument("lam_cstage", 2 * cm.sc)(k),
+                                                   self._argument("fstage", cm.nfz)(k), TA(k), UA(k)])
             if m:
                 nlp.equal_elements("stage_constraint", cm.stage_constraint, [ZM(k), ZP(k)])
 
@@ -267,13 +281,27 @@ class ContactTranscription:
         # (which contacts arrive at their sub-node: their slip is the one after it, ContactMechanics.slip)
         nlp.parameter("arrive", L * c, value=0.0)
         AR = P(nlp.parameter_index("arrive").reshape(L, c))
-        nlp.inequality_elements("slip", cm.slip_row, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), HA(k), AR],
+        ZM, ZP = self._ZM, self._ZP
+        nlp.inequality_elements("slip", cm.slip_row, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), HA(k), AR, ZM(k), ZP(k)],
                                 lb=-np.inf, ub=np.inf)
         if cm.fd == 2:
             # the tangent plane's circular cone, and sliding against the slip (bounds by the modes)
             nlp.inequality_elements("cone", cm.cone_row, [RHO(k)], lb=-np.inf, ub=np.inf)
-            nlp.inequality_elements("slide", cm.slide_row, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), HA(k), AR, RHO(k)],
-                                    lb=-np.inf, ub=np.inf)
+            nlp.inequality_elements("slide", cm.slide_row, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), HA(k), AR, ZM(k),
+                                                            ZP(k), RHO(k)], lb=-np.inf, ub=np.inf)
+        if cm.nfz:
+            # the stages' friction: a sticking stage's displacement and a sliding one's velocity (bounds by the modes),
+            # and on a tangent plane the cone and the sliding rows
+            RZ = self._argument("fstage", cm.nfz)
+            nlp.inequality_elements("stage_slip", cm.stage_slip_row, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), HA(k),
+                                                                      ZM(k), ZP(k)], lb=-np.inf, ub=np.inf)
+            nlp.inequality_elements("stage_vel", cm.stage_vel_row, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), HA(k),
+                                                                    ZM(k), ZP(k)], lb=-np.inf, ub=np.inf)
+            if cm.fd == 2:
+                nlp.inequality_elements("stage_cone", cm.stage_cone_row, [RZ(k)], lb=-np.inf, ub=np.inf)
+                nlp.inequality_elements("stage_slide", cm.stage_slide_row, [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]),
+                                                                            HA(k), ZM(k), ZP(k), RZ(k)],
+                                        lb=-np.inf, ub=np.inf)
 
     def _contact_rows(self) -> None:
         """The holonomic constraints at the nodes and sub-nodes, the gaps, and Newton's law with its slacks."""
@@ -289,6 +317,22 @@ class ContactTranscription:
             nlp.equal_elements("sub_constraint", cm.constraint_row, [X(S)])
         nlp.inequality_elements("node_gap", cm.gap_row, [X(Q[1:])], lb=0.0)
         nlp.inequality_elements("sub_gap", cm.gap_row, [X(S)], lb=0.0)
+        if cm.sc:
+            nlp.inequality_elements("stage_gap", cm.stage_gap, [ZM(k), ZP(k)], lb=0.0)
+            # (the rows that hold a contact at a part's stages: bounds by the march's modes, free elsewhere)
+            nlp.inequality_elements("stage_hold", cm.stage_hold, [X(Q[k]), X(S[k]), X(Q[k + 1]), ZM(k), ZP(k)],
+                                    lb=-np.inf, ub=np.inf)
+        # the contacts' forces of the continuous motion at each sub-node, with the contacts held through the step's
+        # first part (the parameter "held"): zero for a contact released there (its bounds are the march's modes)
+        if self.has_lifts:
+            # the contacts' forces of the continuous motion at each sub-node, with the contacts held ("held") and
+            # sticking ("stuck") through the step's first part: a release's normal force and a stick's cone margin (in
+            # the direction "slide_sign" it slides after), zero where the march timed one there (bounds by its modes)
+            for name in ("held", "stuck", "slide_sign"):
+                nlp.parameter(name, L * c, value=0.0)
+            par = [P(nlp.parameter_index(name).reshape(L, c)) for name in ("held", "stuck", "slide_sign")]
+            nlp.inequality_elements("timed_force", cm.timed_force_rows, [X(Q[k]), X(S[k]), X(B[k]), HA(k), ZM(k), *par,
+                                                                    self._TA(k), UA(k)], lb=-np.inf, ub=np.inf)
         LL = P(nlp.parameter_index("law_length").reshape(L, c))
         nlp.equal_elements("impact_law", cm.law_slack,
                            [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), X(MU[k]), X(SP[k]), X(SM[k]), HA(k), LL,
@@ -304,6 +348,10 @@ class ContactTranscription:
         nlp.minimize_elements("node_penalty", cm.product_penalty, [X(Q[k]), X(NU[k]), rho, p / Hc])
         nlp.minimize_elements("sub_penalty", cm.product_penalty, [X(S[k]), X(MU[k]), rho, np.array([p])])
         nlp.minimize_elements("law_penalty", cm.slack_penalty, [X(SP[k]), X(SM[k]), rho])
+        if cm.sc:
+            nlp.minimize_elements("stage_penalty", cm.stage_penalty, [self._ZM(k), self._ZP(k),
+                                                                      self._argument("lam_cstage", 2 * cm.sc)(k), rho,
+                                                                      p / Hc])
         nlp.minimize_elements("split", cm.split, [X(B[k]), P(nlp.parameter_index("split"))])
         # terminal condition: the last node force may not launch the body (its gap at the end node
         # q_L would otherwise be free; see the module docstring, "Look-ahead step")
@@ -311,6 +359,8 @@ class ContactTranscription:
         # the pairs those penalties hold, per contact: gap ⟂ node force, sub-node gap ⟂ impulse, Newton's
         # law ⟂ impulse (the slacks), and the end node's gap ⟂ the last node force
         nlp.declared_pairs.update({"node": L * cm.c, "sub": L * cm.c, "impact_law": L * cm.c, "end": cm.c})
+        if cm.sc:
+            nlp.declared_pairs["stage"] = L * 2 * cm.sc
 
     def step_starts(self, H=None) -> np.ndarray:
         """The steps' start times ``t_k`` (k = 0..L−1) for the step lengths ``H`` (the grid's by default): the elements'
@@ -453,7 +503,14 @@ class ContactTranscription:
         leaves &= ~self.law_exempt
         raw_max = float(np.max(np.abs(raw[leaves]))) if np.any(leaves) else 0.0
         g_end = np.asarray(cm.gap_row(Q[L])).reshape(-1)
-        return float(max(np.max(np.abs(gq * NU * H[:, None])) / self.scales_p, np.max(np.abs(gs * MU)) / self.scales_p,
+        # (a contact whose release the last step times, mode E, leaves by its own force's zero: not a launch)
+        g_end = np.where([(L - 1, j) in self.lifts for j in range(c)], 0.0, g_end)
+        stage = 0.0
+        if cm.sc:   # the stages' pairs, φ(Z_j) λ^c_j h
+            gz = np.asarray(cm.stage_gap.map(L)(*[z.T for z in zm + zp])).T
+            lcz = np.asarray(values["lam_cstage"], float).reshape(L, 2 * cm.sc)
+            stage = float(np.max(np.abs(gz * lcz * H[:, None]))) / self.scales_p
+        return float(max(stage, np.max(np.abs(gq * NU * H[:, None])) / self.scales_p, np.max(np.abs(gs * MU)) / self.scales_p,
                          float(np.max(np.abs(g_end * NU[L - 1] * H[L - 1]))) / self.scales_p,
                          np.max(np.abs(law)) / self.scales_law,
                          raw_max / self.scales_law * COMPLEMENTARITY_TOL / LAW_TOL))

@@ -24,7 +24,7 @@ from .state import Problem
 STEP_VALUES = ("qs", "beta", "nu", "mu", "mul", "fleft", "fratio")
 #: ... and a step's stages and their multipliers, which a restarted round does not take: a one-step march's stages
 #: sit on another branch of the stage rows than the answer's neighbours (docs/notes.md, issue 43's measurements)
-STAGE_VALUES = ("zs", "lam", "lam_sub", "lam_stage")
+STAGE_VALUES = ("zs", "lam", "lam_sub", "lam_stage", "lam_cstage", "fstage")
 
 
 def _start_of(prog, V, q0):
@@ -226,7 +226,8 @@ def _slips(cm: ContactMechanics, prog, init, vref) -> dict:
     N, n, c = prog.L, cm.n, cm.c
     Q, S = init["q"].reshape(N + 1, n), init["qs"].reshape(N, n)
     ar = np.asarray(prog.nlp.parameter_value("arrive"), float).reshape(N, c)
-    sl = np.asarray(cm.slip_row.map(N)(Q[:-1].T, S.T, Q[1:].T, init["beta"].reshape(N), prog.steps(init), ar.T)).T / vref
+    sl = np.asarray(cm.slip_row.map(N)(Q[:-1].T, S.T, Q[1:].T, init["beta"].reshape(N), prog.steps(init), ar.T,
+                                       *_zparts(prog, init, 0), *_zparts(prog, init, 1))).T / vref
     return {"slip_plus": np.maximum(sl, 0.0).reshape(-1), "slip_minus": np.maximum(-sl, 0.0).reshape(-1)}
 
 

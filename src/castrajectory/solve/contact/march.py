@@ -107,7 +107,7 @@ def _chunk(step: _Step, rows, q, p, h, held, fm, k: int, K: int, span: int, U, t
         if rows.get(name) and name not in ("q", "qs", "beta", "zs"):
             x0[sl] = np.asarray(rows[name][-1], float).reshape(-1)[:sl.stop - sl.start]
     try:
-        Qn, Pn, X, Gs, Gn, Rr, SL = (a[:, :K] if a.ndim == 2 else a[:K]
+        Qn, Pn, X, Gs, Gn, Rr, SL, VZ = (a[:, :K] if a.ndim == 2 else a[:K]
                                      for a in step.chunk(span, q, p, h, held, fm, x0,
                                                          U[k:k + span]))
     except RuntimeError as exc:
@@ -121,8 +121,18 @@ def _chunk(step: _Step, rows, q, p, h, held, fm, k: int, K: int, span: int, U, t
     ok = (Rr <= step.o.chunk_tol * (1.0 + np.max(np.abs(X), axis=0)))
     ok &= np.all((Gs > tol) & (Gn > tol) | held[:, None], axis=0)
     ok &= np.all((NU >= 0.0) & (MU >= 0.0) | ~held[:, None], axis=0)
+    if cm.sc:   # (and its forces at the stages)
+        LC = X[lay["lam_cstage"]].reshape(-1, c, X.shape[1])
+        ok &= np.all((LC >= 0.0) | ~held[None, :, None], axis=(0, 1))
+    if step.o.time_held_events and np.any(held):
+        # a held contact whose force of the continuous motion falls below zero by the step's end is released inside
+        # it, and a sticking one whose friction force leaves its cone starts to slide inside it: that step is marched
+        # alone, where its sub-node times the event (modes E and G, search._release_timing and _grip_timing)
+        stuck = np.array([held[j] and fm[j] == STICK and fm[c + j] == STICK for j in range(c)]) if cm.friction \
+            else np.zeros(c, bool)
+        ok &= _forces_hold(cm, Qn, Pn, held, stuck, U[k:k + K])
     if cm.friction:
-        ok &= step.friction_holds(fm, X[lay["fratio"]], SL)
+        ok &= step.friction_holds(fm, X[lay["fratio"]], SL, X[lay["fstage"]], VZ)
         # a sliding contact whose slip turns inside a step (planar): that step is marched alone, where its
         # sub-node times the turn (mode W, search._slip_turn)
         ok &= ~_turns(cm, fm, held, np.column_stack([q, Qn]), np.column_stack([p, Pn]))
@@ -138,6 +148,26 @@ def _chunk(step: _Step, rows, q, p, h, held, fm, k: int, K: int, span: int, U, t
         _record(rows, vals, np.zeros(c, bool), h, k + j, modes, list(fm))
     step.fprev = list(fm)
     return i, span, (Qn[:, i - 1].copy(), Pn[:, i - 1].copy(), Gn[:, i - 1].copy())
+
+
+def _forces_hold(cm: ContactMechanics, Qn, Pn, held, stuck, U) -> np.ndarray:
+    """Per chunk step (columns of its end nodes ``Qn`` and momenta ``Pn``): the continuous motion's forces there push at
+    every held contact, and keep every sticking one inside its cone (:attr:`ContactMechanics.contact_forces`)."""
+    c, d, K = cm.c, cm.fd, Qn.shape[1]
+    try:
+        if not cm.friction:
+            F = np.asarray(cm.held_force.map(K)(Qn, Pn, held.astype(float), U.T)).reshape(c, K)
+            return np.all((F >= 0.0) | ~held[:, None], axis=0)
+        out = np.asarray(cm.contact_forces.map(K)(Qn, Pn, held.astype(float), stuck.astype(float), U.T)).reshape(-1, K)
+    except RuntimeError as exc:
+        # (the held contacts' rows are dependent -- a box on two corners of one edge, statically indeterminate: their
+        # forces are not functions of the state, and no event of theirs is timed by them)
+        if "Evaluation failed" not in str(exc):
+            raise
+        return np.ones(K, bool)
+    lam, tt = out[:c], out[c:].reshape(c, d, K)
+    margin = cm.mu_f[:, None] * lam - np.linalg.norm(tt, axis=1)
+    return np.all((lam >= 0.0) | ~held[:, None], axis=0) & np.all((margin >= 0.0) | ~stuck[:, None], axis=0)
 
 
 def _one_step(step: _Step, rows, q, p, h, k: int, g_q, held_prev, tol: float, max_splits: int, start, trace):
@@ -184,6 +214,10 @@ def _arrays(cm: ContactMechanics, rows) -> Dict[str, np.ndarray]:
         del out["zs"]
     if not (cm.s and cm.m):
         del out["lam_stage"]
+    if not cm.sc:
+        del out["lam_cstage"]
+    if not cm.nfz:
+        del out["fstage"]
     return out
 
 
@@ -206,7 +240,8 @@ def _turns(cm, fm, held, Q, Pm) -> np.ndarray:
 
 
 #: The per-step values of the march by the transcription's names (``q`` is the step's end node) ...
-_VALUES = ("q", "qs", "beta", "nu", "mu", "lam", "lam_sub", "fratio", "zs", "lam_stage", "mul", "fleft")
+_VALUES = ("q", "qs", "beta", "nu", "mu", "lam", "lam_sub", "fratio", "zs", "lam_stage", "mul", "fleft", "lam_cstage",
+           "fstage")
 #: ... and the march's own records.
 _ROWS = _VALUES + ("bounced", "steps", "base", "modes", "fmodes")
 

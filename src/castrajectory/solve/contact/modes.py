@@ -15,6 +15,14 @@ K = "K"
 #: there vanishes after its share of the first part's force; it slides through the first part, and sticks or
 #: slides the other way through the second)
 W = "W"
+#: a held contact released inside the step, at its sub-node, which it times: its normal force of the continuous motion
+#: there (held_force, with the contacts held through the first part) vanishes; held through the first part, open
+#: through the second, no impulse at the sub-node
+E = "E"
+#: a held contact with friction that sticks through the first part of the step and slides from its sub-node on, which
+#: it times: its friction force of the continuous motion there (contact_forces, with the contacts held and sticking
+#: through the first part) reaches the cone
+G = "G"
 #: friction modes of a contact in a step: no friction force, sticking, sliding with a positive slip
 #: velocity (ρ = −μ_f), sliding with a negative one (ρ = μ_f)
 FREE, STICK, UP, DOWN = "-", "S", "U", "D"
@@ -27,15 +35,15 @@ SLIDE = "L"
 #: an impact at the sub-node (the step's impulse μ there): Newton's law, caught, fixed by the sequential law, Stronge's
 SUB_IMPACT = (I, C, T, F, K)
 #: ... or a held contact's slip turning there: the contacts that arrive at the sub-node, whose slip counts after it
-AT_SUB = SUB_IMPACT + (W,)
+AT_SUB = SUB_IMPACT + (W, G)
 #: the contacts whose gap times the sub-node (it is on the surface there)
 TIMES_SUB = (I, C, T, K)
 #: the arrivals the march times by their gap alone (Newton's law or a catch)
 GAP_TIMED = (I, C)
 #: the contacts held through the first part of the step (their node force free, their sub-node gap closed)
-HELD = (H, R, W)
+HELD = (H, R, W, E, G)
 #: the contacts closed at the step's next node
-CLOSES = (H, C, K, W)
+CLOSES = (H, C, K, W, G)
 #: an impact at the step's first node (Newton's law there; P with its impulse fixed by the sequential law)
 AT_NODE = (N, P)
 #: impulses fixed by the sequential law (at the sub-node)
@@ -43,11 +51,11 @@ SEQUENTIAL = (F, T)
 #: ... and at the node: the impacts exempt from Newton's law row
 LAW_FIXED = SEQUENTIAL + (P,)
 #: the contacts whose sub-node impulse μ is free (≥ 0)
-FREE_IMPULSE = (H, I, C, K, W)
+FREE_IMPULSE = (H, I, C, K, W, G)
 #: the contacts that may push at the sub-node in the search's cascade (an impulse shared by a timed arrival)
 PUSHING = (I, C, H, R)
 #: the contacts that must not penetrate at the sub-node
-KEPT_OUT = PUSHING + (W,)
+KEPT_OUT = PUSHING + (W, G)
 #: friction modes that slide with a positive slip velocity (the force against it): up, and on a plane's cone
 SLIDING_UP = (UP, SLIDE)
 
@@ -56,9 +64,11 @@ SLIDING_UP = (UP, SLIDE)
 def releases(modes) -> np.ndarray:
     """Per contact, 1 where its sub-node impulse μ⁻ is its share of the first part's force
     (:meth:`ContactMechanics.release_row`): held until an impact's sub-node and released there (mode R in a step
-    with an impact at its sub-node: I, C, T, F or K), or held with its slip stopping or turning there (W)."""
+    with an impact at its sub-node: I, C, T, F or K), held with its slip stopping or turning there (W), or sticking
+    until it and sliding after (G): the friction force changes its law there, and the first part's end takes its own
+    share, sticking or sliding as the first part did."""
     impact = any(m in SUB_IMPACT for m in modes)
-    return np.array([float(impact and m == R or m == W) for m in modes])
+    return np.array([float(impact and m == R or m in (W, G)) for m in modes])
 
 
 def turn_fraction(s0: float, s1: float):

@@ -80,6 +80,11 @@ class ContactNLP(ContactTranscription):
         # stops or turns there (W) times it by its slip (left_slip, below)
         first = timed & (np.cumsum(timed, axis=1) == 1)
         turns = modes == M.W
+        # a release timed at its sub-node (E): its force there vanishes, with the contacts held through the first part;
+        # a stick's end timed there (G): its friction force reaches the cone
+        lifts, grips = modes == M.E, modes == M.G
+        self.lifts = [(int(k), int(j)) for k, j in zip(*np.where(lifts))]
+        self.grips = [(int(k), int(j)) for k, j in zip(*np.where(grips))]
         # (which slips stop or turn at a sub-node, for the answer: stop where the second part sticks)
         fm_all = np.asarray(point.get("fmodes", np.full((L, 2 * c), M.FREE)), dtype=object).reshape(L, 2 * c)
         self.turns = [(int(k), int(j), "stop" if fm_all[k, c + j] == M.STICK else "turn") for k, j in zip(*np.where(turns))]
@@ -91,16 +96,25 @@ class ContactNLP(ContactTranscription):
         # the first part's closing impulses μ⁻: a contact released at its step's impact (R with an impact at the
         # sub-node) takes its share of the first part's force there (free, its release row zero); a plastic arrival
         # with friction (K) Stronge's impulse, fixed at the march's (ContactMechanics.sub_row)
-        release = (modes == M.R) & np.any(np.isin(modes, M.SUB_IMPACT), axis=1, keepdims=True) | turns
+        release = (modes == M.R) & np.any(np.isin(modes, M.SUB_IMPACT), axis=1, keepdims=True) | turns | grips
         leftfix = modes == M.K
         self.release = release.astype(float)
+        if np.any(lifts | grips) and not self.has_lifts:
+            raise ValueError("the march timed a release or a stick's end (mode E, G) that this program has no rows for: "
+                             "build it with lifts=True")
         self.hold(release=self.release)
+        if self.has_lifts:
+            fm = np.asarray(point.get("fmodes", np.full((L, 2 * c), M.FREE)), dtype=object).reshape(L, 2 * c)
+            self.nlp.set_parameter("held", held.astype(float).reshape(-1))
+            self.nlp.set_parameter("stuck", (fm[:, :c] == M.STICK).astype(float).reshape(-1))
+            self.nlp.set_parameter("slide_sign", np.select([np.isin(fm[:, c:], M.SLIDING_UP), fm[:, c:] == M.DOWN],
+                                                           [1.0, -1.0], 0.0).reshape(-1))
         self.law_exempt = np.isin(modes, M.LAW_FIXED)
         mul_march = np.asarray(point["mul"], float).reshape(-1)
         mu_march = np.asarray(point["mu"], float).reshape(-1)
         nu_march = np.asarray(point["nu"], float).reshape(-1)
         zero = np.zeros(L * c)
-        untimed = ~np.any(timed | turns, axis=1)
+        untimed = ~np.any(timed | turns | lifts | grips, axis=1)
         blo = np.where(untimed, 0.0, ALPHA_MIN - 0.5)
         bhi = np.where(untimed, 0.0, 0.5 - ALPHA_MIN)
         bounds = {
@@ -119,9 +133,28 @@ class ContactNLP(ContactTranscription):
             "sub_gap": (zero, np.where((held | first).reshape(-1), 0.0, np.inf)),
             "impact_law": (np.where(law.reshape(-1), 0.0, -np.inf), np.where(law.reshape(-1), 0.0, np.inf)),
         }
+        if self.has_lifts:
+            on = np.concatenate([lifts, grips], axis=1).reshape(-1)
+            bounds["timed_force"] = (np.where(on, 0.0, -np.inf), np.where(on, 0.0, np.inf))
+        bounds.update(self._stage_bounds(held, closes))
         if self.cm.friction:
             bounds.update(self._friction_bounds(point, modes, release, leftfix, turns))
         return bounds
+
+    def _stage_bounds(self, first, second) -> Dict[str, tuple]:
+        """The stages' pairs of a decided branch: a contact held through a part (``first``, ``second``: per step and
+        contact) has its gap closed at the part's stages and its force there free (≥ 0); elsewhere the force is 0
+        and the stage's gap is not a row of the branch (the march checks the gaps at the nodes and sub-nodes)
+        (:meth:`ContactMechanics.stage_holds`)."""
+        cm = self.cm
+        if not cm.sc:
+            return {}
+        st = cm.dm.scheme.stages
+        # (per step: the first part's stages, each with its contacts, then the second's)
+        hold = np.concatenate([np.tile(first, (1, st)), np.tile(second, (1, st))], axis=1).reshape(-1)
+        return {"lam_cstage": (np.zeros(hold.size), np.where(hold, np.inf, 0.0)),
+                "stage_gap": (np.full(hold.size, -np.inf), np.full(hold.size, np.inf)),
+                "stage_hold": (np.where(hold, 0.0, -np.inf), np.where(hold, 0.0, np.inf))}
 
     def _friction_bounds(self, point, modes, release, leftfix, turns) -> Dict[str, tuple]:
         """The friction's part of :meth:`mode_bounds` (and its ``arrive`` parameter): each slot's ratio and slip by
@@ -167,7 +200,34 @@ class ContactNLP(ContactTranscription):
             bounds["cone"] = (np.where(on, 0.0, -np.inf).reshape(-1), np.full(L * 2 * c, np.inf))
             sl = np.repeat((fm == M.SLIDE)[..., None], d, axis=2).reshape(-1)
             bounds["slide"] = (np.where(sl, 0.0, -np.inf), np.where(sl, 0.0, np.inf))
+        if self.cm.nfz:
+            bounds.update(self._stage_friction_bounds(fm))
         return bounds
+
+    def _stage_friction_bounds(self, fm) -> Dict[str, tuple]:
+        """The stages' friction on the branch: each part's stages in its slot's mode (the first part's the node slot's,
+        the second's the sub-node slot's; ``fm`` per step and slot).  Sticking, the displacement from the part's start
+        vanishes and the ratio keeps in the cone; sliding, the ratio is at the cone's edge against the stage's slip
+        velocity (in the plane ``ρ = ∓μ_f`` with the velocity's sign); otherwise no friction force."""
+        cm, L, c, d = self.cm, self.L, self.cm.c, self.cm.fd
+        st = cm.dm.scheme.stages
+        # (per step: the first part's stages, each with its contacts, then the second's)
+        zm = np.concatenate([np.tile(fm[:, :c], (1, st)), np.tile(fm[:, c:], (1, st))], axis=1)
+        mu = np.tile(cm._stage_mu(), (L, 1))
+        fmd, mud = np.repeat(zm[..., None], d, axis=2), np.repeat(mu[..., None], d, axis=2)
+        modes = [M.STICK, M.UP, M.DOWN, M.SLIDE]
+        out = {"fstage": (np.select([fmd == m for m in modes], [-mud, -mud, mud, -mud], 0.0).reshape(-1),
+                          np.select([fmd == m for m in modes], [mud, -mud, mud, mud], 0.0).reshape(-1)),
+               "stage_slip": (np.where(fmd == M.STICK, 0.0, -np.inf).reshape(-1),
+                              np.where(fmd == M.STICK, 0.0, np.inf).reshape(-1)),
+               "stage_vel": (np.where(fmd == M.UP, 0.0, -np.inf).reshape(-1),
+                             np.where(fmd == M.DOWN, 0.0, np.inf).reshape(-1))}
+        if d == 2:
+            on = np.isin(zm, (M.STICK, M.SLIDE)).reshape(-1)
+            out["stage_cone"] = (np.where(on, 0.0, -np.inf), np.full(on.size, np.inf))
+            sl = np.repeat((zm == M.SLIDE)[..., None], d, axis=2).reshape(-1)
+            out["stage_slide"] = (np.where(sl, 0.0, -np.inf), np.where(sl, 0.0, np.inf))
+        return out
 
     def solve_branch(self, q0, p0, guess: Dict[str, np.ndarray], options=None, verbose=False,
                      max_iter: Optional[int] = None, penalties=PENALTY) -> NLPResult:
@@ -216,6 +276,9 @@ class ContactNLP(ContactTranscription):
         }
         on = bounced.reshape(-1)
         bounds["impact_law"] = (np.where(on, 0.0, -np.inf), np.where(on, 0.0, np.inf))
+        # a part between two closed points holds its contact at its stages
+        sub_closed = gs <= tol
+        bounds.update(self._stage_bounds(node_closed[:L] & sub_closed, sub_closed & node_closed[1:]))
         init = self._start(q0, p0, guess)
         opts = self._branch_options(options, max_iter)
         # the undecided pairs (if any) by the penalty ladder, warm-started; decided ones are exact
@@ -268,7 +331,8 @@ class ContactNLP(ContactTranscription):
         """Set the branch parameters given (per step and contact, 0/1): the contacts whose arrival times the sub-node
         (``timed``), Newton's law there (``bounce``), the impacts at a node (``node_impact``), the first part's closing
         impulses free (``release``: a contact released at the step's impact, or a slip's turn), the slips counted after
-        the sub-node (``arrive``).  Every strategy sets them through this method (or :meth:`mode_bounds`)."""
+        the sub-node (``arrive``).  Every strategy sets them through this method (or :meth:`mode_bounds`, which also sets
+        the timed forces' masks)."""
         for name, v in (("timed", timed), ("bounce", bounce), ("node_impact", node_impact), ("release", release),
                         ("arrive", arrive)):
             if v is not None:

@@ -48,7 +48,13 @@ class MarchOptions:
     * ``impact_speed_steps``: a contact approaching faster than this many steps' worth of its normal acceleration,
       ``|J q̈| h``, arrives with an impact (resting contact approaches at about half a step's worth): touching at a
       step's first node it takes the impact there (mode N), and an answer lists its impulse as an impact; slower
-      arrivals are the discrete form of persistent contact.
+      arrivals are the discrete form of persistent contact;
+    * ``time_held_events``: the events of a held contact are timed inside their steps, at the steps' sub-nodes: a
+      release where its normal force of the continuous motion reaches zero (mode E), a stick's end where its friction
+      force reaches the cone (mode G), and a slip's stop or turn that the search had put at the step's node (mode W
+      started from the node's slip; a slide's turn inside a step is timed either way).  Their times then have the
+      scheme's order, where a release or a stick's end at a node or an untimed sub-node is first order.  The
+      contact-implicit optimal control's rounds hold their own events, so its march leaves these untimed.
     """
 
     newton_iter: int = 30
@@ -62,6 +68,7 @@ class MarchOptions:
     max_combinations: int = 256
     simultaneous_gap: float = 1e-9
     impact_speed_steps: float = 2.0
+    time_held_events: bool = True
 
     def __post_init__(self):
         _integers(self, ("newton_iter", "chunk_steps", "chunk_newton", "mode_rounds", "friction_rounds",
@@ -231,7 +238,7 @@ class ContactControlOptions:
     resolve_rounds: int = 3
     resolve_contracting: int = 6
     branch_small_iter: int = 500
-    march_options: MarchOptions = field(default_factory=MarchOptions)
+    march_options: MarchOptions = field(default_factory=lambda: MarchOptions(time_held_events=False))
 
     def __post_init__(self):
         # (the names themselves are checked against the registry, .policies.STARTS, when a solve starts)

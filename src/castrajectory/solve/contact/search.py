@@ -13,7 +13,7 @@ from ...discretise.contact.transcription import ALPHA_MIN
 from ...models.impact import (frictional_impact, frictional_impact_plane, sequential_frictional_impact,
                                sequential_impact)
 from .modes import (AT_SUB, CLOSES, DOWN, FIX, FREE, GAP_TIMED, HELD, KEPT_OUT, PUSHING, SLIDE,
-                    STICK, UP, C, F, H, I, K, N, O, P, R, T, W, releases, turn_fraction)
+                    STICK, UP, C, E, F, G, H, I, K, N, O, P, R, T, W, releases, turn_fraction)
 from .step import _Step, restage
 
 
@@ -84,6 +84,9 @@ def _march_step(step: _Step, q, p, h, g_q, held_prev, tol, finest: bool, start=N
     c = step.c
     pen = 1e-12 * step.ell
     touch = g_q <= tol
+    step.held_start = touch & held_prev
+    # (the friction modes the previous step ended in: which contacts stuck at the step's start)
+    step.fprev_start = list(step.fprev[step.c:]) if step.nf else [FREE] * step.c
     v = np.linalg.solve(np.asarray(step.cm.system.mass_matrix(q)), p)
     x0 = restage(step.cm, np.concatenate([q + 0.5 * h * v, q + h * v, np.zeros(step.cm.nx - 2 * step.n)]), q)
     if start is not None:
@@ -131,7 +134,7 @@ def _base_mode(m: str, touching: bool):
     arrival from flight does not."""
     if m == F:
         m = H if touching else I
-    m = {T: I, K: C, P: N}.get(m, m)
+    m = {T: I, K: C, P: N, E: H, G: H}.get(m, m)
     if m == O or (m in (H, R, W, N)) == touching:
         return m
     return None
@@ -179,6 +182,12 @@ def _solved(step: _Step, q, p, h, x, used, gn, tol):
         turned = _slip_turn(step, q, p, h, used, x, step.last_fmodes)
         if turned is not None:
             return _result(step, *turned)
+        lifted = _release_timing(step, q, p, h, used, x, step.last_fmodes)
+        if lifted is not None:
+            return _result(step, *lifted)
+        gripped = _grip_timing(step, q, p, h, used, x, step.last_fmodes)
+        if gripped is not None:
+            return _result(step, *gripped)
     return law or _result(step, x, used, gn, step.last_fmodes)
 
 
@@ -217,6 +226,7 @@ def _try(step: _Step, q, p, h, modes, x0, x, frac):
             xn, used = law
     o = 2 * n + 1
     step.last_mul = xn[step.cm.layout["mul"]] * releases(used)
+    step.last_lc = _stage_forces(step.cm, xn)
     return (xn, np.asarray(gapf(xn[:n])[0]).reshape(-1), np.asarray(gapf(xn[n:2 * n])[0]).reshape(-1),
             xn[o:o + c], xn[o + c:o + 2 * c], float(xn[2 * n]), used)
 
@@ -303,13 +313,16 @@ def _friction_judged(step: _Step, q, p, h, modes, slips, muf, fixed: dict, fm, x
     if not ok:
         return None
     rho = xf[cm.layout["fratio"]]
-    slip = np.asarray(cm.slip_row(q, xf[:n], xf[n:2 * n], xf[2 * n], h, slips)).reshape(-1)
+    slip = np.asarray(cm.slip_row(q, xf[:n], xf[n:2 * n], xf[2 * n], h, slips,
+                                  *_parts(cm, xf))).reshape(-1)
     tol = 1e-12 * step.vref
     worst, pick = 0.0, None
+    rz, vz = _stage_friction(cm, q, h, xf)
     if d == 2:
-        # the circular cone: sticking fails outside it (it then slides), sliding where the slip has vanished
-        rn = np.linalg.norm(rho.reshape(2 * c, d), axis=1)
-        sn = np.linalg.norm(slip.reshape(2 * c, d), axis=1)
+        # the circular cone: sticking fails outside it (it then slides), sliding where the slip has vanished (at the
+        # slot or at a stage of its part)
+        rn = np.maximum(np.linalg.norm(rho.reshape(2 * c, d), axis=1), np.max(np.linalg.norm(rz, axis=2), axis=0, initial=0.0))
+        sn = np.minimum(np.linalg.norm(slip.reshape(2 * c, d), axis=1), np.min(np.linalg.norm(vz, axis=2), axis=0, initial=np.inf))
         for j, f in enumerate(fm):
             if f == STICK and rn[j] > muf[j] * (1 + 1e-10):
                 viol, new = rn[j] - muf[j], SLIDE
@@ -320,13 +333,18 @@ def _friction_judged(step: _Step, q, p, h, modes, slips, muf, fixed: dict, fm, x
             if viol > worst:
                 worst, pick = viol, (j, new)
         return xf, pick
+    # (planar: each slot's ratio and slip with its part's stages: the largest ratio, the slip's extremes)
+    allr = np.vstack([rho[None, :], rz[..., 0]])
+    rext = allr[np.argmax(np.abs(allr), axis=0), np.arange(2 * c)]
+    slo = np.minimum(slip, np.min(vz[..., 0], axis=0, initial=np.inf))
+    shi = np.maximum(slip, np.max(vz[..., 0], axis=0, initial=-np.inf))
     for j, f in enumerate(fm):
-        if f == STICK and abs(rho[j]) > muf[j] * (1 + 1e-10):
-            viol, new = abs(rho[j]) - muf[j], (DOWN if rho[j] > 0 else UP)
-        elif f == UP and slip[j] < -tol:
-            viol, new = -slip[j] / step.vref, STICK
-        elif f == DOWN and slip[j] > tol:
-            viol, new = slip[j] / step.vref, STICK
+        if f == STICK and abs(rext[j]) > muf[j] * (1 + 1e-10):
+            viol, new = abs(rext[j]) - muf[j], (DOWN if rext[j] > 0 else UP)
+        elif f == UP and slo[j] < -tol:
+            viol, new = -slo[j] / step.vref, STICK
+        elif f == DOWN and shi[j] > tol:
+            viol, new = shi[j] / step.vref, STICK
         else:
             continue
         if viol > worst:
@@ -334,11 +352,28 @@ def _friction_judged(step: _Step, q, p, h, modes, slips, muf, fixed: dict, fm, x
     return xf, pick
 
 
+def _stage_friction(cm, q, h, x):
+    """The stages' friction ratios and slip velocities of a step's unknowns ``x``, each ``(stages, 2c, d)`` by the slot
+    whose part the stage is in (node slots first; none for a two-point scheme or without friction)."""
+    c, d, n = cm.c, cm.fd, cm.n
+    if not cm.nfz:
+        return np.zeros((0, 2 * c, d)), np.zeros((0, 2 * c, d))
+    st = cm.dm.scheme.stages
+    vel = np.asarray(cm.stage_vel_row(q, x[:n], x[n:2 * n], x[2 * n], h, *_parts(cm, x))).reshape(-1)
+
+    def by_slot(v):
+        v = v.reshape(2, st, c, d)
+        return np.concatenate([v[0], v[1]], axis=1)
+    return by_slot(x[cm.layout["fstage"]]), by_slot(vel)
+
+
 def _slip_turn(step: _Step, q, p, h, modes, x, fmodes):
     """A held contact whose slip stops or turns inside the step (planar friction, no impact in the step): the step
     again with its sub-node timed there (mode W: the slip velocity at the sub-node, after the contact's share of
     the first part's force, vanishes), the first part sliding as its node slot did and the second sticking or
-    sliding the other way.  ``(x, modes, gaps at q_{k+1}, friction modes)``, or None where no slip turns, or the
+    sliding the other way.  Found where the node slot slides and the slip at the step's end has turned, and where the
+    search let a contact that slid into the step's node stick from it while its slip there still runs (a stop just
+    after the node).  ``(x, modes, gaps at q_{k+1}, friction modes)``, or None where no slip turns, or the
     timed step does not solve with valid modes (the step as it was then stands: the turn inside it, first order)."""
     cm, n, c = step.cm, step.n, step.c
     if not step.nf or step.fd != 1 or any(m not in (O, H) for m in modes):
@@ -351,11 +386,25 @@ def _slip_turn(step: _Step, q, p, h, modes, x, fmodes):
     v1 = cm.dm.velocities(qn[None, :], pn[None, :])[0]
     s0 = np.asarray(cm.system.tangent(q)).reshape(-1, n) @ v0
     s1 = np.asarray(cm.system.tangent(qn)).reshape(-1, n) @ v1
+    before = getattr(step, "fprev_start", [FREE] * c)
     for j in range(c):
-        if modes[j] != H or cm.mu_f[j] <= 0 or fm[j] not in (UP, DOWN):
+        if modes[j] != H or cm.mu_f[j] <= 0:
             continue
-        sg = 1.0 if fm[j] == UP else -1.0
-        frac = turn_fraction(sg * s0[j], sg * s1[j])
+        if step.o.time_held_events and before[j] in (UP, DOWN) and fm[j] != before[j] and step.held_start[j]:
+            # it slid into the node and sticks or slides back from it, its slip at the node still running the old way
+            slid = before[j]
+            sg = 1.0 if slid == UP else -1.0
+            frac = (min(sg * s0[j] / (sg * s0[j] - sg * s1[j]), 0.5) if sg * s1[j] < 0.0 else 0.5) \
+                if sg * s0[j] > 1e-12 * step.vref else None
+        elif fm[j] in (UP, DOWN):
+            slid = fm[j]
+            sg = 1.0 if slid == UP else -1.0
+            frac = turn_fraction(sg * s0[j], sg * s1[j])
+            if frac is None and step.o.time_held_events and fm[c + j] != slid and sg * s0[j] > 0.0 > sg * s1[j]:
+                # (the node momenta's slips bracket the turn, which their half-impulse offset put before the step)
+                frac = sg * s0[j] / (sg * s0[j] - sg * s1[j])
+        else:
+            continue
         if frac is None:
             continue
         frac = min(max(frac, ALPHA_MIN), 1.0 - ALPHA_MIN)
@@ -364,31 +413,194 @@ def _slip_turn(step: _Step, q, p, h, modes, x, fmodes):
         start = restage(cm, np.concatenate([q + frac * (qn - q), x[n:2 * n], [frac - 0.5], x[2 * n + 1:]]), q)
         for after in (STICK, DOWN if sg > 0 else UP):
             trial = list(fm)
-            trial[c + j] = after
+            trial[j], trial[c + j] = slid, after
             xw, ok = step.solve(start, q, p, h, new, fmodes=trial)
             if not ok or not (ALPHA_MIN - 0.5 <= xw[2 * n] <= 0.5 - ALPHA_MIN):
                 continue
             o = 2 * n + 1
             nu, mu, mul = xw[o:o + c], xw[o + c:o + 2 * c], xw[cm.layout["mul"]]
-            rho = xw[cm.layout["fratio"]]
-            slip = np.asarray(cm.slip_row(q, xw[:n], xw[n:2 * n], xw[2 * n], h,
-                                          np.array([float(m == W) for m in new]))).reshape(-1)
+            lc1, lc2 = _stage_forces(cm, xw)
             held = [i for i, m in enumerate(new) if m in (H, W)]
-            valid = all(nu[i] >= 0.0 and mu[i] >= 0.0 for i in held) and mul[j] >= 0.0
-            # every slot's friction mode holds (sticking inside the cone, sliding with its slip's sign)
-            muf = np.concatenate([cm.mu_f, cm.mu_f])
-            tol = 1e-12 * step.vref
-            for i, f in enumerate(trial):
-                if f == STICK:
-                    valid &= abs(rho[i]) <= muf[i] * (1 + 1e-10)
-                elif f == UP:
-                    valid &= slip[i] >= -tol
-                elif f == DOWN:
-                    valid &= slip[i] <= tol
-            gn = np.asarray(cm.system.gap(xw[n:2 * n])[0]).reshape(-1)
+            valid = all(nu[i] >= 0.0 and mu[i] >= 0.0 and lc1[i] >= 0.0 and lc2[i] >= 0.0 for i in held) \
+                and mul[j] >= 0.0
             if valid:
-                return xw, new, gn, trial
+                # every slot's friction mode holds, with the stages of its part (sticking inside the cone, sliding with
+                # its slip's sign)
+                judged = _friction_judged(step, q, p, h, new, np.array([m in AT_SUB for m in new], float),
+                                          np.concatenate([cm.mu_f, cm.mu_f]), {}, trial, xw)
+                valid = judged is not None and judged[1] is None
+            if valid:
+                return xw, new, np.asarray(cm.system.gap(xw[n:2 * n])[0]).reshape(-1), trial
     return None
+
+
+def _end_forces(step: _Step, q, p, h, modes, x):
+    """Each contact's normal force of the continuous motion (:attr:`ContactMechanics.held_force`) at the step's start
+    ``(q_k, p_k⁻)`` with the contacts held there, and at its end ``(q_{k+1}, p_{k+1}⁻)`` with the contacts that close
+    there and the contact itself (``(c,)`` each; at the end, a contact released in the step is then held on a point
+    that its flight has left by O(h³): the force the motion would need there to keep it)."""
+    cm, n, c = step.cm, step.n, step.c
+    start = np.asarray(step.held_start, float)
+    closes = np.array([m in CLOSES for m in modes], float)
+    qs, qn, b = x[:n], x[n:2 * n], float(x[2 * n])
+    zp = cm.stage_parts(x[cm.layout["zs"]])[1]
+    pn = np.asarray(cm.p_node_minus(qs, b, qn, h, *zp, step.t0, *step.uarg)).reshape(-1)
+    force = lambda qq, pp, mask: np.asarray(cm.held_force(qq, pp, mask, *step.uarg)).reshape(-1)  # noqa: E731
+    F0 = force(q, p, start)
+    F1 = np.array([force(qn, pn, np.maximum(closes, np.eye(c)[j]))[j] for j in range(c)])
+    return F0, F1
+
+
+def _release_timing(step: _Step, q, p, h, modes, x, fmodes):
+    """A contact held at the step's start whose normal force reaches zero inside the step (no impact in it,
+    frictionless contacts): the step again with its sub-node timed there (mode E: the force of the continuous motion
+    at the sub-node vanishes, :attr:`ContactMechanics.held_force`), the contact held through the first part and open
+    through the second.  A contact the search released at the step's node (its node force ν pulls) or at its
+    sub-node (R, untimed) while its force at the node still pushes is released inside the step, as is one held
+    through it whose force at the step's end pulls.  ``(x, modes, gaps at q_{k+1}, friction modes)``, or None where no
+    force reaches zero in the step or the timed step does not solve with valid modes (the step as it was then
+    stands: the release at a sub-node or a node, untimed)."""
+    cm, n = step.cm, step.n
+    if not step.o.time_held_events or any(m not in (O, H, R) for m in modes):
+        return None
+    start = np.asarray(step.held_start, bool)
+    if not np.any(start):
+        return None
+    try:
+        F0, F1 = _end_forces(step, q, p, h, modes, x)
+    except RuntimeError as exc:
+        # (dependent held rows: their forces are not functions of the state, _forces_hold)
+        if "Evaluation failed" not in str(exc):
+            raise
+        return None
+    cand = [j for j, m in enumerate(modes) if start[j] and cm.mu_f[j] <= 0 and F0[j] > 0.0 and (F1[j] < 0.0 or m != H)]
+    if not cand:
+        return None
+    frac = {j: F0[j] / (F0[j] - F1[j]) if F1[j] < 0.0 else 1.0 - ALPHA_MIN for j in cand}
+    j = min(cand, key=lambda i: frac[i])
+    f = min(max(frac[j], ALPHA_MIN), 1.0 - ALPHA_MIN)
+    new = list(modes)
+    new[j] = E
+    for i in cand:          # (the others released in the step are held through it: each is timed in its own step)
+        if i != j and new[i] == O:
+            new[i] = H
+    start_x = restage(cm, np.concatenate([q + f * (x[n:2 * n] - q), x[n:2 * n], [f - 0.5], x[2 * n + 1:]]), q)
+    got = _timed_solve(step, q, p, h, new, fmodes, start_x)
+    if got is None:
+        return None
+    xw, nu, mu, lc1, lc2, gs, gn = got
+    pen = 1e-12 * step.ell
+    valid = all((nu[i] >= 0.0 and lc1[i] >= 0.0 if m in HELD else True) and
+                (mu[i] >= 0.0 and lc2[i] >= 0.0 if m in CLOSES else True) and
+                (gs[i] >= -pen if m not in HELD else True) and (gn[i] >= -pen if m not in CLOSES else True)
+                for i, m in enumerate(new))
+    return (xw, new, gn, list(fmodes) if fmodes is not None else None) if valid else None
+
+
+def _timed_solve(step: _Step, q, p, h, modes, fmodes, start_x):
+    """The step in ``modes`` with its sub-node timed, from ``start_x``: ``(x, ν, μ, the smallest stage forces of each
+    part, the gaps at q̃ and at q_{k+1})``, or None where Newton fails or the sub-node leaves its window."""
+    cm, n, c = step.cm, step.n, step.c
+    xw, ok = step.solve(start_x, q, p, h, modes, fmodes=fmodes)
+    if not ok or not (ALPHA_MIN - 0.5 <= xw[2 * n] <= 0.5 - ALPHA_MIN):
+        return None
+    o = 2 * n + 1
+    lc1, lc2 = _stage_forces(cm, xw)
+    return (xw, xw[o:o + c], xw[o + c:o + 2 * c], lc1, lc2, np.asarray(cm.system.gap(xw[:n])[0]).reshape(-1),
+            np.asarray(cm.system.gap(xw[n:2 * n])[0]).reshape(-1))
+
+
+def _grip_timing(step: _Step, q, p, h, modes, x, fmodes):
+    """A held contact that sticks at the step's start and whose friction force of the continuous motion reaches its cone
+    inside the step (no impact in it): the step again with its sub-node timed there (mode G: the cone margin at the
+    sub-node vanishes, :attr:`ContactMechanics.cone_margin`, with the contacts held and sticking through the first
+    part), the contact sticking through the first part and sliding through the second, in the direction its force at the
+    cone pushes.  Found where the search let a contact that stuck through the previous step slide from the step's node,
+    or stick through the step while its margin at the step's end is negative.  ``(x, modes, gaps at q_{k+1}, friction
+    modes)``, or None (the step as it was then stands: the stick's end at a node, untimed)."""
+    cm, n, c, d = step.cm, step.n, step.c, step.fd
+    if not (step.o.time_held_events and step.nf) or any(m not in (O, H) for m in modes):
+        return None
+    start = np.asarray(step.held_start, bool)
+    stuck0 = np.array([start[j] and step.fprev_start[j] == STICK for j in range(c)])
+    fm = list(fmodes)
+    cand = [j for j in range(c) if modes[j] == H and stuck0[j] and cm.mu_f[j] > 0 and
+            (fm[j] != STICK or fm[c + j] != STICK)]
+    closes = np.array([m == H for m in modes], float)
+    zp = cm.stage_parts(x[cm.layout["zs"]])[1]
+    pn = np.asarray(cm.p_node_minus(x[:n], float(x[2 * n]), x[n:2 * n], h, *zp, step.t0, *step.uarg)).reshape(-1)
+    ends = [j for j in range(c) if modes[j] == H and stuck0[j] and cm.mu_f[j] > 0 and fm[j] == STICK and
+            fm[c + j] == STICK]
+    if not cand and not ends:
+        return None
+    try:
+        best = _grip_candidate(step, q, p, x, pn, cand + ends, closes, stuck0, start)
+    except RuntimeError as exc:
+        # (dependent held or sticking rows, _forces_hold)
+        if "Evaluation failed" not in str(exc):
+            raise
+        return None
+    if best is None:
+        return None
+    j, frac, sgj = best
+    f = min(max(frac, ALPHA_MIN), 1.0 - ALPHA_MIN)
+    new = list(modes)
+    new[j] = G
+    trial = list(fm)
+    trial[j] = STICK
+    trial[c + j] = (UP if sgj > 0 else DOWN) if d == 1 else SLIDE
+    return _grip_solved(step, q, p, h, new, trial, x, j, f)
+
+
+def _grip_candidate(step: _Step, q, p, x, pn, cands, closes, stuck0, start):
+    """The earliest stick's end among the contacts ``cands`` (:func:`_grip_timing`): ``(contact, fraction of the step,
+    the sign of the slip it starts)``, or None."""
+    cm, n, c, d = step.cm, step.n, step.c, step.fd
+    stick0 = stuck0.astype(float)
+    held0 = start.astype(float)
+    best = None
+    for j in cands:
+        # the direction the contact starts to slip in: against its friction force at the cone (the force's sign at the
+        # step's end, sticking there)
+        f1 = np.asarray(cm.contact_forces(x[n:2 * n], pn, closes, np.maximum(stick0, np.eye(c)[j]), *step.uarg)).reshape(-1)
+        tj = f1[c + j * d:c + (j + 1) * d]
+        sg = np.zeros(c)
+        sg[j] = -1.0 if (d == 1 and tj[0] > 0) else 1.0
+        m0 = float(np.asarray(cm.cone_margin(q, p, held0, stick0, sg, *step.uarg)).reshape(-1)[j])
+        m1 = float(np.asarray(cm.cone_margin(x[n:2 * n], pn, closes, np.maximum(stick0, np.eye(c)[j]), sg,
+                                             *step.uarg)).reshape(-1)[j])
+        if m0 > 0.0 and m1 < 0.0:
+            frac = m0 / (m0 - m1)
+            if best is None or frac < best[1]:
+                best = (j, frac, sg[j])
+    return best
+
+
+def _grip_solved(step: _Step, q, p, h, new, trial, x, j: int, f: float):
+    """The step in the modes ``new`` (contact ``j`` in mode G) and friction modes ``trial``, its sub-node started at the
+    fraction ``f``: ``(x, modes, gaps at q_{k+1}, friction modes)`` where it solves with valid modes, else None."""
+    cm, n, c, d = step.cm, step.n, step.c, step.fd
+    start_x = restage(cm, np.concatenate([q + f * (x[n:2 * n] - q), x[n:2 * n], [f - 0.5], x[2 * n + 1:]]), q)
+    # (the sub-node's impulse split by the parts' lengths, the first part's share with the node's sticking ratio: its
+    # ratio and its impulse multiply, and Newton from a zero share is singular)
+    lay = cm.layout
+    mu0 = start_x[lay["mu"]][j]
+    start_x[lay["mul"].start + j], start_x[lay["mu"].start + j] = f * mu0, (1.0 - f) * mu0
+    fl = start_x[lay["fleft"]].reshape(c, d)
+    fl[j] = start_x[lay["fratio"]].reshape(2 * c, d)[j]
+    start_x[lay["fleft"]] = fl.reshape(-1)
+    got = _timed_solve(step, q, p, h, new, trial, start_x)
+    if got is None:
+        return None
+    xw, nu, mu, lc1, lc2, _, gn = got
+    valid = all(nu[i] >= 0.0 and mu[i] >= 0.0 and lc1[i] >= 0.0 and lc2[i] >= 0.0 for i, m in enumerate(new) if m != O)
+    if valid:
+        # every slot's friction holds (the node slots and the first part's stages inside the cone, the sliding ones
+        # with their slips' signs)
+        valid = _friction_judged(step, q, p, h, new, np.array([m in AT_SUB for m in new], float),
+                                 np.concatenate([cm.mu_f, cm.mu_f]), {}, trial, xw)
+        valid = valid is not None and valid[1] is None
+    return (xw, new, gn, trial) if valid else None
 
 
 def _slow_arrivals(step: _Step, q, p, h):
@@ -621,10 +833,29 @@ def _changed(modes, pick):
     return out
 
 
+def _parts(cm, x):
+    """``[Z⁻, Z⁺]``: the stages of a step's two parts in its unknowns ``x`` (empty for a two-point scheme)."""
+    zs = x[cm.layout["zs"]]
+    return [zs[:cm.s], zs[cm.s:]]
+
+
+def _stage_forces(cm, x):
+    """The smallest force of each contact at the stages of a step's first and of its second part, ``(c,)`` each
+    (zeros for a two-point scheme)."""
+    if not cm.sc:
+        return np.full(cm.c, np.inf), np.full(cm.c, np.inf)
+    lc = x[cm.layout["lam_cstage"]].reshape(2, -1, cm.c)
+    return lc[0].min(axis=0), lc[1].min(axis=0)
+
+
 def _multiplier_pick(modes, nu, mu, step):
     """The most violated sign of a contact's force or impulse (scaled), as ``(contact, its new mode)``; ``None`` where
-    none is violated beyond 1e-12."""
+    none is violated beyond 1e-12.  A held contact's force at a stage of the step's first part counts as its node force
+    ν, at a stage of the second part as its sub-node impulse μ (each part's forces hold it through that part)."""
     worst, pick = 0.0, None
+    lc1, lc2 = step.last_lc
+    nu = np.minimum(nu, np.where(np.isin(modes, HELD), lc1, np.inf))
+    mu = np.minimum(mu, np.where(np.isin(modes, CLOSES), lc2 * step.smu / step.snu, np.inf))
     for j, m in enumerate(modes):
         if m in (H, R, N) and nu[j] < 0.0:
             viol = -nu[j] / step.snu

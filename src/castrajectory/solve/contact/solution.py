@@ -49,15 +49,19 @@ class SubNodeImpact:
 class Release:
     """A contact that leaves without an impact of its own (a lift-off): step ``k`` (the last node at which it was
     closed), its time and contact; ``at_impact``: released by another contact's impact at that time (the force it
-    held jumps to zero there), otherwise where its held force vanishes (:func:`_releases`)."""
+    held jumps to zero there), otherwise where its held force vanishes (:func:`_releases`); ``timed``: that time is
+    the sub-node of its step, where the march's mode E made the force of the continuous motion vanish (a time of the
+    scheme's order; otherwise a second-order reading of the node forces)."""
 
     step: int
     t: float
     contact: int
     at_impact: bool = False
+    timed: bool = False
 
     def as_dict(self) -> dict:
-        return {"step": self.step, "t": self.t, "contact": self.contact, "at_impact": self.at_impact}
+        return {"step": self.step, "t": self.t, "contact": self.contact, "at_impact": self.at_impact,
+                "timed": self.timed}
 
 
 @dataclass(kw_only=True)
@@ -98,8 +102,12 @@ class ContactTrajectory(Result):
     #: the friction coefficients per contact (None without friction)
     friction_coefficients: Optional[np.ndarray] = None
     #: the slips that stop (``"stop"``: the contact then sticks) or turn (``"turn"``: it slides back) at a sub-node,
-    #: which their step timed: ``(t, contact, kind)``
+    #: and the sticks that end there (``"start"``: the friction force reached the cone), which their step timed:
+    #: ``(t, contact, kind)``
     slip_turns: Optional[list] = None
+    #: per contact, the intervals of one state, ``(from, to, state)``: open, held (frictionless), stick, slide+ / slide-
+    #: (planar) or slide (a tangent plane); their ends are the nodes and sub-nodes, where the march times the events
+    intervals: Optional[list] = None
     #: the lift-offs: contacts that leave without an impact of their own (:class:`Release`, by time)
     releases: List["Release"] = field(default_factory=list)
     #: the contact force per node, ``node_impulse`` over the node's dual cell (``[t_k − h/2, t_k + h/2]``; node 0's
@@ -182,7 +190,9 @@ class ContactTrajectory(Result):
         normal impulse).  A node's ratio is its cell's mean, so the first sliding node's cell slides throughout and
         the stick ends inside the cell before it; there the parabola through the ratios (along the slide's
         direction) of the three stuck nodes before that cell reaches ``μ`` (the line through two).  The disk in
-        the bowl at μ = 0.05 slides again at 2.6038, 3.7049 and 4.8297 s (an event-driven reference)."""
+        the bowl at μ = 0.05 slides again at 2.6038, 3.7049 and 4.8297 s (an event-driven reference).  A start the
+        march timed (mode G: the sticking force reached the cone at its step's sub-node; ``slip_turns`` with kind
+        ``"start"``) is at that sub-node's time, of the scheme's order."""
         if self.friction_impulse is None:
             return []
         mu = float(self.friction_coefficients[contact])
@@ -195,6 +205,7 @@ class ContactTrajectory(Result):
         sliding = loaded & (rn >= mu * (1 - 1e-9))
         stuck = loaded & ~sliding
         stops, out = list(self.slip_stops(contact)), []
+        starts = [x for x, j, kind in (self.slip_turns or []) if j == contact and kind == "start"]
         for k in range(3, Lam.size - 1):
             if not stops or stops[0] >= t[k - 1]:
                 continue                                          # (a start needs a stop before it)
@@ -204,6 +215,10 @@ class ContactTrajectory(Result):
             stops = [x for x in stops if x >= t[k]]               # this start answers every stop before it
             held = [i for i in range(k - 4, k - 1) if i >= 0 and stuck[i] and t[i] > max(t[0], t[k] - 5 * (t[k] - t[k - 1]))]
             when = float(t[k - 1])
+            timed = [x for x in starts if t[max(k - 2, 0)] <= x <= t[k + 1]]
+            if timed:       # the march timed it at its step's sub-node (mode G)
+                out.append(timed[0])
+                continue
             if len(held) >= 2:
                 roots = np.roots(np.polyfit(t[held] - t[k - 1], ratio[held] @ d - mu, len(held) - 1))
                 roots = roots[np.isreal(roots)].real
@@ -225,6 +240,9 @@ class ContactTrajectory(Result):
                 # each contact's slip events (friction only): [stops, reversals, starts]
                 "slip_events": None if self.friction_impulse is None else
                 [[*self.slip_events(j), self.slip_starts(j)] for j in range(len(self.friction_coefficients))],
+                # each contact's intervals of one state (open, held, stick, slide)
+                "contact_intervals": None if self.intervals is None else
+                [[{"from": a, "to": b, "state": st} for a, b, st in iv] for iv in self.intervals],
                 # JSON keys of the earlier second sub-node per step, kept for existing readers: a step
                 # now holds one sub-node (the grid is halved instead), so they are always empty
                 "steps_sub2": [], "t_sub2": [], "mu_sub2": [],
@@ -255,8 +273,8 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     # march's mode N: the node's impulse h ν); the node's momentum is then the one after it, not the mean
     impacts = _impacts(cm, tn, res, N, q, S, B, MU, ZM, ZP, H, t, t_sub, gap, closed, force, half, pp, p)
     simultaneous = _simultaneous_warnings(cm, impacts)
-    # velocities M⁻¹p, tangent to the holonomic constraints where there are any
-    v = cm.dm.velocities(q, p)
+    # velocities M⁻¹p, tangent to the holonomic constraints where there are any, and to the contacts held at the node
+    v = _held_velocities(cm, q, cm.dm.velocities(q, p), closed, cm.gaps(S) <= TOUCH_TOL * tn.scales_ell)
     energy = sysm.energies(q, v)
     gap_sub = np.asarray(sysm.gap.map(N)(S.T)[0]).reshape(c, N).T
     # Impulse per node: Λ_k = h ν_k + (1 − α_k) μ_k + α_{k−1} μ_{k−1}, each sub-node impulse shared
@@ -275,7 +293,8 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
     # the nodes' dual cells: node 0's is half a step; node N's reaches past T into the look-ahead step, as its Λ does
     cell = 0.5 * (np.concatenate([[0.0], H[:N]]) + H[:N + 1])
     contact_force = lam / cell[:, None]
-    releases = _releases(t, closed, contact_force, impacts)
+    releases = _releases(t, closed, contact_force, impacts,
+                         {(k, j): float(t_sub[k]) for k, j in getattr(tn, "lifts", []) if k < N})
     return ContactTrajectory(
         warnings=warnings,
         t=t, q=q, p=p, v=v, energy=energy, t_sub=t_sub, q_sub=S, mu=MU, nu=nu, gap=gap, gap_sub=gap_sub,
@@ -288,16 +307,75 @@ def _finish(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, h: flo
         scheme=cm.dm.scheme.name, homotopy=list(res.homotopy), attempts=attempts, n=int(round(float(t[-1]) / h)),
         friction_ratio=fratio, slip=slip, friction_impulse=fimp,
         friction_coefficients=cm.mu_f.copy() if cm.friction else None,
-        slip_turns=[(float(t_sub[k]), j, kind) for k, j, kind in getattr(tn, "turns", []) if k < N] if cm.friction else None,
-        program={"terms": sysm.terms(), "steps": int(tn.L), **tn.nlp.anatomy()})
+        slip_turns=[(float(t_sub[k]), j, kind) for k, j, kind in
+                    list(getattr(tn, "turns", [])) + [(k, j, "start") for k, j in getattr(tn, "grips", [])]
+                    if k < N] if cm.friction else None,
+        program={"terms": sysm.terms(), "steps": int(tn.L), **tn.nlp.anatomy()},
+        intervals=_intervals(cm, t, t_sub, closed, gap_sub <= TOUCH_TOL * tn.scales_ell, fratio))
+
+
+def _intervals(cm: ContactMechanics, t, t_sub, closed, closed_sub, fratio) -> List[list]:
+    """Per contact, the answer's time split into intervals of one state: ``open``, ``held`` (frictionless), and with
+    friction ``stick``, ``slide+``/``slide-`` (the planar slip's sign) or ``slide`` (on a tangent plane).  Each part of
+    each step has one state: held where the contact is closed at both of its ends, sticking or sliding by its friction
+    slot's ratio (the node's for the first part, the sub-node's for the second: inside the cone, or on its edge against
+    the slip).  A part's ends are nodes and sub-nodes, so every event the march timed (an impact, a release, a slip's
+    stop, turn or start) is an interval's end at its own time.  ``[(from, to, state), ...]`` by contact."""
+    N, c = t_sub.size, cm.c
+    out = []
+    for j in range(c):
+        pieces = []
+        for k in range(N):
+            for part, (a, b) in enumerate(((t[k], t_sub[k]), (t_sub[k], t[k + 1]))):
+                held = closed[k, j] and closed_sub[k, j] if part == 0 else closed_sub[k, j] and closed[k + 1, j]
+                state = "open"
+                if held:
+                    state = "held"
+                    if cm.friction and cm.mu_f[j] > 0:
+                        r = np.atleast_1d(np.asarray(fratio[k, j, part], float))
+                        rn = float(np.linalg.norm(r))
+                        state = ("stick" if rn < cm.mu_f[j] * (1 - 1e-9) else "slide" if r.size > 1 else
+                                 "slide+" if r[0] < 0 else "slide-")
+                if b <= a:
+                    continue
+                if pieces and pieces[-1][2] == state:
+                    pieces[-1][1] = float(b)
+                else:
+                    pieces.append([float(a), float(b), state])
+        out.append([tuple(p) for p in pieces])
+    return out
+
+
+def _held_velocities(cm: ContactMechanics, q, v, closed, closed_sub):
+    """The node velocities ``v`` projected (in the kinetic metric, with the holonomic constraints) onto the tangent
+    space of the contacts held at each node: closed there and at the sub-nodes on either side (held through both parts
+    that meet at the node; a flight leaves one of them open).  The one-sided momenta of a held node differ by its
+    impulse ``h∇φᵀν``, along the held normals: their projection is one velocity, the scheme's, where their mean kept
+    a normal velocity of the impulse's split (second order)."""
+    N = q.shape[0] - 1
+    before = np.vstack([closed_sub[:1], closed_sub])[:N + 1]
+    after = np.vstack([closed_sub, closed_sub[-1:]])[:N + 1]
+    held = closed & before & after
+    out = np.array(v, float)
+    for k in np.flatnonzero(np.any(held, axis=1)):
+        M = np.asarray(cm.system.mass_matrix(q[k]))
+        C = np.asarray(cm.system.constraint(q[k])[1]) if cm.m else np.zeros((0, cm.n))
+        G = np.vstack([C, np.asarray(cm.system.gap(q[k])[1])[held[k]]])
+        MiGt = np.linalg.solve(M, G.T)
+        out[k] = v[k] - MiGt @ np.linalg.lstsq(G @ MiGt, G @ v[k], rcond=None)[0]
+    return out
 
 
 def _node_momenta(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, q, S, B, ZM, ZP, p0):
     """The node momenta of an answer, ``(p, p⁺, half the node forces' impulse, the node forces, closed, gaps, h ν)``.
 
-    A node force h ν_k makes the one-sided momenta differ, p_k⁺ = p_k⁻ + h ∇φ(q_k)ᵀ ν_k; the node's momentum is their
-    mean where the contact is closed (for a body resting on the ground p_k⁻ = −p_k⁺, so it is 0, not ±m g h/4).
-    Without a node force p_k⁻ = p_k⁺ (DEL).  At t = 0 the given p_0; at T the look-ahead step supplies ν_N."""
+    A node force h ν_k makes the one-sided momenta differ, p_k⁺ = p_k⁻ + h ∇φ(q_k)ᵀ ν_k; the node's momentum is the
+    forced discrete Legendre transform, which gives each part that meets at the node its quadrature's share of that
+    impulse, in proportion to the part's length: ``p_k = p_k⁻ + τ_l/(τ_l + τ_r) · h∇φᵀν`` (``τ_l``, ``τ_r`` the parts
+    before and after the node; their mean for equal parts, and for a body resting on the ground p_k⁻ = −p_k⁺ gives 0,
+    not ±m g h/4; a slip's turn timed inside a step makes the parts unequal, where the mean left a first-order error
+    of the node's velocity).  Without a node force p_k⁻ = p_k⁺ (DEL).  At t = 0 the given p_0; at T the look-ahead
+    step supplies ν_N."""
     n, c, sysm, H = cm.n, cm.c, cm.system, tn.H
     NL = N + LOOKAHEAD
     nu_full = H[:NL, None] * res.values["nu"][:NL * c].reshape(NL, c)
@@ -319,7 +397,12 @@ def _node_momenta(cm: ContactMechanics, tn: ContactNLP, res: NLPResult, N: int, 
     pp = np.asarray(cm.p_node_plus.map(N)(q[:-1].T, S.T, B, H[:N], *[z.T for z in ZM], T0[None, :N], U[:N].T)).T
     pN = np.asarray(cm.p_node_minus(S[-1], B[-1], q[-1], H[N - 1], *[z[-1] for z in ZP], T0[N - 1],
                                     U[N - 1])).reshape(1, -1)
-    p = np.vstack([pp - half[:N], pN + half[N:]])
+    # each node's share of its impulse that belongs to the part after it, τ_r / (τ_l + τ_r)
+    alpha = 0.5 + res.values["beta"][:NL].reshape(-1)
+    tau_r = alpha[:N + 1] * H[:N + 1]
+    tau_l = np.concatenate([[0.0], (1.0 - alpha[:N]) * H[:N]])
+    right = np.where(tau_l + tau_r > 0, tau_r / np.maximum(tau_l + tau_r, 1e-300), 0.5)[:, None]
+    p = np.vstack([pp - 2.0 * right[:N] * half[:N], pN + 2.0 * (1.0 - right[N:]) * half[N:]])
     p[0] = p0
     return p, pp, half, force, closed, gap, nu_full
 
@@ -399,27 +482,33 @@ def _friction_parts(cm, tn, res, N, NL, nu_full, alpha_full, mu_full, q, S, B, h
         fd = cm.fd
         fratio = res.values["fratio"][:N * 2 * c * fd].reshape(N, 2, c, fd).transpose(0, 2, 1, 3)
         arrive = getattr(tn, "arrive", np.zeros((tn.L, c)))[:N]
-        slip = np.asarray(cm.slip_row.map(N)(q[:-1].T, S.T, q[1:].T, B, hv, arrive.T)).reshape(2 * c * fd, N).T
+        ZM, ZP = ([z[:N] for z in part] for part in tn._stages(res.values))
+        slip = np.asarray(cm.slip_row.map(N)(q[:-1].T, S.T, q[1:].T, B, hv, arrive.T, *[z.T for z in ZM],
+                                             *[z.T for z in ZP])).reshape(2 * c * fd, N).T
         slip = slip.reshape(N, 2, c, fd).transpose(0, 2, 1, 3)
         if fd == 1:       # planar: (N, contacts, 2) for [node force, sub-node impulse]
             fratio, slip = fratio[..., 0], slip[..., 0]
     return fratio, slip, fimp
 
 
-def _releases(t: np.ndarray, closed: np.ndarray, force: np.ndarray, impacts) -> List[Release]:
+def _releases(t: np.ndarray, closed: np.ndarray, force: np.ndarray, impacts, lifts=None) -> List[Release]:
     """The lift-offs: a contact closed with a force at node ``a`` and open at node ``a + 1``, without an impact of its
     own between them.  Where another contact's impact lies in ``(t_a, t_{a+1}]`` it released it (the force it held
     jumps to zero there: the rimless wheel's back spoke as the front one lands); otherwise the held force fell to
     zero inside node ``a``'s cell, and the release is where the parabola through the forces of the three nodes
     before ``a`` (whose cells it filled) vanishes (the line through two where only two were held; the node's time
     where fewer).  The node forces are second-order values of the force, so the time is second order (the ladder
-    sliding down a wall: 2.9e-5, 1.8e-5, 4.1e-6, 1.2e-6 s from sin θ = (2/3) sin θ₀ at N = 70 to 560)."""
+    sliding down a wall: 2.9e-5, 1.8e-5, 4.1e-6, 1.2e-6 s from sin θ = (2/3) sin θ₀ at N = 70 to 560).  A release the
+    march timed (mode E; ``lifts`` maps its step and contact to its sub-node's time) is at that time."""
     out = []
     for j in range(closed.shape[1]):
         for a in np.flatnonzero(closed[:-1, j] & ~closed[1:, j] & (force[:-1, j] > 0.0)):
             # (its own impact in the step, or at node a where a flight landed on the node: a bounce, no release)
             own = [i for i in impacts if i.contact == j and t[a] <= i.t <= t[a + 1]]
             if own:
+                continue
+            if (a, j) in (lifts or {}):     # timed at its sub-node (mode E)
+                out.append(Release(int(a), lifts[(a, j)], int(j), timed=True))
                 continue
             others = [i.t for i in impacts if t[a] <= i.t <= t[a + 1]]
             if others:
@@ -550,14 +639,23 @@ def _simultaneous_warnings(cm: ContactMechanics, impacts) -> List[str]:
     return out
 
 
+def elastic_loss(system, energy) -> float:
+    """The energy an answer of an elastic (e = 1), frictionless and unforced contact system lost, ``E_0 − min E``
+    (0 for any other system): such impacts conserve the energy exactly, so a loss is the grid's catches of bounces
+    it does not resolve -- an error of the answer, not physics."""
+    c = system.contact
+    if (c is None or c.restitution != 1.0 or system.forced or np.any(np.asarray(c.friction, float) > 0)
+            or energy.size < 2 or not np.all(np.isfinite(energy))):
+        return 0.0
+    return max(0.0, float(energy[0]) - float(np.min(energy)))
+
+
 def _elastic_loss_warning(cm: ContactMechanics, energy, impacts, H, tol: float) -> List[str]:
     """For e = 1: the fraction of the energy lost, if above ``tol`` (``ContactOptions.elastic_loss_tol``).  Elastic impacts
     conserve the energy exactly (docs, contact §3); a loss means arrivals were caught, i.e. bounces the
     grid does not resolve -- a step longer than the flights (the answer is the grid's, not the physics')."""
-    if cm.e != 1.0 or cm.system.forced or cm.friction or energy.size < 2 or not np.all(np.isfinite(energy)):
-        return []
-    E0 = float(energy[0])
-    loss = (E0 - float(np.min(energy))) / max(abs(E0), 1e-300)
+    E0 = float(energy[0]) if energy.size else 0.0
+    loss = elastic_loss(cm.system, energy) / max(abs(E0), 1e-300)
     if loss <= tol:
         return []
     return [f"an elastic contact (e = 1) lost {100 * loss:.3g} % of the energy: arrivals were caught because "

@@ -11,7 +11,7 @@ import numpy as np
 from ...discretise.contact.elements import ContactMechanics
 from .. import jit
 from .options import MarchOptions
-from .modes import AT_SUB, CLOSES, DOWN, FIX, FREE, HELD, SLIDE, SLIDING_UP, STICK, TIMES_SUB, UP, F, I, K, N, P, T, W, releases
+from .modes import AT_SUB, CLOSES, DOWN, FIX, FREE, HELD, SLIDE, SLIDING_UP, STICK, TIMES_SUB, UP, E, F, G, I, K, N, P, T, W, releases
 
 
 
@@ -26,6 +26,8 @@ class _Step:
         # cache; CasADi's VM where that is not possible)
         self.fn = cm.derived("march step compiled", lambda: jit.compiled(cm.march_step))
         self.packed = cm.derived("march step packed", lambda: _packed(self.fn))
+        # (the step with the timed contact forces, modes E and G: built, not compiled, where a step first times one)
+        self._packed_timed = lambda: cm.derived("march step timed packed", lambda: _packed(cm.march_step_timed))
         self._chunks = cm.derived("march chunks", dict)
         self.ell, self.pref, self.vref = scales[0], scales[1], scales[2]
         self.n, self.c, self.m = cm.n, cm.c, cm.m
@@ -39,6 +41,12 @@ class _Step:
         self.uarg = [np.zeros(0)]
         #: the start time of the step marched (the march sets it; the input before the controls)
         self.t0 = 0.0
+        #: the last step solved: its released contacts' shares (μ⁻) and each contact's smallest force at the stages
+        #: of its two parts (:mod:`.search`)
+        self.last_mul = np.zeros(cm.c)
+        self.last_lc = (np.zeros(cm.c), np.zeros(cm.c))
+        #: the contacts held at the start of the step searched
+        self.held_start = np.zeros(cm.c, bool)
 
     def chunk(self, K: int, q, p, h, held, fmodes=None, x0=None, controls=None):
         """``K`` steps from ``(q, p)`` in one call, the ``held`` contacts held (mode H) and the others
@@ -65,20 +73,25 @@ class _Step:
             # the flight's guess of the positions (and stages), the previous step's forces, ratios, multipliers
             x = ca.vertcat(qm_, qn_, ca.DM.zeros(1), xs[2 * n + 1:2 * n + 1 + 2 * c + 2 * m + self.nf],
                            _stage_line(cm, qs, qm_, qn_), xs[cm.layout["lam_stage"]],
-                           ca.DM.zeros(cm.layout["mul"].stop - cm.layout["mul"].start + self.nf // 2))
+                           ca.DM.zeros(cm.layout["mul"].stop - cm.layout["mul"].start + self.nf // 2),
+                           xs[cm.layout["lam_cstage"]], xs[cm.layout["fstage"]])
             for _ in range(self.o.chunk_newton):
                 r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero, zero, zero, zero, zero, zero, zero, zero,
-                               zero, *fz, ts, *us)
+                               zero, zero, zero, *fz, ts, *us)
                 x = x - ca.solve(J, r)
             # the size of one more Newton step: the rows' residual in units of the unknowns
             r, J = self.fn(x, qs, ps, hs, *sc, 0.0, zero, hm, hm, zero, zero, zero, zero, zero, zero, zero, zero, zero,
-                           *fz, ts, *us)
+                           zero, zero, *fz, ts, *us)
             res = ca.mmax(ca.fabs(ca.solve(J, r)))
             qn, qt = x[n:2 * n], x[:n]
             zp = [x[cm.layout["zs"]][cm.s:]]
-            slip = cm.slip_row(qs, qt, qn, 0.0, hs, zero) if self.nf else ca.DM.zeros(1)
+            zz = x[cm.layout["zs"]]
+            slip = cm.slip_row(qs, qt, qn, 0.0, hs, zero, zz[:cm.s], zz[cm.s:]) if self.nf else ca.DM.zeros(1)
+            # (the stages' slip velocities, with friction and stages)
+            vz = cm.stage_vel_row(qs, qt, qn, 0.0, hs, zz[:cm.s], zz[cm.s:]) if cm.nfz else ca.DM.zeros(1)
             one = ca.Function("chunk_step", [qs, ps, xs, hs, hm] + sc + [st, sg, ts] + us,
-                              [qn, cm.p_node_minus(qt, 0.0, qn, hs, *zp, ts, *us), x, cm.gap_row(qt), cm.gap_row(qn), res, slip])
+                              [qn, cm.p_node_minus(qt, 0.0, qn, hs, *zp, ts, *us), x, cm.gap_row(qt), cm.gap_row(qn), res, slip,
+                               vz])
             self._chunks[key] = one.mapaccum("chunk_steps", K, [0, 1, 2], [0, 1, 2])
         fargs = self._friction_modes(fmodes)[:2]
         x0 = np.zeros(self.cm.nx) if x0 is None else x0
@@ -98,25 +111,31 @@ class _Step:
                 np.array([1.0 if f in SLIDING_UP else -1.0 if f == DOWN else 0.0 for f in fm]),
                 np.array([f == FIX for f in fm], float))
 
-    def friction_holds(self, fm, rho, slip) -> np.ndarray:
-        """Per column (step) of ratios ``rho`` and slips ``slip``: every slot's friction mode holds (sticking
+    def friction_holds(self, fm, rho, slip, rz=None, vz=None) -> np.ndarray:
+        """Per column (step) of ratios ``rho`` and slips ``slip`` (with the stages' ratios ``rz`` and slip velocities
+        ``vz``, with stages): every slot's friction mode holds, at the slot and at the stages of its part (sticking
         inside the cone; sliding with the slip's sign, on a tangent plane a slip that has not vanished)."""
         c, d = self.c, self.fd
         muf = np.concatenate([self.cm.mu_f, self.cm.mu_f])[:, None]
         K = rho.shape[1]
-        R, S = rho.reshape(2 * c, d, K), slip.reshape(2 * c, d, K)
-        rn, sn = np.linalg.norm(R, axis=1), np.linalg.norm(S, axis=1)
+        R, S = rho.reshape(2 * c, d, K)[None], slip.reshape(2 * c, d, K)[None]
+        if self.cm.nfz and rz is not None:
+            st = self.cm.dm.scheme.stages
+            by_slot = lambda v: np.concatenate([v[0], v[1]], axis=1)  # noqa: E731
+            R = np.concatenate([R, by_slot(rz.reshape(2, st, c, d, K))])
+            S = np.concatenate([S, by_slot(vz.reshape(2, st, c, d, K))])
+        rn, sn = np.linalg.norm(R, axis=2), np.linalg.norm(S, axis=2)
         tol = 1e-12 * self.vref
         ok = np.ones(K, bool)
         for i, f in enumerate(fm):
             if f == STICK:
-                ok &= rn[i] <= muf[i] * (1 + 1e-10)
+                ok &= np.all(rn[:, i] <= muf[i] * (1 + 1e-10), axis=0)
             elif f == UP:
-                ok &= S[i, 0] >= -tol
+                ok &= np.all(S[:, i, 0] >= -tol, axis=0)
             elif f == DOWN:
-                ok &= S[i, 0] <= tol
+                ok &= np.all(S[:, i, 0] <= tol, axis=0)
             elif f == SLIDE:
-                ok &= sn[i] > 1e-10 * self.vref
+                ok &= np.all(sn[:, i] > 1e-10 * self.vref, axis=0)
         return ok
 
     def masks(self, modes):
@@ -135,7 +154,8 @@ class _Step:
         if timing.size > 1:
             t[timing[1:]] = 0.0
         return (t, held, closed, law, node, fixed, nfixed, releases(modes), np.array([float(m == K) for m in modes]),
-                np.array([float(m == W) for m in modes]))
+                np.array([float(m == W) for m in modes]), np.array([float(m == E) for m in modes]),
+                np.array([float(m == G) for m in modes]))
 
     def solve(self, x, q, p, h, modes, bfix=None, mufix=None, fmodes=None, rfix=None, mufixl=None, rfixl=None):
         """Newton on the step's rows in the given modes (with ``bfix``: the sub-node's ``β`` fixed
@@ -144,14 +164,14 @@ class _Step:
         closing impulses and ratios of the contacts in mode K); ``(x, ok)``."""
         n, c = self.n, self.c
         self.snu, self.smu = self.pref / h, self.pref
-        t, held, closed, law, node, fixed, nfixed, release, leftfix, tslip = self.masks(modes)
+        t, held, closed, law, node, fixed, nfixed, release, leftfix, tslip, tlift, tgrip = self.masks(modes)
         if bfix is not None:
             t = np.zeros(c)
             x = x.copy()
             x[2 * n] = bfix
         args = (q, p, h, self.ell, self.snu, self.smu, self.vref, 0.0 if bfix is None else bfix,
                 t, held, closed, law, node, fixed, np.zeros(c) if mufix is None else mufix, nfixed, release, leftfix,
-                np.zeros(c) if mufixl is None else mufixl, tslip)
+                np.zeros(c) if mufixl is None else mufixl, tslip, tlift, tgrip)
         stick, sgn, fix = self._friction_modes(fmodes)
         nfs = self.cm.nfs
         args = args + (stick, sgn, fix, np.zeros(self.cm.nfr) if rfix is None else rfix,
@@ -159,12 +179,15 @@ class _Step:
                        np.zeros(self.cm.nfl) if rfixl is None else rfixl)
         small = 0
         size0 = 1.0 + float(np.max(np.abs(x)))
+        packed = self._packed_timed() if np.any(tlift) or np.any(tgrip) else self.packed
         # (the inputs other than x packed into one vector, once: a call of two numeric inputs and one output costs half
         # of one with the step's 28 inputs and two outputs; docs/notes.md)
         args = np.concatenate([np.asarray(a, float).reshape(-1, order="F") for a in (*args, self.t0, *self.uarg)])
         nx = x.size
         for _ in range(self.o.newton_iter):
-            out = self.packed(x, args).full().reshape(-1)
+            out = _evaluated(packed, x, args)
+            if out is None:
+                return x, False
             r, Jr = out[:nx], out[nx:].reshape(nx, nx, order="F")
             # rows and columns equilibrated (momentum rows ~ 1/h², gap rows ~ 1/ℓ): the step's
             # rounding then stays at the level of the unknowns, not of the Jacobian's condition
@@ -189,7 +212,9 @@ class _Step:
             small = small + 1 if np.max(np.abs(dx)) <= 1e-14 * (1.0 + float(np.max(np.abs(x)))) else 0
             if small == 2:
                 break
-        out = self.packed(x, args).full().reshape(-1)
+        out = _evaluated(packed, x, args)
+        if out is None:
+            return x, False
         r, Jr = out[:nx], out[nx:].reshape(nx, nx, order="F")
         # each row in units of the unknowns (divided by its largest derivative): rows that go like
         # 1/α near α = 0 are then held to the rounding of the point, not of their size
@@ -198,6 +223,17 @@ class _Step:
         # (a root ``runaway`` times the start's size is not the step's: Newton can run to a far root of the friction
         # rows, whose rows hold relative to that size; docs/notes.md)
         return x, bool(np.max(np.abs(r)) <= self.o.step_tol * size and size <= self.o.runaway * size0)
+
+
+def _evaluated(packed: ca.Function, x, args):
+    """``packed(x, args)`` as a flat array, or None where CasADi's evaluation failed (the timed step's index-1 system
+    singular at a trial point: dependent held rows, whose forces are not functions of the state)."""
+    try:
+        return packed(x, args).full().reshape(-1)
+    except RuntimeError as exc:
+        if "Evaluation failed" not in str(exc):
+            raise
+        return None
 
 
 def _packed(fn: ca.Function) -> ca.Function:
