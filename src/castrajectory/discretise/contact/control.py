@@ -126,9 +126,21 @@ class ContactControlTranscription(ContactTranscription):
         nlp.variable("slip_minus", L * 2 * c, lb=0.0)
         AR = P(nlp.parameter_index("arrive").reshape(L, c))
         nlp.equal_elements("slip_split", self._slip_split(cm, vref),
-                           [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), HA(k), AR,
+                           [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), HA(k), AR, ZM(k), ZP(k),
                             X(nlp.index("slip_plus").reshape(L, 2 * c)),
                             X(nlp.index("slip_minus").reshape(L, 2 * c))])
+        if cm.nfz:
+            # the stages' friction likewise: a stage's displacement from its part's start (its sticking row, the
+            # march's) split into its signs, against the stage's ratio
+            nz = cm.nfz
+            nlp.variable("stage_slip_plus", L * nz, lb=0.0)
+            nlp.variable("stage_slip_minus", L * nz, lb=0.0)
+            SP, SM = (X(nlp.index(name).reshape(L, nz)) for name in ("stage_slip_plus", "stage_slip_minus"))
+            nlp.equal_elements("stage_slip_split", self._stage_slip_split(cm, vref),
+                               [X(Q[k]), X(S[k]), X(Q[k + 1]), X(B[k]), HA(k), ZM(k), ZP(k), SP, SM])
+            nlp.minimize_elements("stage_slip_penalty", self._slip_penalty(cm, stages=True),
+                                  [X(nlp.index("fstage").reshape(L, nz)), SP, SM, rho])
+            nlp.declared_pairs["stage_slip"] = L * 2 * nz
         # (an open contact's slot has no force, so its ratio is free: the pair sets it against a flight's slip, and
         # nothing follows from it.  Weighted by the slot's normal force, three factors, the penalty stopped being
         # exact: Ipopt converged with residuals of 0.1-50 on the push to a target, the friction pushing forward)
@@ -243,6 +255,11 @@ class ContactControlTranscription(ContactTranscription):
             muf = np.concatenate([cm.mu_f, cm.mu_f])[None, :]
             sp, sm = values["slip_plus"].reshape(L, 2 * c), values["slip_minus"].reshape(L, 2 * c)
             out.append(float(np.max(np.abs((muf + r) * sp) + np.abs((muf - r) * sm))))
+            if cm.nfz:
+                rz = values["fstage"].reshape(L, cm.nfz)
+                mz = cm._stage_mu()[None, :]
+                zp_, zm_ = (values[name].reshape(L, cm.nfz) for name in ("stage_slip_plus", "stage_slip_minus"))
+                out.append(float(np.max(np.abs((mz + rz) * zp_) + np.abs((mz - rz) * zm_))))
         if self.end_velocity:
             out.append(float(np.max(np.abs(g(Q[L:]) * values["nu_end"]))) * self.h / self.scales_p)
         return float(max(out))
@@ -253,16 +270,29 @@ class ContactControlTranscription(ContactTranscription):
         """``s/v_ref − s⁺ + s⁻`` per slot (node and sub-node of every contact)."""
         sym, n, c = ca.SX.sym, cm.n, cm.c
         qk, qs, qn, b, h, arrive = sym("q", n), sym("qs", n), sym("qn", n), sym("b"), sym("h"), sym("arrive", c)
+        zm, zp = sym("zm", cm.s), sym("zp", cm.s)
         sp, sm = sym("sp", 2 * c), sym("sm", 2 * c)
-        return ca.Function("c_slip_split", [qk, qs, qn, b, h, arrive, sp, sm],
-                           [cm.slip(qk, qs, qn, b, h, arrive) / vref - sp + sm])
+        return ca.Function("c_slip_split", [qk, qs, qn, b, h, arrive, zm, zp, sp, sm],
+                           [cm.slip(qk, qs, qn, b, h, arrive, zm, zp) / vref - sp + sm])
 
     @staticmethod
-    def _slip_penalty(cm: ContactMechanics) -> ca.Function:
-        """``ρ Σ [(μ_f + r) s⁺ + (μ_f − r) s⁻]`` over a step's slots (``r`` their friction ratios)."""
-        sym, c = ca.SX.sym, cm.c
-        r, sp, sm, w = sym("r", 2 * c), sym("sp", 2 * c), sym("sm", 2 * c), sym("rho")
-        muf = ca.DM(np.concatenate([cm.mu_f, cm.mu_f]))
+    def _stage_slip_split(cm: ContactMechanics, vref: float) -> ca.Function:
+        """``χ/v_ref − s⁺ + s⁻`` per stage slot (:meth:`ContactMechanics.stage_slips`)."""
+        sym, n = ca.SX.sym, cm.n
+        qk, qs, qn, b, h = sym("q", n), sym("qs", n), sym("qn", n), sym("b"), sym("h")
+        zm, zp = sym("zm", cm.s), sym("zp", cm.s)
+        sp, sm = sym("sp", cm.nfz), sym("sm", cm.nfz)
+        return ca.Function("c_stage_slip_split", [qk, qs, qn, b, h, zm, zp, sp, sm],
+                           [cm.stage_slips(qk, qs, qn, b, h, zm, zp)[0] / vref - sp + sm])
+
+    @staticmethod
+    def _slip_penalty(cm: ContactMechanics, stages: bool = False) -> ca.Function:
+        """``ρ Σ [(μ_f + r) s⁺ + (μ_f − r) s⁻]`` over a step's slots (``r`` their friction ratios; ``stages``: over its
+        stage slots)."""
+        sym = ca.SX.sym
+        muf = ca.DM(cm._stage_mu() if stages else np.concatenate([cm.mu_f, cm.mu_f]))
+        k = muf.numel()
+        r, sp, sm, w = sym("r", k), sym("sp", k), sym("sm", k), sym("rho")
         return ca.Function("c_slip_pen", [r, sp, sm, w], [w * (ca.dot(muf + r, sp) + ca.dot(muf - r, sm))])
 
     @staticmethod

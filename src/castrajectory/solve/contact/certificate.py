@@ -228,7 +228,13 @@ def _slips(cm: ContactMechanics, prog, init, vref) -> dict:
     ar = np.asarray(prog.nlp.parameter_value("arrive"), float).reshape(N, c)
     sl = np.asarray(cm.slip_row.map(N)(Q[:-1].T, S.T, Q[1:].T, init["beta"].reshape(N), prog.steps(init), ar.T,
                                        *_zparts(prog, init, 0), *_zparts(prog, init, 1))).T / vref
-    return {"slip_plus": np.maximum(sl, 0.0).reshape(-1), "slip_minus": np.maximum(-sl, 0.0).reshape(-1)}
+    out = {"slip_plus": np.maximum(sl, 0.0).reshape(-1), "slip_minus": np.maximum(-sl, 0.0).reshape(-1)}
+    if cm.nfz:      # (and the stages' displacements, ContactControlTranscription's stage slip split)
+        H = prog.steps(init)
+        sz = np.asarray(cm.stage_slip_row.map(N)(Q[:-1].T, S.T, Q[1:].T, init["beta"].reshape(N), H,
+                                                 *_zparts(prog, init, 0), *_zparts(prog, init, 1))).T / vref
+        out.update(stage_slip_plus=np.maximum(sz, 0.0).reshape(-1), stage_slip_minus=np.maximum(-sz, 0.0).reshape(-1))
+    return out
 
 
 def _zparts(prog, V, part):
