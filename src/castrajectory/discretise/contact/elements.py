@@ -23,6 +23,7 @@ import numpy as np
 from ...models.mechanics import LagrangianSystem
 from ...validation import InputError
 from ..lagrangians import GUESS_SUBSTEPS, DiscreteMechanics, rk4_step
+from . import forces
 
 
 #: Weight of Σβ² (the split of impact-free steps), far below the penalties.
@@ -68,7 +69,10 @@ class ContactMechanics:
         self._momentum_functions(x)
         if not self.s and not self.nu:
             self._guess_functions(x)
-        self._held_force_function()
+        # the contact forces of the continuous motion (the timing of a release or a stick's end, .forces)
+        self.forces = forces.held_forces(self)
+        self.contact_forces, self.held_force = self.forces.contact_forces, self.forces.held_force
+        self.cone_margin, self.timed_force = self.forces.cone_margin, self.forces.timed_force
         self._march_function(x.phi)
         self.node_law_fn = ca.Function("c_node_law", [x.p0, x.qk, x.qs, x.b, x.h, x.zm, x.t, x.U],
                                        [self.node_law(x.p0, x.qk, x.qs, x.b, x.h, x.zm)])
@@ -299,89 +303,6 @@ class ContactMechanics:
             y = rk4_step(f, y, dt)
         self.flow = ca.Function("flow", [qk, v, tau], [y[:n], y[n:], phi(y[:n])])
         self._flights: Dict[int, ca.Function] = {}
-
-    def _held_force_function(self) -> None:
-        """``contact_forces(q, p, held, stick, u)``: the contacts' normal forces ``λ`` and the sticking ones' friction
-        forces ``t`` (``c`` then ``c·d`` entries) of the continuous motion at ``(q, p)``, with the contacts ``held``
-        (mask) kept closed and those ``stick`` (mask) kept from slipping -- the index-1 system
-        ``M q̈ = f + Ĵᵀλ + D_Sᵀt − Cᵀλ_c``, ``∇φ_H q̈ + (∇φ_H q̇)_q q̇ = 0``, ``D_S q̈ + (D_S q̇)_q q̇ = 0``,
-        ``C q̈ + (C q̇)_q q̇ = 0``, where a held contact that slides with friction pushes along
-        ``Ĵ_j = ∇φ_j − μ_j ŝ_jᵀ D_j`` (Coulomb's force against its slip direction ``ŝ_j``), at the velocity
-        ``q̇ = Π M⁻¹p`` that keeps the held contacts, the sticking ones and the constraints (the projection of
-        :func:`_tangent_velocity` with those rows).  Zero for a contact not held (not sticking).  ``held_force(q, p,
-        held, u)`` is its normal part with nothing sticking; ``cone_margin(q, p, held, stick, sgn, u)`` a sticking
-        contact's distance from its cone, ``μ_f λ − |t|`` (in the plane ``μ_f λ + sgn t``, ``sgn`` the sign of the slip
-        it would start).  A release's time is where its force reaches zero, a stick's end where its margin does
-        (``docs/derivations.md``, "Held contacts at the stages"): the state at a sub-node is the scheme's, of its
-        order, and so is the time where a smooth function of it vanishes."""
-        system, n, c, m, d = self.system, self.n, self.c, self.m, self.fd
-        q, qd = system.q, system.qd
-        M, f = system.dynamics_exprs()
-        uvec = system.control_vector
-        held, stick, p = ca.SX.sym("held", c), ca.SX.sym("stick", c), ca.SX.sym("p", n)
-        J = system.gap(q)[1]
-        rows_c = [self._C(q), ca.mtimes(ca.diag(held), J)]
-        reg = [ca.SX(m, m), ca.diag(1 - held)]
-        if self.friction:
-            Dm = self._D(q)
-            srep = self._per_component(stick)
-            rows_c.append(ca.mtimes(ca.diag(srep), Dm))
-            reg.append(ca.diag(1 - srep))
-        G, R = ca.vertcat(*rows_c), ca.diagcat(*reg)
-        MiGt = ca.solve(M, G.T)
-        vfree = ca.solve(M, p)
-        v = vfree - ca.mtimes(MiGt, ca.solve(ca.mtimes(G, MiGt) + R, ca.mtimes(G, vfree)))
-        Gf = G
-        if self.friction:
-            # a held contact sliding with friction pushes along ∇φ_j − μ_j ŝ_jᵀ D_j (its slip direction at v)
-            S = ca.reshape(ca.mtimes(Dm, v), d, c)
-            norm = ca.sqrt(ca.sum1(S * S) + 1e-300)
-            slide = held * (1 - stick) * ca.DM(self.mu_f)
-            rows = []
-            for j in range(c):
-                Dj = Dm[j * d:(j + 1) * d, :] if d > 1 else Dm[j, :]
-                sj = S[:, j] / norm[j]
-                rows.append(J[j, :] - slide[j] * ca.mtimes(sj.T, Dj))
-            Gf = ca.vertcat(self._C(q), ca.mtimes(ca.diag(held), ca.vertcat(*rows)), rows_c[2])
-        A = ca.mtimes(G, ca.solve(M, Gf.T)) + R
-        gdot = ca.jtimes(ca.mtimes(G, qd), q, qd)
-        rhs = ca.substitute(ca.vertcat(f, gdot), qd, v)
-        U = ca.SX.sym("u", self.nu)
-        bvec = ca.mtimes(G, ca.solve(M, rhs[:n])) + rhs[n:]
-        if self.nu:
-            A, bvec = ca.substitute(A, uvec, U), ca.substitute(bvec, uvec, U)
-        # the index-1 system's matrix and right-hand side (expressions), and its solve a linear-solve node: the masked
-        # system holds every contact and slip component, and solved symbolically it grew as their number cubed
-        kkt = self._kkt = ca.Function("c_kkt", [q, p, held, stick, U], [A, bvec])
-        qm, pm_, hm, sm, um = (ca.MX.sym(nm, k) for nm, k in (("q", n), ("p", n), ("held", c), ("stick", c),
-                                                               ("u", self.nu)))
-        Am, bm = kkt(qm, pm_, hm, sm, um)
-        out = -ca.solve(Am, bm)[m:]
-        self.contact_forces = ca.Function("c_contact_forces", [qm, pm_, hm, sm, um], [out])
-        self.held_force = ca.Function("c_held_force", [qm, pm_, hm, um], [self.contact_forces(qm, pm_, hm, 0 * sm, um)[:c]])
-        sgn = ca.MX.sym("sgn", c)
-        if self.friction:
-            lam_n, tt = out[:c], ca.reshape(out[c:], d, c)
-            margin = (ca.DM(self.mu_f) * lam_n + sgn * ca.transpose(tt) if d == 1 else
-                      ca.DM(self.mu_f) * lam_n - ca.transpose(ca.sqrt(ca.sum1(tt * tt) + 1e-300)))
-            self.cone_margin = ca.Function("c_cone_margin", [qm, pm_, hm, sm, sgn, um], [margin])
-        # ... at a step's sub-node, with the momentum p̃⁻ that ends the step's first part (the release row of mode E, the
-        # stick's end of mode G)
-        qk, qs, b, h, zm, t = (ca.MX.sym(nm, k) for nm, k in (("q", n), ("qs", n), ("beta", 1), ("h", 1),
-                                                              ("zm", self.s), ("t", 1)))
-        sq, sz, sqs, sb, sh = (ca.SX.sym(nm, k) for nm, k in (("q", n), ("zm", self.s), ("qs", n), ("beta", 1),
-                                                                ("h", 1)))
-        pm_fn = ca.Function("c_pm", [sq, sz, sqs, sb, sh, self._t, self._U],
-                            [self._D2(sq, sz if self.s else self._z, sqs, (0.5 + sb) * sh, self._t, self._U)])
-        pm = pm_fn(qk, zm, qs, b, h, t, um)
-        #: ``[λ; margin]`` at the sub-node: the normal forces (a release's row, mode E) and the sticking contacts' cone
-        #: margins (a stick's end, mode G; zeros without friction), with the contacts held and sticking through the
-        #: first part
-        if self.friction:
-            timed = ca.vertcat(self.contact_forces(qs, pm, hm, sm, um)[:c], self.cone_margin(qs, pm, hm, sm, sgn, um))
-        else:
-            timed = ca.vertcat(self.held_force(qs, pm, hm, um), ca.MX.zeros(c))
-        self.timed_force = ca.Function("c_timed_force", [qk, qs, b, h, zm, hm, sm, sgn, t, um], [timed])
 
     def _normal_acceleration(self, x) -> None:
         """The contacts' normal accelerations ``J(q) q̈`` (under the step's control: the march's test of an arrival at a
@@ -626,15 +547,6 @@ class ContactMechanics:
         self.layout
         return self._nx
 
-    def _timed_forces_mx(self, qk, qs, b, h, zm, held, tlift, tgrip, stick, sgn, t, U):
-        """The timing rows of the contact forces at a step's sub-node (MX): a release's normal force (``tlift``, mode E)
-        and a stick's cone margin (``tgrip``, mode G), of the continuous motion with the contacts held (and, with
-        friction, sticking: the node slots) through the step's first part; ``0`` for a contact with neither mask."""
-        c = self.c
-        timed = self.timed_force(qk, qs, b, h, zm, held, stick[:c] if self.friction else ca.MX.zeros(c),
-                                 sgn[c:] if self.friction else ca.MX.zeros(c), t, U)
-        return ca.dot(tlift, timed[:c]) + ca.dot(tgrip, timed[c:])
-
     def _march_function(self, phi):
         """One step of the transcription's own rows, each contact in a mode given by masks (the march).
 
@@ -657,7 +569,7 @@ class ContactMechanics:
         and sub-node rows of the transcription (:meth:`node_row`, :meth:`sub_row`), so a point solved step by step satisfies the whole
         program's rows (``docs/derivations.md``, "Contact trajectories", "The march").
         """
-        n, c, m, sym = self.n, self.c, self.m, ca.SX.sym
+        n, c, sym = self.n, self.c, ca.SX.sym
         L = self.layout
         x = sym("x", self.nx)
         qs, qn, b = x[L["qs"]], x[L["q"]], x[2 * n]
@@ -701,17 +613,11 @@ class ContactMechanics:
                        release * self.release_row(qk, qs, b, h, mul, rl, release, zm) / vref + leftfix * (mul - mufixl) / smu
                        + (1 - release - leftfix) * mul / smu,
                        con(qs), con(qn))
+        lc = x[L["lam_cstage"]]
+        rz = x[L["fstage"]] if self.nfz else None
         if self.s:
-            lc = x[L["lam_cstage"]]
-            rz = x[L["fstage"]] if self.nfz else None
-            R = ca.vertcat(R, self.stage_rows(qk, qs, qn, b, h, zm, zp, x[L["lam_stage"]], lc, rz))
-            if m:
-                R = ca.vertcat(R, self.stage_constraints(zm, zp))
-            # a contact held through a part (its first: held; its second: closed) has its gap closed at the part's
-            # stages and its force there free; elsewhere its stage forces vanish
-            st = self.dm.scheme.stages
-            hold = ca.vertcat(*([held] * st + [closed] * st))
-            R = ca.vertcat(R, hold * self.stage_holds(qk, qs, qn, zm, zp) / ell + (1 - hold) * lc / snu)
+            R = ca.vertcat(R, self._stage_march_rows(qk, qs, qn, b, h, zm, zp, x[L["lam_stage"]], lc, rz, held, closed,
+                                                     ell, snu))
         # the friction's modes per slot: inputs of the step whether or not it has friction (no entries without)
         # (per contact: stick (the slip vanishes), slide (ρ = −sgn μ_f, sgn the slip's sign), or no friction force
         # (ρ = 0: an open contact, or a frictionless one); fix: ρ = rfix, a ratio decided outside the step, the
@@ -719,21 +625,8 @@ class ContactMechanics:
         # are ρ + μ_f s/|s| = 0, the ratio against the slip's direction on the circular cone, see friction_rows)
         arrive, rfixl = sym("arrive", nfs // 2), sym("rfixl", self.nfl)
         if self.friction:
-            R = ca.vertcat(R, self.friction_rows(self.slip(qk, qs, qn, b, h, arrive, zm, zp), rho, stick, sgn, fix, rfix,
-                                                 vref))
-            if self.nfz:
-                # the stages' friction: each part's stages in the mode of its slot (the first part's the node's, the
-                # second's the sub-node's): sticking, the contact point's displacement from the part's start vanishes
-                # there; sliding, the ratio opposes the stage's slip velocity at the cone's edge; otherwise none
-                st = self.dm.scheme.stages
-                chi, vel = self.stage_slips(qk, qs, qn, b, h, zm, zp)
-                zs = lambda v: ca.vertcat(*([v[:c]] * st + [v[c:]] * st))  # noqa: E731
-                R = ca.vertcat(R, self.friction_rows(chi, rz, zs(stick), zs(sgn), ca.DM.zeros(2 * self.sc),
-                                                     ca.DM.zeros(self.nfz), vref, self._stage_mu(), slide_slip=vel))
-            # the first part's closing impulses μ⁻: a released contact's share sticks or slides as its node slot did
-            # through that part, against the slip velocity before the impact; a law's (leftfix) ratio is fixed (rfixl)
-            R = ca.vertcat(R, self.friction_rows(self.left_velocity(qk, qs, b, h, mul, rl, release, zm), rl, stick[:c] * release,
-                                                 sgn[:c] * release, leftfix, rfixl, vref, self.mu_f))
+            R = ca.vertcat(R, self._friction_march_rows(qk, qs, qn, b, h, zm, zp, rho, rz, mul, rl, arrive, release,
+                                                        leftfix, stick, sgn, fix, rfix, rfixl, vref))
         ins = [x, qk, p, h, ell, snu, smu, vref, bfix, t, held, closed, law, node, fixed, mufix, nfixed, release, leftfix,
                mufixl, tslip, tlift, tgrip, stick, sgn, fix, rfix, arrive, rfixl, self._t, self._U]
         self.march_step = ca.Function("march_step", ins, [R, ca.jacobian(R, x)])
@@ -741,54 +634,46 @@ class ContactMechanics:
         self._march_rows = ca.Function("march_rows", ins, [R])
         self._timing_row = 2 * n
 
+    def _stage_march_rows(self, qk, qs, qn, b, h, zm, zp, lz, lc, rz, held, closed, ell, snu):
+        """The march step's rows of the stages: their stationarity (:meth:`stage_rows`), the constraints there, and a
+        contact held through a part (its first: ``held``; its second: ``closed``) closed at the part's stages with its
+        force there free (:meth:`stage_holds`); elsewhere its stage forces vanish."""
+        R = self.stage_rows(qk, qs, qn, b, h, zm, zp, lz, lc, rz)
+        if self.m:
+            R = ca.vertcat(R, self.stage_constraints(zm, zp))
+        st = self.dm.scheme.stages
+        hold = ca.vertcat(*([held] * st + [closed] * st))
+        return ca.vertcat(R, hold * self.stage_holds(qk, qs, qn, zm, zp) / ell + (1 - hold) * lc / snu)
+
+    def _friction_march_rows(self, qk, qs, qn, b, h, zm, zp, rho, rz, mul, rl, arrive, release, leftfix, stick, sgn,
+                             fix, rfix, rfixl, vref):
+        """The march step's friction rows: the slots' (:meth:`friction_rows` of the step's slips), the stages' (each
+        part's stages in its slot's mode: sticking, the contact point's displacement from the part's start vanishes
+        there; sliding, the ratio opposes the stage's slip velocity at the cone's edge), and the first part's closing
+        impulses μ⁻ (a released contact's share sticks or slides as its node slot did through that part, against the
+        slip velocity before the impact; a law's, ``leftfix``, ratio is fixed at ``rfixl``)."""
+        c = self.c
+        R = self.friction_rows(self.slip(qk, qs, qn, b, h, arrive, zm, zp), rho, stick, sgn, fix, rfix, vref)
+        if self.nfz:
+            st = self.dm.scheme.stages
+            chi, vel = self.stage_slips(qk, qs, qn, b, h, zm, zp)
+            zs = lambda v: ca.vertcat(*([v[:c]] * st + [v[c:]] * st))  # noqa: E731
+            R = ca.vertcat(R, self.friction_rows(chi, rz, zs(stick), zs(sgn), ca.DM.zeros(2 * self.sc),
+                                                 ca.DM.zeros(self.nfz), vref, self._stage_mu(), slide_slip=vel))
+        return ca.vertcat(R, self.friction_rows(self.left_velocity(qk, qs, b, h, mul, rl, release, zm), rl,
+                                                stick[:c] * release, sgn[:c] * release, leftfix, rfixl, vref, self.mu_f))
+
     @property
     def timed_force_rows(self) -> ca.Function:
-        """:attr:`timed_force` as an expression (its index-1 system solved symbolically): the element of the program's
-        rows, which are formed in SX (:mod:`.transcription`, only for a program whose march timed a release or a stick's
-        end)."""
-        if "timed rows" not in self._derived:
-            f = self.timed_force
-            ins = [ca.SX.sym(f"a{i}", f.sparsity_in(i)) for i in range(f.n_in())]
-            qk, qs, b, h, zm, held, stick, sgn, t, U = ins
-            n, c, d, m = self.n, self.c, self.fd, self.m
-            sq, sz, sqs, sb, sh = (ca.SX.sym(nm, k) for nm, k in (("q", n), ("zm", self.s), ("qs", n), ("beta", 1),
-                                                                    ("h", 1)))
-            pm = ca.Function("c_pm", [sq, sz, sqs, sb, sh, self._t, self._U],
-                             [self._D2(sq, sz if self.s else self._z, sqs, (0.5 + sb) * sh, self._t, self._U)])(
-                qk, zm, qs, b, h, t, U)
-            A, bb = self._kkt(qs, pm, held, stick if self.friction else 0 * held, U)
-            out = -ca.solve(A, bb)[m:]
-            lam = out[:c]
-            if self.friction:
-                tt = ca.reshape(out[c:], d, c)
-                margin = (ca.DM(self.mu_f) * lam + sgn * ca.transpose(tt) if d == 1 else
-                          ca.DM(self.mu_f) * lam - ca.transpose(ca.sqrt(ca.sum1(tt * tt) + 1e-300)))
-            else:
-                margin = ca.SX.zeros(c)
-            self._derived["timed rows"] = ca.Function("c_timed_force_rows", ins, [ca.vertcat(lam, margin)])
-        return self._derived["timed rows"]
+        """:attr:`timed_force` as an expression, the element of the program's rows (:func:`.forces.timed_force_rows`),
+        built on first use."""
+        return self.derived("timed rows", lambda: forces.timed_force_rows(self))
 
     @property
     def march_step_timed(self) -> ca.Function:
-        """The march step with the timing rows of the contact forces (modes E and G, :meth:`_timed_forces`) added to
-        its sub-node's timing row: the same inputs and outputs as :attr:`march_step`, built on first use (only a step
-        that times a release or a stick's end evaluates it).  It is an MX function whose index-1 system is one linear
-        solve node (:attr:`contact_forces`), not an expression: inlined, the masked system of every contact and slip
-        component made the march step of a box on eight corners with friction 2.8 million nodes."""
-        if "timed" not in self._derived:
-            base = self._march_rows
-            ins = [ca.MX.sym(f"a{i}", base.sparsity_in(i)) for i in range(base.n_in())]
-            n, L = self.n, self.layout
-            # (the inputs by position, as _march_function lists them)
-            xx, qk, h, snu, held, tlift, tgrip, stick, sgn, t, U = (ins[i] for i in (0, 1, 3, 5, 10, 21, 22, 23, 24, 29,
-                                                                                      30))
-            zm = xx[L["zs"]][:self.s] if self.s else ca.MX(0, 1)
-            extra = self._timed_forces_mx(qk, xx[L["qs"]], xx[2 * n], h, zm, held, tlift, tgrip, stick, sgn, t, U) / snu
-            e = ca.DM.zeros(base.sparsity_out(0).numel())
-            e[self._timing_row] = 1.0
-            R = base(*ins) + e * extra
-            self._derived["timed"] = ca.Function("march_step_timed", ins, [R, ca.jacobian(R, xx)])
-        return self._derived["timed"]
+        """The march step with the timed contact forces (modes E and G; :func:`.forces.march_step_timed`), built on
+        first use: the same inputs and outputs as :attr:`march_step`."""
+        return self.derived("timed", lambda: forces.march_step_timed(self))
 
     def friction_rows(self, slip, rho, stick, sgn, fix, rfix, vref, muf=None, slide_slip=None):
         """The friction's rows of a step, per slot (contact and part; masks per slot, values per component):

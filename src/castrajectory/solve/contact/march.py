@@ -127,14 +127,14 @@ def _chunk(step: _Step, rows, q, p, h, held, fm, k: int, K: int, span: int, U, t
     if step.o.time_held_events and np.any(held):
         # a held contact whose force of the continuous motion falls below zero by the step's end is released inside
         # it, and a sticking one whose friction force leaves its cone starts to slide inside it: that step is marched
-        # alone, where its sub-node times the event (modes E and G, search._release_timing and _grip_timing)
+        # alone, where its sub-node times the event (modes E and G, transitions._release_timing and _grip_timing)
         stuck = np.array([held[j] and fm[j] == STICK and fm[c + j] == STICK for j in range(c)]) if cm.friction \
             else np.zeros(c, bool)
         ok &= _forces_hold(cm, Qn, Pn, held, stuck, U[k:k + K])
     if cm.friction:
         ok &= step.friction_holds(fm, X[lay["fratio"]], SL, X[lay["fstage"]], VZ)
         # a sliding contact whose slip turns inside a step (planar): that step is marched alone, where its
-        # sub-node times the turn (mode W, search._slip_turn)
+        # sub-node times the turn (mode W, transitions._slip_turn)
         ok &= ~_turns(cm, fm, held, np.column_stack([q, Qn]), np.column_stack([p, Pn]))
     i = int(np.argmin(ok)) if not np.all(ok) else K
     span = min(2 * span, step.o.chunk_steps) if i == K else 8
