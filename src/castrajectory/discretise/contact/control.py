@@ -111,6 +111,16 @@ class ContactControlTranscription(ContactTranscription):
         self.delta = vref * h
         nlp.declared_pairs.update({"exact_law": L * c})
         nlp.declared_pairs.update({"catch": L * c})
+        if cm.sc:
+            # and a part held at its ends is held at its stages, as the march holds it: a node force holds the first
+            # part's stages on the surface, φ(Z⁻_j) ⟂ ν_k, and a sub-node impulse that holds the body the second part's,
+            # φ(Z⁺_j) ⟂ μ_k (waived as the launch and the catch pairs are).  (Without them a held part's stage could
+            # leave the surface, its force and so its friction zero, the node forces carrying the weight: the block
+            # push at N = 20 with galerkin4 hopped so at its first stage, below the cone, a motion the march does not have)
+            nlp.minimize_elements("stage_hold_penalty", self._stage_hold_penalty(cm),
+                                  [ZM(k), ZP(k), X(NU[k]), X(nlp.index("mu").reshape(L, c)), NI, TM, rho,
+                                   np.array([vref * pref])])
+            nlp.declared_pairs["stage_hold"] = L * 2 * cm.sc
 
     def _slip_complementarity(self) -> None:
         """Maximal dissipation as complementarity: the slip split into its signs (planar friction)."""
@@ -141,6 +151,19 @@ class ContactControlTranscription(ContactTranscription):
             nlp.minimize_elements("stage_slip_penalty", self._slip_penalty(cm, stages=True),
                                   [X(nlp.index("fstage").reshape(L, nz)), SP, SM, rho])
             nlp.declared_pairs["stage_slip"] = L * 2 * nz
+            # and each part's stages slide as its slot does (the march's: one mode per part): a held stage's tangential
+            # force at the cone's edge against the slot's slip, (μ_f λ^c_j ± ρ^Z_j λ^c_j) ⟂ s±, the slot the node's for
+            # the first part and the sub-node's for the second.  (Without it each stage chose its own branch: a block
+            # pushed from rest below the cone slid at N = 20 with galerkin4, its first part's slot forward and a stage's
+            # friction pushing it, a motion the march, one mode per part, does not have: certificate 4.9e-3.  Weighted
+            # by the stage's normal force, the pair binds only where the contact is held, so a flight whose tangential
+            # velocity turns inside a part meets no conflict with the stage pairs above)
+            nlp.minimize_elements("stage_tie_penalty", self._stage_tie_penalty(cm),
+                                  [X(nlp.index("lam_cstage").reshape(L, 2 * cm.sc)),
+                                   X(nlp.index("fstage").reshape(L, nz)),
+                                   X(nlp.index("slip_plus").reshape(L, 2 * c)),
+                                   X(nlp.index("slip_minus").reshape(L, 2 * c)), rho, Hc / self.scales_pref])
+            nlp.declared_pairs["stage_tie"] = L * 2 * nz
         # (an open contact's slot has no force, so its ratio is free: the pair sets it against a flight's slip, and
         # nothing follows from it.  Weighted by the slot's normal force, three factors, the penalty stopped being
         # exact: Ipopt converged with residuals of 0.1-50 on the push to a target, the friction pushing forward)
@@ -250,6 +273,12 @@ class ContactControlTranscription(ContactTranscription):
         vp = self.scales_v * self.scales_pref          # the launch pair's scale; the catch pair's is v_p h
         out.append(float(np.max(np.abs((1 - ni) * g(S) * NU))) / vp)
         out.append(float(np.max(np.abs((1 - tm) * g(Q[1:]) * MU) / self.steps(values)[:, None])) / vp)
+        if cm.sc:       # (the stages against the forces that hold their parts)
+            zm, zp = self._stages(values)
+            gz = np.asarray(cm.stage_gap.map(L)(*[z.T for z in zm + zp])).T.reshape(L, 2, -1, c)
+            out.append(float(np.max(np.abs((1 - ni)[:, None] * gz[:, 0] * NU[:, None]),
+                                    initial=0.0)) / vp)
+            out.append(float(np.max(np.abs((1 - tm)[:, None] * gz[:, 1] * MU[:, None]), initial=0.0)) / vp)
         if cm.friction:
             r = values["fratio"].reshape(L, 2 * c)
             muf = np.concatenate([cm.mu_f, cm.mu_f])[None, :]
@@ -260,6 +289,8 @@ class ContactControlTranscription(ContactTranscription):
                 mz = cm._stage_mu()[None, :]
                 zp_, zm_ = (values[name].reshape(L, cm.nfz) for name in ("stage_slip_plus", "stage_slip_minus"))
                 out.append(float(np.max(np.abs((mz + rz) * zp_) + np.abs((mz - rz) * zm_))))
+                a, b = self._stage_ties(cm, values["lam_cstage"].reshape(L, -1).T, rz.T, sp.T, sm.T)
+                out.append(float(np.max(np.abs(a) + np.abs(b))) * float(np.max(self.steps(values))) / self.scales_pref)
         if self.end_velocity:
             out.append(float(np.max(np.abs(g(Q[L:]) * values["nu_end"]))) * self.h / self.scales_p)
         return float(max(out))
@@ -284,6 +315,43 @@ class ContactControlTranscription(ContactTranscription):
         sp, sm = sym("sp", cm.nfz), sym("sm", cm.nfz)
         return ca.Function("c_stage_slip_split", [qk, qs, qn, b, h, zm, zp, sp, sm],
                            [cm.stage_slips(qk, qs, qn, b, h, zm, zp)[0] / vref - sp + sm])
+
+    @staticmethod
+    def _stage_hold_penalty(cm: ContactMechanics) -> ca.Function:
+        """``ρ Σ_j [(1 − w⁻) φ(Z⁻_j) ν + (1 − w⁺) φ(Z⁺_j) μ] / scale`` per contact: a step's stages against the forces
+        that hold its parts (``w⁻`` the impacts at the node, ``w⁺`` the timed arrivals)."""
+        sym, c = ca.SX.sym, cm.c
+        zm, zp = sym("zm", cm.s), sym("zp", cm.s)
+        nu, mu, wn, wt, rho, sc = sym("nu", c), sym("mu", c), sym("wn", c), sym("wt", c), sym("rho"), sym("scale")
+        g = cm.stage_gaps(zm, zp)
+        half = g.numel() // 2
+        total = 0
+        for j in range(cm.dm.scheme.stages):
+            total = total + ca.dot((1 - wn) * g[j * c:(j + 1) * c], nu) \
+                + ca.dot((1 - wt) * g[half + j * c:half + (j + 1) * c], mu)
+        return ca.Function("c_stage_hold_pen", [zm, zp, nu, mu, wn, wt, rho, sc], [rho * total / sc])
+
+    @staticmethod
+    def _stage_ties(cm: ContactMechanics, lc, rz, sp, sm):
+        """``[(μ_f + ρ^Z_j) λ^c_j s⁺_slot, (μ_f − ρ^Z_j) λ^c_j s⁻_slot]`` per stage slot: a held stage's tangential force
+        against its part's slot (the first part's stages the node slot's, the second's the sub-node slot's)."""
+        c, st = cm.c, cm.dm.scheme.stages
+        muz = cm._stage_mu().reshape(-1, 1)
+        if isinstance(lc, ca.SX):
+            muz = ca.DM(muz)
+        slot = np.concatenate([np.tile(np.arange(c), st) + part * c for part in (0, 1)])
+        plus, minus = sp[slot.tolist()], sm[slot.tolist()]
+        return (muz + rz) * lc * plus, (muz - rz) * lc * minus
+
+    @classmethod
+    def _stage_tie_penalty(cm_cls, cm: ContactMechanics) -> ca.Function:
+        """``ρ w Σ_j [(μ_f + ρ^Z_j) λ^c_j s⁺ + (μ_f − ρ^Z_j) λ^c_j s⁻]`` over a step's stage slots (:meth:`_stage_ties`;
+        ``w`` the scale, ``h/p_ref``)."""
+        sym = ca.SX.sym
+        lc, rz, sp, sm = sym("lc", 2 * cm.sc), sym("rz", cm.nfz), sym("sp", 2 * cm.c), sym("sm", 2 * cm.c)
+        w, sc = sym("rho"), sym("scale")
+        a, b = cm_cls._stage_ties(cm, lc, rz, sp, sm)
+        return ca.Function("c_stage_tie_pen", [lc, rz, sp, sm, w, sc], [w * sc * (ca.sum1(a) + ca.sum1(b))])
 
     @staticmethod
     def _slip_penalty(cm: ContactMechanics, stages: bool = False) -> ca.Function:
