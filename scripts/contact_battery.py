@@ -112,7 +112,9 @@ from castrajectory.cli import sweeps  # noqa: E402
 from castrajectory.inspect import files, study  # noqa: E402
 from castrajectory.inspect.battery import (  # noqa: E402  (the scenes, their solve and their checks)
     COMP_TOL, ENERGY_TOL, FRICTION_FAMILIES, GAP_TOL, LAW_TOL, SCHEME_SET, TIME_FLOOR, battery_task,
-    check_friction_twins, check_twins, draw_friction_scenes, draw_scenes, draw_scheme_scenes, fitted_order)
+    ORDER_FLOOR, check_friction_twins, check_twins, draw_friction_scenes, draw_scenes, draw_scheme_scenes, fitted_order,
+    reference_order)
+from castrajectory.discretise.schemes import scheme as scheme_named  # noqa: E402
 
 
 def run_all(scenes, timeout: float, log, executor=None, bar=None, quiet=False):
@@ -131,7 +133,7 @@ FIELDS = ["id", "family", "N", "e", "status", "solved", "checks", "iterations", 
           "complementarity", "impact_law", "energy_change", "impacts", "caught", "resolvable_catches", "oracle_impacts",
           "impact_time_error", "mu", "cone", "dissipation", "stick", "oracle_error", "twin_of", "command"]
 
-FRICTION_FIELDS = ["id", "family", "N", "T", "e", "mu", "body", "centred", "status", "solved", "failed", "iterations",
+FRICTION_FIELDS = ["id", "family", "scheme", "N", "T", "e", "mu", "body", "centred", "status", "solved", "failed", "iterations",
                    "time_s", "impacts", "caught", "oracle_impacts", "first_arrival", "min_gap", "complementarity", "cone",
                    "dissipation", "stick", "impact_energy", "impact_cone", "impact_time_error", "stop_time_error",
                    "oracle_error", "reference_error", "reference_reason", "twin_of", "twin_ok", "command"]
@@ -166,6 +168,22 @@ def _family_rows(rows, families, columns):
     return out
 
 
+def _order_lines(pairs, scheme: str):
+    """Per family, the orders its refinement pairs show in the whole motion against the event-driven reference
+    (:func:`reference_order`: both errors above ORDER_FLOOR), against the scheme's."""
+    out = ["", f"## Orders against the event-driven reference ({scheme}, order {scheme_named(scheme).order})", "",
+           "| family | pairs | fitted | median order | lowest | highest |", "|---|---|---|---|---|---|"]
+    for fam in FRICTION_FAMILIES:
+        ps = [(c, f) for c, f in pairs if c["family"] == fam]
+        if not ps:
+            continue
+        orders = [o for c, f in ps for o in [reference_order(c, f)] if not math.isnan(o)]
+        cells = (f"{np.median(orders):.2f} | {min(orders):.2f} | {max(orders):.2f}" if orders else
+                 f"- | - | - (errors at the {ORDER_FLOOR:g} floor or not compared)")
+        out.append(f"| {fam} | {len(ps)} | {len(orders)} | {cells} |")
+    return out
+
+
 def _scene_params(r) -> str:
     """A friction scene's drawn parameters, for the list of failures."""
     keys = {"incline": ("alpha", "v0"), "rolling": ("body", "v0", "spin"),
@@ -179,7 +197,8 @@ def summarise_friction(rows, seconds):
     """The friction families' summary: per family the count solved, the median and worst times, the worst of each
     check (gap, complementarity, cone, ρ·s, stick, a bounce's energy change, an impulse's cone, the impact time
     and the closed form); the failures with their parameters; the refinement pairs."""
-    lines = _head("# Contact battery: friction", rows, seconds) + [
+    scheme = next((r["scheme"] for r in rows if r.get("scheme")), "midpoint")
+    lines = _head(f"# Contact battery: friction ({scheme})", rows, seconds) + [
         "| family | scenes | solved | median s | worst s | worst gap | worst compl. | worst cone | worst ρ·s | "
         "worst stick slip | worst bounce dK/K | worst impulse cone | worst t-error | worst oracle error | "
         "median ref. error | worst ref. error |",
@@ -210,6 +229,7 @@ def summarise_friction(rows, seconds):
     by_id = {r["id"]: r for r in rows}
     pairs = [(by_id[r["twin_of"]], r) for r in rows if r.get("twin_of") in by_id]
     if pairs:
+        head = len(lines)
         lines += ["", "## Refinement pairs (N, 2N): the oracle errors (impact time, s; closed form)", ""]
 
         def errs(r):
@@ -219,8 +239,11 @@ def summarise_friction(rows, seconds):
         for coarse, fine in pairs:
             verdict = "ok" if fine.get("twin_ok") else "WORSE" if coarse.get("solved") and fine.get("failed", "").startswith(
                 "twin worse") else "a run not solved"
-            lines.append(f"* {coarse['id']} ({coarse['family']}): N = {coarse['N']}: {errs(coarse)}; 2N: {errs(fine)}: "
-                         f"{verdict}")
+            order = reference_order(coarse, fine)
+            shown = f", order {order:.2f}" if not math.isnan(order) else ""
+            lines.append(f"* {coarse['id']} ({coarse['family']}): N = {coarse['N']}: {errs(coarse)}; 2N: {errs(fine)}"
+                         f"{shown}: {verdict}")
+        lines[head:head] = _order_lines(pairs, scheme)
     return "\n".join(lines) + "\n"
 
 
@@ -319,6 +342,9 @@ def main(argv=None):
     p.add_argument("--friction", action="store_true",
                    help="the friction families instead (block on an incline, rolling disk or sphere, a spinning disk or "
                    "sphere bouncing, the rectangle dropped and in the bowl with friction; seed 17)")
+    p.add_argument("--scheme", default="midpoint",
+                   help="with --friction: the scheme every scene is solved with (other than the midpoint, every scene "
+                   "is twinned at 2N and the files are friction_SCHEME.csv and friction_SCHEME_summary.md)")
     p.add_argument("--schemes", action="store_true",
                    help="the scheme families instead (pendulum at a joint limit, double pendulum at a wall; schemes "
                    "of order 4 to 8, each scene with its twin at 2N)")
@@ -326,6 +352,14 @@ def main(argv=None):
     args = p.parse_args(argv)
     if args.friction and args.schemes:
         print("contact_battery: --friction and --schemes are two batteries: one at a time", file=sys.stderr)
+        return 2
+    if args.scheme != "midpoint" and not args.friction:
+        print("contact_battery: --scheme applies to the friction battery: add --friction", file=sys.stderr)
+        return 2
+    try:
+        scheme_named(args.scheme)
+    except (ValueError, KeyError) as exc:
+        print(f"contact_battery: {exc}", file=sys.stderr)
         return 2
     if args.count is None:
         args.count = 20 if args.schemes else 100 if args.friction else 60
@@ -338,7 +372,7 @@ def main(argv=None):
     if args.schemes:
         scenes = draw_scheme_scenes(args.seed, args.count)
     elif args.friction:
-        scenes = draw_friction_scenes(17 if args.seed == 13 else args.seed, args.count)
+        scenes = draw_friction_scenes(17 if args.seed == 13 else args.seed, args.count, args.scheme)
     else:
         scenes = draw_scenes(args.seed, args.count)
     if args.family:
@@ -365,8 +399,9 @@ def main(argv=None):
               f"solved={str(r.get('solved')):5s} {r.get('iterations', 0) or 0:5d} it {r.get('time_s', math.nan):7.2f} s "
               f"law {r.get('impact_law', math.nan):.1e} t-err {r.get('impact_time_error', math.nan):.1e}", flush=True)
 
+    tag = "" if args.scheme == "midpoint" else f"_{args.scheme}"
     fields, names = (SCHEME_FIELDS, ("schemes.csv", "schemes_summary.md")) if args.schemes else \
-        (FRICTION_FIELDS, ("friction.csv", "friction_summary.md")) if args.friction else \
+        (FRICTION_FIELDS, (f"friction{tag}.csv", f"friction{tag}_summary.md")) if args.friction else \
         (FIELDS, ("battery.csv", "summary.md"))
 
     def write(rows, seconds, stopped=None):

@@ -33,7 +33,7 @@ from .friction import (  # noqa: F401  (the friction families)
     impact_residuals, FRICTION_TOL, FRICTION_PATH_STEPS, FRICTION_CONE, STICK_ROUNDING, run_friction_scene,
     STOP_TIME_TOL, IMPACT_TIME_TOL, BOUNCE_TOL, IMPACT_ENERGY_TOL, IMPACT_CONE_TOL, TWIN_FLOOR, TWIN_SLACK,
     ORACLE_MARGIN_STEPS, REBOUND_STEPS, ARRIVAL_MARGIN, round_bounce, spin_drop_oracle,
-    run_impact_friction_scene, check_friction_twins)
+    run_impact_friction_scene, check_friction_twins, reference_order, ORDER_FLOOR)
 from .schemes import (  # noqa: F401  (every scheme of order >= 4)
     SCHEME_SET, SCHEME_FAMILIES, SCHEME_NS, SCHEME_SEPARATION, SCHEME_APPROACH, SCHEME_ARRIVAL, SCHEME_CLEARANCE,
     TIME_C, TIME_FLOOR, SCHEME_LAW_TOL, ENERGY_C, ENERGY_FLOOR, joint_limit_pendulum, double_pendulum_wall,
@@ -96,12 +96,13 @@ def command(sc) -> str:
         skip = ("id", "twin_of")
         scene = json.dumps({k: v for k, v in sc.items() if k not in skip})
         return f"python -c 'from castrajectory.inspect.battery import run_scene; print(run_scene({scene}))'"
+    scheme = f" --scheme {sc['scheme']}" if sc.get("scheme") else ""
     if sc["family"] == "incline":
         return (f"python problems/sliding_block.py --mu {sc['mu']} --incline {sc['alpha']} --v0 {sc['v0']} "
-                f"--T {sc['T']} --n {sc['N']}")
+                f"--T {sc['T']} --n {sc['N']}{scheme}")
     if sc["family"] == "rolling":
         return (f"python problems/rolling_ball.py --body {sc['body']} --mu {sc['mu']} --v0 {sc['v0']} "
-                f"--spin {sc['spin']} --T {sc['T']} --n {sc['N']}")
+                f"--spin {sc['spin']} --T {sc['T']} --n {sc['N']}{scheme}")
     if sc["family"] == "ball":
         return (f"python problems/bouncing_ball.py --restitution {sc['e']} --height {sc['height']} "
                 f"--velocity {sc['velocity']} --T {sc['T']} --n {sc['N']}")
