@@ -117,6 +117,47 @@ def test_block_push_hits_the_exact_discrete_optimum_and_is_certified():
     assert np.max(np.abs(sol.u[:, 0] - exact.control(sol.t_u))) < 0.04
 
 
+def test_a_scheme_with_stages_takes_its_controls_at_each_parts_nodes_and_reaches_the_optimum():
+    """galerkin4 on the block push that slides the whole horizon (T = 1): its controls are a value at each node of
+    each part's quadrature (3 per part, 6 per step), so the cost's and the forces' quadratures keep the scheme's order
+    on each part; the optimum u* = μmg + 6(1 − 2t) is linear, and the answer reaches J* to 9.9e-9 at N = 20 and u* at
+    its 120 control times to 3e-8 (with one control per step it stops at 0.121 at N = 10, the piecewise-constant
+    force's second order).  Certified (5e-13); the friction at the cone's edge throughout."""
+    exact = BlockPush(1.0, 0.3, 1.0, 1.0)
+    system, u = block(0.3)
+    ocp = ct.OptimalControl(system, T=1.0, N=20, scheme="galerkin4")
+    ocp.initial(q=[0.0, 0.0], qd=[0.0, 0.0])
+    ocp.final(q=[1.0, 0.0], qd=[0.0, 0.0])
+    ocp.minimize(running=u ** 2)
+    sol = ocp.solve()
+    assert sol.success, sol.message
+    assert sol.u.shape == (20 * 6, 1) and sol.t_u.shape == (120,)
+    assert abs(sol.cost - exact.cost) < 1e-6
+    assert sol.certificate < 1e-10
+    inside = sol.t_u < 1.0 - 1e-12          # (the closed form's control is 0 from T on)
+    assert np.max(np.abs(sol.u[inside, 0] - exact.control(sol.t_u[inside]))) < 3e-6
+    assert np.allclose(sol.fratio, -0.3, atol=1e-8)
+
+
+def test_the_launched_block_push_closed_form():
+    """The block launched at v0 toward d: its slide's τ* is the positive root of (μg)²τ⁴ − 4v0²τ² + 24v0dτ − 36d², and
+    J(τ) = (μmg)²τ − 2μm²g v0 + m²(4v0²/τ − 12v0d/τ² + 12d²/τ³) is least there (against a fine scan of τ); its path
+    reaches d at rest at τ*, its control vanishes there (the slide ends at the cone), and from rest it is the resting
+    push's closed form."""
+    ex = BlockPush(1.0, 0.3, 1.0, 2.0, v0=0.7)
+    tau = ex.free_slide
+    taus = np.linspace(0.3, 2.0, 200001)
+    J = lambda t: (0.3 * 9.81) ** 2 * t - 2 * 0.3 * 9.81 * 0.7 + 4 * 0.49 / t - 12 * 0.7 / t ** 2 + 12 / t ** 3  # noqa: E731
+    assert abs(taus[np.argmin(J(taus))] - tau) < 1e-5 and abs(ex.cost - J(tau)) < 1e-12
+    assert ex.sticks and ex.slides_forward
+    e = 1e-6
+    assert abs(ex.position(tau) - 1.0) < 1e-12 and abs(ex.position(tau - e) - 1.0) < 1e-9       # at rest at d
+    assert abs((ex.position(e) - ex.position(0.0)) / e - 0.7) < 1e-5                              # launched at v0
+    assert abs(float(ex.control(tau - 1e-12))) < 1e-9
+    rest, launched = BlockPush(1.0, 0.3, 1.0, 2.0), BlockPush(1.0, 0.3, 1.0, 2.0, v0=0.0)
+    assert launched.cost == pytest.approx(rest.cost, rel=1e-14) and launched.free_slide == rest.free_slide
+
+
 def test_a_weightless_block_push_hits_the_free_particles_discrete_optimum():
     """g = 0, μ = 0: a free particle on its floor, whose midpoint optimum is (12d²/T³)N²/(N²−1) (measured 4e-15 at
     N = 20).  Its zero control guess has no acceleration: the penalties' velocity scale comes from the horizon, d/T

@@ -17,6 +17,14 @@ otherwise slides for ``τ*`` and sticks for ``T − τ*`` (where in ``[0, T]`` t
 placement costs the same), with ``J* = (4/3)(μmg)² τ*``.  The peak force ``μmg + 6md/τ²`` must be within the
 bound ``u_max`` for this to be the optimum of the bounded problem (:attr:`BlockPush.bound_inactive`).
 
+Launched at ``v0 > 0`` (``BlockPush.v0``), the slide starts at once and its placement is no longer free.  With
+``u = μmg + m a``, ``∫u² = (μmg)²τ − 2μm²g v0 + m² E(τ)`` (``∫a = −v0``), where the least ``∫a²`` that takes a free
+mass from ``(0, v0)`` to ``(d, 0)`` in ``τ`` is ``E(τ) = 4v0²/τ − 12v0d/τ² + 12d²/τ³`` (``a`` linear in t); the
+cheapest slide's ``τ*`` is the positive root of ``(μg)²τ⁴ − 4v0²τ² + 24v0dτ − 36d² = 0``.  The formula holds while
+the slide's velocity stays positive inside it (:attr:`BlockPush.slides_forward`).  The block push launched at
+``v0`` has one event, the stop at ``τ*``, whose time the optimum fixes: a test of the stop's timing that the
+resting start's free placement does not give.
+
 On the midpoint rule with ``N`` steps (controls constant per step) and a slide over the whole horizon, the
 friction's impulse per step is ``μmgh`` exactly, and the discrete optimum is the frictionless one plus the
 friction's share: ``J_N = (12m²d²/T³) N²/(N² − 1) + (μmg)² T``.
@@ -56,13 +64,35 @@ class BlockPush:
     T: float
     g: float = 9.81
     u_max: float = math.inf
+    #: the initial velocity (toward d; 0: from rest)
+    v0: float = 0.0
 
     @property
     def free_slide(self) -> float:
-        """``τ* = √(6d/(μg))``: the duration of the cheapest slide (``inf`` without friction)."""
+        """``τ*``: the duration of the cheapest slide, ``√(6d/(μg))`` from rest, else the positive root of
+        ``(μg)²τ⁴ − 4v0²τ² + 24v0dτ − 36d² = 0`` (``inf`` without friction)."""
         if self.friction <= 0:
             return math.inf
-        return math.sqrt(6.0 * abs(self.distance) / (self.friction * self.g))
+        d, v0, mg = abs(self.distance), abs(self.v0), self.friction * self.g
+        if v0 == 0.0:
+            return math.sqrt(6.0 * d / mg)
+        r = np.roots([mg * mg, 0.0, -4.0 * v0 * v0, 24.0 * v0 * d, -36.0 * d * d])
+        return float(np.max(r[(np.abs(r.imag) < 1e-9 * np.abs(r)) & (r.real > 0)].real))
+
+    def _accel(self, tau: float):
+        """``(c0, c1)``: the slide's least-effort acceleration ``a = c0 + c1 t`` from ``(0, v0)`` to ``(d, 0)`` in ``τ``."""
+        d, v0 = self.distance, self.v0
+        return (6.0 * d - 4.0 * v0 * tau) / tau ** 2, (6.0 * v0 * tau - 12.0 * d) / tau ** 3
+
+    @property
+    def slides_forward(self) -> bool:
+        """Does the slide's velocity keep its sign inside it (the closed form's assumption)?"""
+        tau = self.slide
+        c0, c1 = self._accel(tau)
+        t = np.linspace(0.0, tau, 2001)[1:-1]
+        v = self.v0 + c0 * t + 0.5 * c1 * t * t
+        s = np.sign(self.distance) if self.distance else 1.0
+        return bool(np.all(s * v > 0))
 
     @property
     def slide(self) -> float:
@@ -76,21 +106,27 @@ class BlockPush:
 
     @property
     def cost(self) -> float:
-        """``J* = 12m²d²/τ³ + (μmg)²τ`` at the optimum's slide ``τ``."""
-        m, d, tau = self.mass, self.distance, self.slide
-        return 12.0 * m * m * d * d / tau ** 3 + (self.friction * m * self.g) ** 2 * tau
+        """``J* = (μmg)²τ − 2μm²g v0 + m² E(τ)`` at the optimum's slide ``τ`` (``12m²d²/τ³ + (μmg)²τ`` from rest)."""
+        m, d, tau, v0 = self.mass, self.distance, self.slide, self.v0
+        s = np.sign(d) if d else 1.0
+        E = 4.0 * v0 * v0 / tau - 12.0 * v0 * d / tau ** 2 + 12.0 * d * d / tau ** 3
+        return float((self.friction * m * self.g) ** 2 * tau - 2.0 * s * self.friction * m * m * self.g * v0 + m * m * E)
 
     def discrete_cost(self, N: int) -> float:
-        """The midpoint optimum on ``N`` steps when the block slides the whole horizon (``nan`` when it sticks)."""
-        if self.sticks:
+        """The midpoint optimum on ``N`` steps when the block slides the whole horizon from rest (``nan`` when it
+        sticks or is launched)."""
+        if self.sticks or self.v0:
             return math.nan
         m, d, T = self.mass, self.distance, self.T
         return 12.0 * m * m * d * d / T ** 3 * N * N / (N * N - 1.0) + (self.friction * m * self.g) ** 2 * T
 
     @property
     def peak_force(self) -> float:
-        """``μmg + 6m|d|/τ²``: the largest force of the optimum (at the start of its slide)."""
-        return self.friction * self.mass * self.g + 6.0 * self.mass * abs(self.distance) / self.slide ** 2
+        """The largest |force| of the optimum (at an end of its slide: ``μmg + 6m|d|/τ²`` from rest)."""
+        c0, c1 = self._accel(self.slide)
+        s = np.sign(self.distance) if self.distance else 1.0
+        ends = (c0, c0 + c1 * self.slide)
+        return float(max(abs(s * self.friction * self.mass * self.g + self.mass * a) for a in ends))
 
     @property
     def bound_inactive(self) -> bool:
@@ -98,17 +134,22 @@ class BlockPush:
         return self.peak_force <= self.u_max
 
     def control(self, t) -> np.ndarray:
-        """The optimal force with the slide first, ``μmg + m(6d/τ²)(1 − 2t/τ)`` on ``[0, τ)``, 0 after."""
+        """The optimal force with the slide first, ``μmg + m(c0 + c1 t)`` on ``[0, τ)`` (``μmg + m(6d/τ²)(1 − 2t/τ)``
+        from rest), 0 after."""
         t = np.asarray(t, float)
-        m, d, tau = self.mass, self.distance, self.slide
-        s = np.sign(d) if d else 1.0
-        return np.where(t < tau, s * self.friction * m * self.g + m * 6.0 * d / tau ** 2 * (1.0 - 2.0 * t / tau), 0.0)
+        m, tau = self.mass, self.slide
+        c0, c1 = self._accel(tau)
+        s = np.sign(self.distance) if self.distance else 1.0
+        return np.where(t < tau, s * self.friction * m * self.g + m * (c0 + c1 * t), 0.0)
 
     def position(self, t) -> np.ndarray:
-        """The optimal position with the slide first: ``d (3 − 2t/τ)(t/τ)²`` on the slide, ``d`` after."""
-        t = np.minimum(np.asarray(t, float), self.slide) / self.slide
-        return self.distance * (3.0 - 2.0 * t) * t * t
+        """The optimal position with the slide first: ``v0 t + c0 t²/2 + c1 t³/6`` on the slide (``d (3 − 2t/τ)(t/τ)²``
+        from rest), ``d`` after."""
+        t = np.minimum(np.asarray(t, float), self.slide)
+        c0, c1 = self._accel(self.slide)
+        return self.v0 * t + 0.5 * c0 * t * t + c1 * t ** 3 / 6.0
 
     def as_dict(self) -> dict:
         return {"exact_cost": self.cost, "slide_time": self.slide, "free_slide": self.free_slide,
-                "sticks": self.sticks, "peak_force": self.peak_force, "bound_inactive": self.bound_inactive}
+                "sticks": self.sticks, "peak_force": self.peak_force, "bound_inactive": self.bound_inactive,
+                "v0": self.v0, "slides_forward": self.slides_forward}

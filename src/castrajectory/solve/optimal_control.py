@@ -297,7 +297,8 @@ class OptimalControl:
         hi = np.concatenate([c.upper for c in self._controls]) if self._controls else np.zeros(0)
         path = [(ca.Function(f"g{j}", [q, u, s.t], [g]), lb, ub) for j, (g, lb, ub) in enumerate(self._path)]
         return solve_contact_control(s, self.T, self.N, self.scheme, (q0, v0), (qN, vN), running, final, (lo, hi),
-                                     self._controls, guess, options, verbose, keep_modes, path, contact)
+                                     self._controls, guess, options, verbose, keep_modes, path, contact,
+                                     control_points=self.control_points)
 
     def _inconsistency(self) -> Optional[str]:
         """What the inputs prove inconsistent before any solve (``None``: nothing proved; Ipopt's

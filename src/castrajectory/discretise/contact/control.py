@@ -4,8 +4,9 @@ The program is the initial-value contact program of :mod:`.transcription` (the s
 and impact-law rows, the same exact ℓ1 penalties of the complementarity pairs) on ``N`` steps with no
 look-ahead, and on top of it, as in DMOC (:mod:`..optimal_control`):
 
-* the controls ``u_k``, one per step, constant over both parts of step ``k`` (bounds on the variables), in
-  every row that holds the step's forces (:class:`.elements.ContactMechanics`);
+* the controls of step ``k``: one value on both of its parts, or on a scheme with stages a value at each node of
+  each part's quadrature (``controls="quadrature"``, :class:`.elements.ContactMechanics`; bounds on the variables),
+  in every row that holds the step's forces;
 * the running cost, the scheme's quadrature of ``ℓ(q, q̇, u)`` over each part of every step (``[q_k, q̃_k]`` of
   length ``αh``, ``[q̃_k, q_{k+1}]`` of ``(1 − α)h``), and a final cost ``φ(q_N, q̇_N, T)``;
 * the end: the given entries of ``q_N`` fixed by bounds; a given final velocity by the end node's momentum
@@ -404,22 +405,24 @@ class ContactControlTranscription(ContactTranscription):
         zm, zp = sym("zm", s), sym("zp", s)
         u = cm._U
         a = 0.5 + b
-        f = lambda q, v, t: running(q, v, u, t)  # noqa: E731
+        # (each part's quadrature node with its control: the step's one value, or the part's own per node)
+        f = [cm.dm.control_at(lambda q, v, t, uu: running(q, v, uu, t), cm.part_controls(u, part)) for part in (0, 1)]
         parts = [[qk] + [zm[j * n:(j + 1) * n] for j in range(st.stages)] + [qs],
                  [qs] + [zp[j * n:(j + 1) * n] for j in range(st.stages)] + [qn]]
         tk = kk * h
-        val = st.discrete_lagrangian(f, parts[0], a * h, tk) + st.discrete_lagrangian(f, parts[1], (1 - a) * h,
-                                                                                     tk + a * h)
+        val = st.discrete_lagrangian(f[0], parts[0], a * h, tk) + st.discrete_lagrangian(f[1], parts[1], (1 - a) * h,
+                                                                                         tk + a * h)
         return ca.Function("c_running", [qk, qs, qn, b, h, kk, zm, zp, u], [val])
 
     @staticmethod
     def _path_elements(cm: ContactMechanics, fn: ca.Function):
-        """``g(q_k, u, k h)`` at a node and ``g(q̃_k, u_k, (k + ½ + β) h)`` at a sub-node."""
+        """``g(q_k, u, k h)`` at a node and ``g(q̃_k, u_k, (k + ½ + β) h)`` at a sub-node (controls per part: the step's
+        first part's at its start, the second part's at its start)."""
         sym, n = ca.SX.sym, cm.n
         q, b, h, k = sym("q", n), sym("b"), sym("h"), sym("k")
         u = cm._U
-        return (ca.Function("c_path", [q, h, k, u], [fn(q, u, k * h)]),
-                ca.Function("c_path_sub", [q, b, h, k, u], [fn(q, u, (k + 0.5 + b) * h)]))
+        return (ca.Function("c_path", [q, h, k, u], [fn(q, cm.instant_control(u, 0, 0.0), k * h)]),
+                ca.Function("c_path_sub", [q, b, h, k, u], [fn(q, cm.instant_control(u, 1, 0.0), (k + 0.5 + b) * h)]))
 
     @staticmethod
     def _final(cm: ContactMechanics, final: ca.Function, N: int) -> ca.Function:

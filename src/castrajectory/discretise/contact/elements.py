@@ -33,13 +33,19 @@ SPLIT_WEIGHT = 1e-6
 class ContactMechanics:
     """CasADi element functions of the contact transcription for one system and scheme."""
 
-    def __init__(self, system: LagrangianSystem, scheme: str):
+    def __init__(self, system: LagrangianSystem, scheme: str, controls: str = "step"):
         if system.contact is None:
             raise ValueError("the system has no contact term")
         if system.time_dependent:
             raise InputError("contact with a time-dependent system is not supported yet; remove the time from the "
                              "contact scene")
         dm = DiscreteMechanics(system, scheme, control_points="step")
+        #: the controls of a step: one value for both parts ("step"), or with ``controls="quadrature"`` on a scheme with
+        #: stages one at each node of each part's quadrature (the first part's, then the second's), so that the
+        #: forces' and the cost's quadratures keep the scheme's order on each part, a step split at an event included
+        self.per_part = controls == "quadrature" and bool(dm.s) and bool(dm.nu)
+        if self.per_part:
+            dm = DiscreteMechanics(system, scheme, control_points="quadrature")
         self.system, self.dm = system, dm
         self._derived: Dict[str, object] = {}
         self.n, self.c, self.e = dm.n, system.ncontact, system.contact.restitution
@@ -60,8 +66,8 @@ class ContactMechanics:
         self._friction_sizes()
         x = self._symbols()
         self._kinematics = lambda xp, xx, xn, tau_m, tau_p, Zm, Zp: _sub_node_kinematics(  # noqa: E731
-            self._D1, self._D2, self._J, system.mass_matrix, self._C, self.e, xp, xx, xn, tau_m, tau_p, Zm, Zp,
-            self._t)
+            lambda *a: self._D1(*a, part=1), self._D2, self._J, system.mass_matrix, self._C, self.e, xp, xx, xn, tau_m,
+            tau_p, Zm, Zp, self._t)
         self._step_rows(x)
         self._friction_functions(x)
         self._law_rows(x)
@@ -97,24 +103,59 @@ class ContactMechanics:
         the discrete mechanics' (:class:`~castrajectory.discretise.lagrangians.DiscreteMechanics`), and callers pass
         the steps' start times.
 
-        Controls (optimal control through contact): one value per step, ``u_k``, constant over both parts of step k,
-        the last input of every element whose rows hold the forces of a step, zero-size without controls (one
-        signature: a caller passes the step's controls, an empty column for a scene without them, and the program is
-        the same); the node row holds the forces of two steps, ``u_{k−1}`` and ``u_k``.  With forces (Force, Damping;
+        Controls (optimal control through contact): the step's control values ``u_k``, the last input of every element
+        whose rows hold the forces of a step, zero-size without controls (one signature: a caller passes the step's
+        controls, an empty column for a scene without them, and the program is the same); the node row holds the
+        forces of two steps, ``u_{k−1}`` and ``u_k``.  One value for both parts, or per part (:attr:`per_part`) a value
+        at each node of each part's quadrature, the first part's block then the second's (:meth:`part_controls`; the
+        index-1 system's control at a point of a part: :meth:`instant_control`).  With forces (Force, Damping;
         no time) the discrete Lagrange–d'Alembert momenta over each part of a step, ``p⁺ = −D₁L_d − f⁻`` and
         ``p⁻ = D₂L_d + f⁺``, stand where ``D₁L_d`` and ``D₂L_d`` stand without them."""
         dm = self.dm
-        self.nu = dm.nu
-        U = self._U = ca.SX.sym("u", dm.nu)
+        self.nu1 = dm.nu1
+        self.nu = 2 * dm.nu if self.per_part else dm.nu
+        U = self._U = ca.SX.sym("u", self.nu)
         self._t = ca.SX.sym("t")
-        # (a, Z, b, the part's length, the part's start time[, its controls])
+        # (a, Z, b, the part's length, the part's start time[, the step's controls, the part: 0 the first, 1 the second])
         if self.system.forced:
-            self._D1 = lambda a, Z, b, tau, t0, u=U: -dm.p_plus(a, Z, b, tau, t0, u)  # noqa: E731
-            self._D2 = lambda a, Z, b, tau, t0, u=U: dm.p_minus(a, Z, b, tau, t0, u)  # noqa: E731
+            self._D1 = lambda a, Z, b, tau, t0, u=U, part=0: -dm.p_plus(  # noqa: E731
+                a, Z, b, tau, t0, self.part_controls(u, part))
+            self._D2 = lambda a, Z, b, tau, t0, u=U, part=0: dm.p_minus(  # noqa: E731
+                a, Z, b, tau, t0, self.part_controls(u, part))
         else:
-            self._D1 = lambda a, Z, b, tau, t0, u=None: dm.D1(a, Z, b, tau, t0)  # noqa: E731
-            self._D2 = lambda a, Z, b, tau, t0, u=None: dm.D2(a, Z, b, tau, t0)  # noqa: E731
+            self._D1 = lambda a, Z, b, tau, t0, u=None, part=0: dm.D1(a, Z, b, tau, t0)  # noqa: E731
+            self._D2 = lambda a, Z, b, tau, t0, u=None, part=0: dm.D2(a, Z, b, tau, t0)  # noqa: E731
         self._J = lambda q: self.system.gap(q)[1]  # noqa: E731
+
+    def part_controls(self, u, part: int):
+        """The controls of one part of a step (0 the first, 1 the second) from the step's ``u``: the part's block of
+        values at its quadrature nodes (per part), or the step's one value."""
+        if not self.per_part:
+            return u
+        k = self.dm.nu
+        return u[part * k:(part + 1) * k]
+
+    def instant_control(self, u, part: int, tau: float):
+        """The control at the fraction ``tau`` of a part of a step (per part: the Lagrange interpolant of the part's
+        values at its quadrature nodes; the step's one value otherwise): the control of the continuous motion's
+        index-1 system there."""
+        if not self.per_part:
+            return u
+        c, k = np.asarray(self.dm.scheme.nodes, float), self.nu1
+        v = self.part_controls(u, part)
+        w = [float(np.prod([(tau - c[m]) / (c[i] - c[m]) for m in range(c.size) if m != i])) for i in range(c.size)]
+        return sum(w[i] * v[i * k:(i + 1) * k] for i in range(c.size))
+
+    def control_times(self, t0, h, beta) -> np.ndarray:
+        """The times of each step's control values, ``(N, values)``: the step's midpoint for one value per step; per
+        part, the nodes of each part's quadrature (``t0`` the steps' starts, ``h`` their lengths, ``beta`` their
+        splits)."""
+        t0, h, beta = (np.asarray(x, float).reshape(-1) for x in (t0, h, beta))
+        if not self.per_part:
+            return (t0 + 0.5 * h)[:, None]
+        c = np.asarray(self.dm.scheme.nodes, float)[None, :]
+        a = (0.5 + beta)[:, None] * h[:, None]
+        return np.hstack([t0[:, None] + a * c, t0[:, None] + a + (h[:, None] - a) * c])
 
     def _friction_sizes(self) -> None:
         """Coulomb friction, only where a coefficient is positive (a frictionless system keeps its rows and element
@@ -179,11 +220,11 @@ class ContactMechanics:
         self.initial = ca.Function("c_initial", [x.q0, qs, b, x.p0, x.nu, h, x.lam, x.rho, zm, t, U],
                                    [self.node_row(x.p0, x.q0, qs, b, x.nu, x.lam, h, x.frn, zm)])
         self.node = ca.Function("c_node", [x.qsm, x.bm, qk, qs, b, x.nu, x.hp, h, x.lam, x.rho, x.zpm, zm, t, x.Um, U],
-                                [self.node_row(D2(x.qsm, x.zpm, qk, (1 - x.am) * x.hp, t - (1 - x.am) * x.hp, x.Um),
+                                [self.node_row(D2(x.qsm, x.zpm, qk, (1 - x.am) * x.hp, t - (1 - x.am) * x.hp, x.Um, part=1),
                                                qk, qs, b, x.nu, x.lam, h, x.frn, zm)])
         sub_row, x.r = self.sub_row(qk, qs, qk1, b, x.mu, x.lams, h, x.frs, zm, zp, x.mul, x.rll, x.rel)
         # the momenta on either side of q̃
-        x.pm, x.pp = D2(qk, zm, qs, x.a * h, t), -D1(qs, zp, qk1, (1 - x.a) * h, t + x.a * h)
+        x.pm, x.pp = D2(qk, zm, qs, x.a * h, t), -D1(qs, zp, qk1, (1 - x.a) * h, t + x.a * h, part=1)
         self.sub = ca.Function("c_sub", [qk, qs, qk1, b, x.mu, h, x.mul, x.rl, x.lams, x.rho, zm, zp, t, U], [sub_row])
         #: the contacts' normal velocities at the sub-node before its impact, after the released contacts' shares
         self.release = ca.Function("c_release", [qk, qs, b, h] + x.left + [zm, t, U],
@@ -272,7 +313,7 @@ class ContactMechanics:
                                        [-D1(x.qk, x.zm, x.qs, x.a * h, t)])
         # (the step's second part, from its sub-node to the node that ends it: t is the step's start)
         self.p_node_minus = ca.Function("p_node_minus", [x.qsm, x.bm, x.qk, h, x.zp, t, U],
-                                        [D2(x.qsm, x.zp, x.qk, (1 - x.am) * h, t + x.am * h)])
+                                        [D2(x.qsm, x.zp, x.qk, (1 - x.am) * h, t + x.am * h, part=1)])
 
     def _guess_functions(self, x) -> None:
         """The event-located guess's functions (a two-point scheme without controls; a scheme with stages guesses with
@@ -293,7 +334,7 @@ class ContactMechanics:
                         mask * phi(qs) + (1 - mask) * mu, mask * phi(qk1) + (1 - mask) * nu)
         self.held_step = ca.Function("held_step", [xh, qk, p0, mask, h, x.t], [Rh, ca.jacobian(Rh, xh)])
         z = ca.SX(0, 1)
-        F = self._D2(qk, z, qs, 0.5 * h, x.t) + self._D1(qs, z, qk1, 0.5 * h, x.t + 0.5 * h)
+        F = self._D2(qk, z, qs, 0.5 * h, x.t) + self._D1(qs, z, qk1, 0.5 * h, x.t + 0.5 * h, part=1)
         self.free_sub = ca.Function("free_sub", [qk, qs, qk1, h, x.t], [F, ca.jacobian(F, qs)])
         v, tau = sym("v", n), sym("tau")
         acc = self.system.acceleration
@@ -314,7 +355,8 @@ class ContactMechanics:
             self.acc_normal = self.guide.acc_normal if self.s else ca.Function(
                 "acc_normal", [qk, v, U], [ca.mtimes(J(qk), acc(qk, v))])
         else:
-            qdd = ca.substitute(system._index1_exprs()[0], system.control_vector, U)
+            # (the control at the step's start: the march tests an arrival at its node)
+            qdd = ca.substitute(system._index1_exprs()[0], system.control_vector, self.instant_control(U, 0, 0.0))
             acc = ca.Function("qdd_u", [system.q, system.qd, U], [qdd])
             self.acc_normal = ca.Function("acc_normal", [qk, v, U], [ca.mtimes(J(qk), acc(qk, v, U))])
 
@@ -354,8 +396,9 @@ class ContactMechanics:
         l1, l2 = (lz[:ms], lz[ms:]) if self.m else (ca.SX(0, 1), ca.SX(0, 1))
         U, t = self._U, self._t
         r1, r2 = (rz[:self.nfz // 2], rz[self.nfz // 2:]) if self.nfz else (None, None)
-        return ca.vertcat((sr(qk, zm, qs, l1, a * h, t, U) + self._stage_forces(zm, lc[:sc], r1)) * a,
-                          (sr(qs, zp, qn, l2, (1 - a) * h, t + a * h, U) + self._stage_forces(zp, lc[sc:], r2)) * (1 - a))
+        U1, U2 = self.part_controls(U, 0), self.part_controls(U, 1)
+        return ca.vertcat((sr(qk, zm, qs, l1, a * h, t, U1) + self._stage_forces(zm, lc[:sc], r1)) * a,
+                          (sr(qs, zp, qn, l2, (1 - a) * h, t + a * h, U2) + self._stage_forces(zp, lc[sc:], r2)) * (1 - a))
 
     def _stage_forces(self, Z, lc, rz=None):
         """``w_j [∇φ(Z_j)ᵀλ^c_j + D(Z_j)ᵀ(ρ^Z_j λ^c_j)]`` at each stage of one part (stage by stage; the friction where

@@ -25,7 +25,7 @@ from types import SimpleNamespace
 import casadi as ca
 
 
-def _index1_system(cm) -> ca.Function:
+def _index1_system(cm, tau: float = 0.0) -> ca.Function:
     """``(A, b)`` of the masked index-1 system at ``(q, p, held, stick, u)``, ``A Λ = −b`` (constraints first, then the
     contacts' normal forces, then the sticking ones' friction forces; a masked row is ``Λ_i = 0``)."""
     system, n, c, m, d = cm.system, cm.n, cm.c, cm.m, cm.fd
@@ -55,7 +55,9 @@ def _index1_system(cm) -> ca.Function:
     b = ca.mtimes(G, ca.solve(M, rhs[:n])) + rhs[n:]
     U = ca.SX.sym("u", cm.nu)
     if cm.nu:
-        A, b = ca.substitute(A, system.control_vector, U), ca.substitute(b, system.control_vector, U)
+        # (the step's controls at the fraction tau of its first part: its start, or the sub-node that ends it)
+        ui = cm.instant_control(U, 0, tau)
+        A, b = ca.substitute(A, system.control_vector, ui), ca.substitute(b, system.control_vector, ui)
     return ca.Function("c_index1", [q, p, held, stick, U], [A, b])
 
 
@@ -84,20 +86,25 @@ def held_forces(cm) -> SimpleNamespace:
     matrix and right-hand side) and ``momentum`` (``p̃⁻``), for :func:`timed_force_rows`."""
     n, c, m = cm.n, cm.c, cm.m
     index1, momentum = _index1_system(cm), _sub_node_momentum(cm)
+    index1_sub = _index1_system(cm, 1.0) if cm.per_part else index1
     q, p, hm, sm, um, sgn = (ca.MX.sym(nm, k) for nm, k in (("q", n), ("p", n), ("held", c), ("stick", c),
                                                              ("u", cm.nu), ("sgn", c)))
     A, b = index1(q, p, hm, sm, um)
     out = -ca.solve(A, b)[m:]
     contact = ca.Function("c_contact_forces", [q, p, hm, sm, um], [out])
+    contact_sub = contact
+    if cm.per_part:     # (at the sub-node, with the control there)
+        As, bs = index1_sub(q, p, hm, sm, um)
+        contact_sub = ca.Function("c_contact_forces_sub", [q, p, hm, sm, um], [-ca.solve(As, bs)[m:]])
     held = ca.Function("c_held_force", [q, p, hm, um], [contact(q, p, hm, 0 * sm, um)[:c]])
     margin = ca.Function("c_cone_margin", [q, p, hm, sm, sgn, um], [_margin(cm, out[:c], out[c:], sgn)]) \
         if cm.friction else None
     qk, qs, bb, h, zm, t = (ca.MX.sym(nm, k) for nm, k in (("q", n), ("qs", n), ("beta", 1), ("h", 1), ("zm", cm.s),
                                                            ("t", 1)))
     pm = momentum(qk, zm, qs, bb, h, t, um)
-    timed = (ca.vertcat(contact(qs, pm, hm, sm, um)[:c], margin(qs, pm, hm, sm, sgn, um)) if cm.friction else
-             ca.vertcat(held(qs, pm, hm, um), ca.MX.zeros(c)))
-    return SimpleNamespace(index1=index1, momentum=momentum, contact_forces=contact, held_force=held,
+    fs = contact_sub(qs, pm, hm, sm if cm.friction else 0 * sm, um)
+    timed = ca.vertcat(fs[:c], _margin(cm, fs[:c], fs[c:], sgn) if cm.friction else ca.MX.zeros(c))
+    return SimpleNamespace(index1=index1_sub, momentum=momentum, contact_forces=contact, held_force=held,
                            cone_margin=margin,
                            timed_force=ca.Function("c_timed_force", [qk, qs, bb, h, zm, hm, sm, sgn, t, um], [timed]))
 

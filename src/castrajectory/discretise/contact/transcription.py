@@ -210,7 +210,9 @@ class ContactTranscription:
         # controls (optimal control through contact): one value per step, an input of every row that holds the
         # step's forces (ContactMechanics); a system without controls passes an empty one (the same signature)
         if cm.nu:
-            lo, hi = u_bounds if u_bounds is not None else (np.full(cm.nu, -np.inf), np.full(cm.nu, np.inf))
+            lo, hi = u_bounds if u_bounds is not None else (np.full(cm.nu1, -np.inf), np.full(cm.nu1, np.inf))
+            # (each control value of a step: one per step, or one per node of each part's quadrature)
+            lo, hi = (np.tile(np.asarray(x, float).reshape(-1), cm.nu // cm.nu1) for x in (lo, hi))
             nlp.variable("u", L * cm.nu, lb=np.tile(lo, L), ub=np.tile(hi, L), init=np.tile(np.clip(0.0, lo, hi), L))
 
     def _parameters(self) -> None:

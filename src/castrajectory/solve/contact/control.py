@@ -67,9 +67,10 @@ class _Program(ContactControlTranscription, ContactNLP):
     local_memo = None
 
 
-def mechanics(system, scheme: str) -> ContactMechanics:
-    """The contact elements of ``system`` and ``scheme``, built once per pair and kept with the system."""
-    return system.derived(("contact elements", scheme), lambda: ContactMechanics(system, scheme))
+def mechanics(system, scheme: str, controls: str = "step") -> ContactMechanics:
+    """The contact elements of ``system`` and ``scheme`` with ``controls`` ("step" or "quadrature",
+    :class:`ContactMechanics`), built once per triple and kept with the system."""
+    return system.derived(("contact elements", scheme, controls), lambda: ContactMechanics(system, scheme, controls))
 
 
 @dataclass(kw_only=True)
@@ -135,11 +136,14 @@ def _scales(system, q0, v0, length: float, u, T: float):
 def solve_contact_control(system, T, N: int, scheme: str, start, end, running, final, u_bounds,
                           controls, guess: Optional[dict] = None, options: Optional[dict] = None,
                           verbose: bool = False, keep_modes: bool = False, path=(),
-                          contact: Optional[ContactControlOptions] = None) -> ContactControlResult:
+                          contact: Optional[ContactControlOptions] = None,
+                          control_points: str = "step") -> ContactControlResult:
     """Solve a contact-implicit optimal-control problem (:func:`_solve_contact_control`) within the settings'
     ``iteration_budget`` Ipopt iterations in all, or a run's own budget (``--max-iter``) where one is set.
     ``options``: Ipopt's options on top of the settings' ``ipopt``; ``contact``: the settings
-    (:class:`ContactControlOptions`, the library's by default)."""
+    (:class:`ContactControlOptions`, the library's by default); ``control_points``: ``"step"`` (one control value per
+    step) or ``"quadrature"`` (on a scheme with stages, a value at each node of each part's quadrature, so that the
+    cost and the motion keep the scheme's order: :class:`ContactMechanics`)."""
     o = contact if contact is not None else ContactControlOptions()
     if not isinstance(o, ContactControlOptions):
         raise InputError(f"contact takes a ContactControlOptions (got {type(o).__name__})")
@@ -149,7 +153,7 @@ def solve_contact_control(system, T, N: int, scheme: str, start, end, running, f
     run = budget.current()
     B = run if run is not None else budget.Budget(o.iteration_budget)
     out = _solve_contact_control(system, T, N, scheme, start, end, running, final, u_bounds, controls, guess, options,
-                                 verbose, keep_modes, path, o, B)
+                                 verbose, keep_modes, path, o, B, control_points=control_points)
     if run is None and not out.success and B.remaining() == 0:
         out.message = f"{out.message} (the solve's budget of {o.iteration_budget} Ipopt iterations is spent)"
     return out
@@ -157,7 +161,8 @@ def solve_contact_control(system, T, N: int, scheme: str, start, end, running, f
 
 def _solve_contact_control(system, T, N: int, scheme: str, start, end, running, final, u_bounds,
                            controls, guess, options, verbose: bool, keep_modes: bool, path,
-                           o: ContactControlOptions, B: budget.Budget, elastic: bool = True) -> ContactControlResult:
+                           o: ContactControlOptions, B: budget.Budget, elastic: bool = True,
+                           control_points: str = "step") -> ContactControlResult:
     """Solve a contact-implicit optimal-control problem (module docstring).  ``T``: the horizon, or ``(lo, hi)`` for
     a free final time; ``start``, ``end``: ``(q, q̇)`` with NaN for a free entry (``q̇`` ``None``: free; the start's
     ``q`` given in full, NaN entries of its ``q̇`` are unknowns); ``running(q, v, u, t)``, ``final(q, v, T)``: CasADi
@@ -169,14 +174,15 @@ def _solve_contact_control(system, T, N: int, scheme: str, start, end, running, 
     to a target after k bounces), and no homotopy runs.  ``B``: the Ipopt iteration budget every solve of it
     draws on, the coarser grids' and the elastic mode's included."""
     t_all = _time.perf_counter()
-    problem = (system, T, scheme, start, end, running, final, u_bounds, controls)
+    problem = (system, T, scheme, start, end, running, final, u_bounds, controls, control_points)
     rung = ladder.Rung(guess=guess)
     if not keep_modes:
         # the ladder of grids (solve.ladder): the answer on half the steps, its controls interpolated at this grid's
         # steps (and its horizon and start), is the guess here
         rung = ladder.below(N, o.ladder_max, guess, lambda M: _solve_contact_control(
             system, T, M, scheme, start, end, running, final, u_bounds, controls, None, options, verbose, keep_modes,
-            path, o, B), lambda prior: _interpolated(prior, N))
+            path, o, B, control_points=control_points),
+            lambda prior: _interpolated(mechanics(system, scheme, control_points), prior, N))
     prior, rungs, guess = rung.prior, rung.grids, rung.guess
     P, init, marched, guess_time = _setup(problem, N, guess, options, verbose, keep_modes, path, o, B)
     (qN, vN) = end
@@ -204,13 +210,15 @@ def _solve_contact_control(system, T, N: int, scheme: str, start, end, running, 
     return out
 
 
-def _interpolated(prior: ContactControlResult, N: int) -> dict:
+def _interpolated(cm: ContactMechanics, prior: ContactControlResult, N: int) -> dict:
     """The guess of an ``N``-step grid from the answer ``prior`` on a coarser one: its horizon, its start's velocity,
-    and its controls interpolated at this grid's steps (the ladder of grids)."""
-    tu = prior.T / N * (np.arange(N) + 0.5)
+    and its controls interpolated at this grid's control times (the ladder of grids; its sub-nodes centred)."""
+    h = prior.T / N
+    tu = cm.control_times(h * np.arange(N), np.full(N, h), np.zeros(N)).reshape(-1)
     guess = {"T": prior.T, "qd0": prior.v[0]}
     if prior.u is not None and np.size(prior.u):      # (a system without controls has none to interpolate)
-        guess["u"] = np.column_stack([np.interp(tu, prior.t_u, prior.u[:, j]) for j in range(prior.u.shape[1])])
+        U = np.column_stack([np.interp(tu, prior.t_u, prior.u[:, j]) for j in range(prior.u.shape[1])])
+        guess["u"] = U.reshape(N, -1)
     return guess
 
 
@@ -219,10 +227,10 @@ def _setup(problem, N: int, guess, options, verbose: bool, keep_modes: bool, pat
     """The program of one grid and its start: ``(Problem, the start point, the guess's march or None, the guess's
     time)``.  The controls' guess (the user's, else zero clipped to the bounds) is marched from the initial state by
     the contact march; where that fails (or halves a step), the straight line from the start to the end."""
-    system, T, scheme, (q0, v0), (qN, vN), running, final, (lo, hi), _ = problem
+    system, T, scheme, (q0, v0), (qN, vN), running, final, (lo, hi), _, control_points = problem
     free_time = tuple(T) if isinstance(T, (tuple, list)) else None
-    cm = mechanics(system, scheme)
-    n, nu = cm.n, cm.nu
+    cm = mechanics(system, scheme, control_points)
+    n, nu, reps = cm.n, cm.nu, cm.nu // max(cm.nu1, 1)
     guess = dict(guess or {})
     unknown = sorted(set(guess) - {"u", "T", "qd0"})
     if unknown:
@@ -234,11 +242,19 @@ def _setup(problem, N: int, guess, options, verbose: bool, keep_modes: bool, pat
     h = Tg / N
     free_v = np.isnan(v0)
     v0g = np.where(free_v, np.asarray(guess.get("qd0", np.zeros(n)), float).reshape(n), v0)
-    U0 = np.tile(np.clip(0.0, lo, hi), (N, 1)) if nu else np.zeros((N, 0))
+    # (a guess per step, (N, controls), serves each of the step's control values; one per value is taken as it is)
+    lo_all, hi_all = np.tile(lo, reps), np.tile(hi, reps)
+    U0 = np.tile(np.clip(0.0, lo_all, hi_all), (N, 1)) if nu else np.zeros((N, 0))
     if nu and "u" in guess:
-        U0 = np.clip(np.asarray(guess["u"], float).reshape(N, nu), lo, hi)
+        Ug = np.asarray(guess["u"], float)
+        if Ug.size == N * cm.nu1 and reps > 1:
+            Ug = np.tile(Ug.reshape(N, cm.nu1), (1, reps))
+        if Ug.size != N * nu:
+            raise InputError(f"the guess's u needs {N} rows of {cm.nu1} (one per step) or of {nu} (one per control "
+                             f"value of a step); got {Ug.size} values")
+        U0 = np.clip(Ug.reshape(N, nu), lo_all, hi_all)
     length = _length_scale(system, q0)
-    scales = _scales(system, q0, v0g, length, U0[0], Tg)
+    scales = _scales(system, q0, v0g, length, U0[0][:cm.nu1], Tg)
     p0 = np.asarray(system.momentum(q0, v0g)).reshape(-1)
     t_guess = _time.perf_counter()
     point = discrete_march(cm, q0, p0, N, h, scales, controls=U0, options=o.march_options)
@@ -294,6 +310,14 @@ def _timing_rounds(P: Problem, init: dict, near: bool):
         res = got
         if res.continuable and before is None:
             answers.append(Attempt(res, prog.parameters()))
+        if not res.continuable and res.solver_status in SUCCESS_STATUSES and P.cm.sc:
+            # (converged short of complementarity with a stage lifted off a part held at its ends, a minimum of the
+            # penalties: the next round holds that part at its stages, from this answer)
+            now = read_branch(P, res.values, prev=branch)
+            if now.holds is not None and np.any(now.holds & ~(branch.holds if branch.holds is not None else False)) \
+                    and now.key not in seen:
+                branch = now
+                continue
         if not res.continuable:
             # (a later rung of the ladder failed after an earlier one converged short of complementarity: that one's
             # controls are the certificate's to march and solve on their branch)
@@ -303,12 +327,12 @@ def _timing_rounds(P: Problem, init: dict, near: bool):
         # the events read from the answer; once they settle with an event pinned against its window's edge, the
         # moves: each round then moves such an event one step, up to move_rounds rounds
         edges = pinned(P, res) if before is not None else []
-        now = read_branch(P, res.values, edges)
+        now = read_branch(P, res.values, edges, prev=branch)
         if now.same(branch):
             edges = pinned(P, res) if before is None else []
             if not edges:
                 break
-            now = read_branch(P, res.values, edges)
+            now = read_branch(P, res.values, edges, prev=branch)
             if np.array_equal(now.timed, branch.timed):
                 break                       # (nowhere to move)
             before = Attempt(res, prog.parameters())
@@ -391,7 +415,7 @@ def _elastic(problem, N, guess, options, verbose, path, o: ContactControlOptions
     stops at a penalty minimum; with the end state in the cost every round is feasible, and an event held against its
     window's edge moves to the next step (:func:`_move_edge_arrivals`) until the events sit where the end needs them.
     ``None`` where either solve fails."""
-    system, T, scheme, (q0, v0), (qN, vN), running, final, u_bounds, controls = problem
+    system, T, scheme, (q0, v0), (qN, vN), running, final, u_bounds, controls, control_points = problem
     n = system.nq
     q, v, Ts = ca.SX.sym("q", n), ca.SX.sym("v", n), ca.SX.sym("T")
     given = np.where(~np.isnan(qN))[0]
@@ -403,12 +427,13 @@ def _elastic(problem, N, guess, options, verbose, path, o: ContactControlOptions
     soft = ca.Function("phi_elastic", [q, v, Ts], [cost + o.elastic_weight * miss])
     free_end = (np.full(n, np.nan), None)
     first = _solve_contact_control(system, T, N, scheme, (q0, v0), free_end, running, soft, u_bounds, controls, guess,
-                                   options, verbose, False, path, o, B, elastic=False)
+                                   options, verbose, False, path, o, B, elastic=False, control_points=control_points)
     if not first.success:
         return None
-    g = {"T": first.T, "qd0": first.v[0], **({"u": first.u} if first.u is not None and np.size(first.u) else {})}
+    g = {"T": first.T, "qd0": first.v[0],
+         **({"u": first.u.reshape(N, -1)} if first.u is not None and np.size(first.u) else {})}
     out = _solve_contact_control(system, T, N, scheme, (q0, v0), (qN, vN), running, final, u_bounds, controls, g,
-                                 options, verbose, False, path, o, B, elastic=False)
+                                 options, verbose, False, path, o, B, elastic=False, control_points=control_points)
     if not out.success:
         return None
     out.iterations += first.iterations
@@ -562,10 +587,14 @@ def _answer(system, P: Problem, res: NLPResult, rounds, controls, C: Certificate
     if prog.end_velocity:            # the end node's momentum after its own force: the given final one
         p[-1] = np.asarray(prog.nlp.parameter_value("pN"), float).reshape(-1)
     v = cm.dm.velocities(Q, p)
+    # (each control value its own row, at its time t_u: one per step, or per node of each part's quadrature)
+    Uv = U.reshape(-1, cm.nu1) if cm.nu else U
     out = ContactControlResult(
         success=res.success, solver_status=res.solver_status, message=res.message, iterations=sum(st.iterations for st in steps),
         build_time_s=res.build_time_s, solve_time_s=wall - res.build_time_s, cost=cost, T=N * h, t=times, q=Q, v=v,
-        u=U, t_u=times[:-1] + 0.5 * h, controls=split_controls(U, controls, N), certificate=C.local, march_distance=C.march,
+        u=Uv, t_u=cm.control_times(times[:-1], np.full(N, h), B).reshape(-1),
+        controls=split_controls(Uv, controls, Uv.shape[0]),
+        certificate=C.local, march_distance=C.march,
         scheme=cm.dm.scheme.name, qs=S, t_sub=t_sub, mu=MU, nu=NU,
         fratio=V["fratio"].reshape(N, -1) if cm.friction else None, impact_times=impact_times,
         complementarity=float(prog.residual(V)), homotopy=steps, timing_rounds=rounds)

@@ -4,7 +4,7 @@ pinned at their windows' edges moved to the neighbouring step: by the rounds (:f
 :func:`_move_edge_turns`) and across their nodes on the certified answer (:func:`_across`)."""
 from __future__ import annotations
 
-from typing import List
+from typing import List, Optional
 
 import numpy as np
 
@@ -46,17 +46,19 @@ def bounces(prog, Q, timed: np.ndarray) -> np.ndarray:
     return timed & ((nxt > prog.open_gap) | (nxt2 > prog.open_gap))
 
 
-def read_branch(P: Problem, V, edges=()) -> Branch:
+def read_branch(P: Problem, V, edges=(), prev: Optional[Branch] = None) -> Branch:
     """The branch a timing round holds, read from the values ``V``: the arrivals, their bounces, the slips' turns and
     the turns' node ratios (:func:`arrivals`, :func:`bounces`, :func:`slip_turns`); the arrivals pinned at an edge of
-    their window (``edges``, :func:`pinned`) moved to the neighbouring step (:func:`_move_edge_arrivals`)."""
+    their window (``edges``, :func:`pinned`) moved to the neighbouring step (:func:`_move_edge_arrivals`); the parts
+    held at their stages (:func:`stage_holds`, on top of those the last round ``prev`` held)."""
     cm, prog, N, n = P.cm, P.prog, P.N, P.cm.n
     Q = np.asarray(V["q"], float).reshape(N + 1, n)
     timed = arrivals(cm, Q, np.asarray(V["qs"], float).reshape(N, n), P.tol, V.get("nu"), P.scales[1], P.o.node_force)
     turn, ratio = slip_turns(P, V, timed)
     _move_edge_turns(P, V, timed, turn, ratio)
     _move_edge_arrivals(prog, edges, timed, turn)
-    return Branch(timed, bounces(prog, Q, timed), turn, ratio)
+    holds = stage_holds(P, V, None if prev is None else prev.holds) if cm.sc else None
+    return Branch(timed, bounces(prog, Q, timed), turn, ratio, holds)
 
 
 def at_edge(B, edge: float) -> np.ndarray:
@@ -329,7 +331,33 @@ def _event_bounds(P: Problem, branch: Branch, init) -> dict:
     # (and a turn's contact is held through its step, closed at q̃_k and q_{k+1}, as the march's W)
     out["sub_gap"] = (np.zeros(L * c), np.where((first | turn).reshape(-1), 0.0, np.inf))
     out["node_gap"] = (np.zeros(L * c), np.where(t, 0.0, np.inf))
+    if cm.sc:
+        h = np.zeros(L * 2 * cm.sc, bool) if branch.holds is None else branch.holds.reshape(-1)
+        out["stage_hold"] = (np.where(h, 0.0, -np.inf), np.where(h, 0.0, np.inf))
     return out
+
+
+def stage_holds(P: Problem, V, before=None) -> np.ndarray:
+    """The parts a round holds at their stages (``(N, 2·stages·c)``, the rows of
+    :meth:`ContactMechanics.stage_holds`), as the march holds them: those the last round held (``before``) and those
+    whose contact the values ``V`` lift off at a stage while both the part's ends touch the surface (gaps within the
+    touch tolerance), while both ends still touch.  (As pairs alone, the stages' gap against the part's end impulses, a
+    block pushed along its floor with galerkin4 hopped over the second parts of two steps, a ballistic arc of
+    g(h/2)²/8 over the part, and stayed there from ρ = 1e3 to 1e6: the arc and the held stage are two minima of the
+    penalties, between which the stage's own pair φ(Z)λ^c rises.  Held in every part that touches at both ends from
+    the first round on, the block pushed over the whole horizon, exact at N = 10 with galerkin4, lost its certificate
+    at N = 20)"""
+    cm, N, st = P.cm, P.N, P.cm.dm.scheme.stages
+    Q = np.asarray(V["q"], float).reshape(N + 1, cm.n)
+    S = np.asarray(V["qs"], float).reshape(N, cm.n)
+    closed = lambda X: cm.gaps(X) <= P.tol  # noqa: E731
+    ends = np.concatenate([np.tile(closed(Q[:-1]) & closed(S), (1, st)), np.tile(closed(S) & closed(Q[1:]), (1, st))],
+                          axis=1)
+    zm, zp = P.prog._stages(V)
+    gz = np.asarray(cm.stage_gap.map(N)(*[z.T for z in zm + zp])).T.reshape(N, -1)
+    lifted = gz > P.tol
+    held = lifted if before is None else (lifted | np.asarray(before, bool).reshape(N, -1))
+    return ends & held
 
 
 def _event_start(cm: ContactMechanics, turn, ratio, start) -> None:

@@ -66,10 +66,14 @@ class Branch:
     bounce: np.ndarray
     turn: np.ndarray
     ratio: np.ndarray
+    #: per step, the parts' stage slots (``(N, 2·stages·c)``) whose contact the round holds at the stages
+    #: (:func:`.events.stage_holds`); None: none
+    holds: Optional[np.ndarray] = None
 
     @property
     def key(self) -> bytes:
-        return self.timed.tobytes() + b"|" + self.bounce.tobytes() + b"|" + self.turn.tobytes()
+        return self.timed.tobytes() + b"|" + self.bounce.tobytes() + b"|" + self.turn.tobytes() + b"|" + (
+            b"" if self.holds is None else self.holds.tobytes())
 
     @property
     def events(self) -> np.ndarray:
@@ -83,11 +87,14 @@ class Branch:
 
     def same(self, other: "Branch") -> bool:
         return (np.array_equal(self.timed, other.timed) and np.array_equal(self.bounce, other.bounce)
-                and np.array_equal(self.turn, other.turn))
+                and np.array_equal(self.turn, other.turn)
+                and (self.holds is None) == (other.holds is None)
+                and (self.holds is None or np.array_equal(self.holds, other.holds)))
 
     def moved(self, k: int, to: int) -> "Branch":
         """The branch with step ``k``'s events held in step ``to`` instead (the others kept)."""
-        out = Branch(self.timed.copy(), self.bounce.copy(), self.turn.copy(), self.ratio.copy())
+        out = Branch(self.timed.copy(), self.bounce.copy(), self.turn.copy(), self.ratio.copy(),
+                     None if self.holds is None else self.holds.copy())
         for flags in (out.timed, out.bounce, out.turn):
             flags[to], flags[k] = flags[k].copy(), False
         out.ratio[to], out.ratio[k] = out.ratio[k].copy(), 0.0
