@@ -8,6 +8,7 @@ import time
 
 import numpy as np
 
+from ...discretise.schemes import scheme as scheme_named
 from .common import COMP_TOL, GAP_TOL, G, _check_twins, _rect_clearance
 
 
@@ -26,11 +27,63 @@ def _friction_mu(rng) -> float:
     return 0.0 if rng.random() < 0.125 else float(np.round(rng.uniform(0.0, 1.5), 3))
 
 
+def _draw_family(fam: str, rng) -> dict:
+    """One scene of the friction family ``fam`` drawn from ``rng`` (:func:`draw_friction_scenes`)."""
+    if fam == "incline":
+        mu = float(np.round(rng.uniform(0.1, 1.5), 3))
+        T = float(np.round(rng.uniform(0.5, 2.0), 2))
+        alpha = float(np.round(min(math.atan(mu) * rng.uniform(0.8, 1.2), 1.45), 4))
+        v0 = float(np.round(rng.choice([0.0, rng.uniform(-2, 3)]), 3))
+        sc = dict(family=fam, e=0.0, mu=mu, alpha=alpha, v0=v0, T=T)
+    elif fam == "rolling":
+        mu = float(np.round(rng.uniform(0.1, 1.5), 3))
+        T = float(np.round(rng.uniform(0.5, 2.0), 2))
+        sc = dict(family=fam, e=0.0, mu=mu, body=str(rng.choice(["disk", "sphere"])),
+                  v0=float(np.round(rng.uniform(0.5, 3.0), 3)), spin=float(np.round(rng.uniform(-30, 30), 2)),
+                  T=T)
+    elif fam == "spin-drop":
+        e = float(rng.choice([0.0, 1.0])) if rng.random() < 0.1 else float(np.round(rng.uniform(0, 1), 3))
+        H = float(np.round(rng.uniform(0.1, 1.5), 3))
+        t1 = math.sqrt(2 * H / G)
+        sc = dict(family=fam, e=e, mu=_friction_mu(rng), body=str(rng.choice(["disk", "sphere"])), radius=0.1,
+                  height=H, vx=float(np.round(rng.uniform(-2, 2), 3)),
+                  omega=float(np.round(rng.uniform(-30, 30), 2)),
+                  T=float(min(1.5, math.ceil(100 * (t1 + rng.uniform(0.1, 1.0))) / 100)))
+    elif fam == "rectangle-friction":
+        e = float(rng.choice([0.0, 0.5, 0.8, 1.0]))
+        mu = _friction_mu(rng)
+        ratio = float(np.round(rng.uniform(1.0, 4.0), 3))
+        hgt, wid = (1.0 / ratio, 1.0) if rng.random() < 0.5 else (1.0, ratio)
+        T = float(np.round(rng.uniform(0.8, 1.5), 2))
+        if rng.random() < 0.25:     # a corner straight under the centroid (either diagonal), no spin
+            th = -math.pi / 2 + float(rng.choice([-1.0, 1.0])) * math.atan2(hgt, wid)
+            y = 0.5 * math.hypot(wid, hgt) + float(np.round(rng.uniform(0.1, 1.5), 3))
+            sc = dict(family=fam, e=e, mu=mu, width=wid, height=hgt, x=0.0, y=y, angle=th,
+                      vx=float(np.round(rng.uniform(-2, 2), 3)), vy=0.0, omega=0.0, T=T, centred=1)
+        else:
+            th = float(np.round(rng.uniform(0, math.pi / 2), 4))
+            y = _rect_clearance(wid, hgt, th) + float(np.round(rng.uniform(0.1, 1.5), 3))
+            sc = dict(family=fam, e=e, mu=mu, width=wid, height=hgt, x=0.0, y=y, angle=th,
+                      vx=float(np.round(rng.uniform(-1, 1), 3)), vy=0.0,
+                      omega=float(np.round(rng.uniform(-3, 3), 3)), T=T, centred=0)
+    else:
+        e = float(rng.choice([0.0, 0.5, 0.8, 1.0]))
+        mu = _friction_mu(rng)
+        R = float(np.round(rng.uniform(1.0, 4.0), 3))
+        wid, hgt = 0.4, 0.2
+        th = float(np.round(rng.uniform(-0.6, 0.6), 4))
+        x = float(np.round(rng.uniform(-0.4, 0.4) * R, 3))
+        y = x * x / (2 * R) + math.hypot(wid, hgt) / 2 + abs(x) / R * 0.5 + float(np.round(rng.uniform(0.05, 0.6), 3))
+        sc = dict(family=fam, e=e, mu=mu, width=wid, height=hgt, x=x, y=y, angle=th, vx=0.0, vy=0.0,
+                  omega=float(np.round(rng.uniform(-2, 2), 3)), radius=R, T=float(np.round(rng.uniform(0.8, 1.5), 2)))
+    return sc
+
+
 def draw_friction_scenes(seed: int, count: int, scheme: str = "midpoint"):
     """The friction families (issue #25), taking turns (``FRICTION_FAMILIES``, shifted by one every ten scenes so
     that the twins, every tenth scene again at 2N, meet every family); N in {200, 400, 800} (FRICTION_NS_HIGH, a
     quarter of those, for another scheme: the same draws); every scene solved with
-    ``scheme`` (a scheme other than the midpoint's twins every scene, so that each family's refinement pairs fit the
+    ``scheme`` (a scheme of order above 2 twins every scene, so that each family's refinement pairs fit the
     scheme's order, :func:`reference_order`):
 
     * ``incline``: the block on an incline around tan α = μ (μ in [0.1, 1.5], α within 20 % of arctan μ, launched
@@ -46,65 +99,18 @@ def draw_friction_scenes(seed: int, count: int, scheme: str = "midpoint"):
     * ``bowl-friction``: the 0.4 × 0.2 rectangle in the bowl (R in [1, 4]) as the old battery's bowl, with μ
       and e as the rectangle's, T in [0.8, 1.5]."""
     rng = np.random.default_rng(seed)
+    # (the scheme's order, not its name: a scheme above second order takes the coarser grids and twins every scene)
+    high = scheme_named(scheme).order > 2
     scenes = []
     for i in range(count):
         fam = FRICTION_FAMILIES[(i + i // 10) % len(FRICTION_FAMILIES)]
         N = int(rng.choice(FRICTION_NS))
-        if scheme != "midpoint":
+        if high:
             N = FRICTION_NS_HIGH[FRICTION_NS.index(N)]
-        if fam == "incline":
-            mu = float(np.round(rng.uniform(0.1, 1.5), 3))
-            T = float(np.round(rng.uniform(0.5, 2.0), 2))
-            alpha = float(np.round(min(math.atan(mu) * rng.uniform(0.8, 1.2), 1.45), 4))
-            v0 = float(np.round(rng.choice([0.0, rng.uniform(-2, 3)]), 3))
-            sc = dict(family=fam, e=0.0, mu=mu, alpha=alpha, v0=v0, T=T)
-        elif fam == "rolling":
-            mu = float(np.round(rng.uniform(0.1, 1.5), 3))
-            T = float(np.round(rng.uniform(0.5, 2.0), 2))
-            sc = dict(family=fam, e=0.0, mu=mu, body=str(rng.choice(["disk", "sphere"])),
-                      v0=float(np.round(rng.uniform(0.5, 3.0), 3)), spin=float(np.round(rng.uniform(-30, 30), 2)),
-                      T=T)
-        elif fam == "spin-drop":
-            e = float(rng.choice([0.0, 1.0])) if rng.random() < 0.1 else float(np.round(rng.uniform(0, 1), 3))
-            H = float(np.round(rng.uniform(0.1, 1.5), 3))
-            t1 = math.sqrt(2 * H / G)
-            sc = dict(family=fam, e=e, mu=_friction_mu(rng), body=str(rng.choice(["disk", "sphere"])), radius=0.1,
-                      height=H, vx=float(np.round(rng.uniform(-2, 2), 3)),
-                      omega=float(np.round(rng.uniform(-30, 30), 2)),
-                      T=float(min(1.5, math.ceil(100 * (t1 + rng.uniform(0.1, 1.0))) / 100)))
-        elif fam == "rectangle-friction":
-            e = float(rng.choice([0.0, 0.5, 0.8, 1.0]))
-            mu = _friction_mu(rng)
-            ratio = float(np.round(rng.uniform(1.0, 4.0), 3))
-            hgt, wid = (1.0 / ratio, 1.0) if rng.random() < 0.5 else (1.0, ratio)
-            T = float(np.round(rng.uniform(0.8, 1.5), 2))
-            if rng.random() < 0.25:     # a corner straight under the centroid (either diagonal), no spin
-                th = -math.pi / 2 + float(rng.choice([-1.0, 1.0])) * math.atan2(hgt, wid)
-                y = 0.5 * math.hypot(wid, hgt) + float(np.round(rng.uniform(0.1, 1.5), 3))
-                sc = dict(family=fam, e=e, mu=mu, width=wid, height=hgt, x=0.0, y=y, angle=th,
-                          vx=float(np.round(rng.uniform(-2, 2), 3)), vy=0.0, omega=0.0, T=T, centred=1)
-            else:
-                th = float(np.round(rng.uniform(0, math.pi / 2), 4))
-                y = _rect_clearance(wid, hgt, th) + float(np.round(rng.uniform(0.1, 1.5), 3))
-                sc = dict(family=fam, e=e, mu=mu, width=wid, height=hgt, x=0.0, y=y, angle=th,
-                          vx=float(np.round(rng.uniform(-1, 1), 3)), vy=0.0,
-                          omega=float(np.round(rng.uniform(-3, 3), 3)), T=T, centred=0)
-        else:
-            e = float(rng.choice([0.0, 0.5, 0.8, 1.0]))
-            mu = _friction_mu(rng)
-            R = float(np.round(rng.uniform(1.0, 4.0), 3))
-            wid, hgt = 0.4, 0.2
-            th = float(np.round(rng.uniform(-0.6, 0.6), 4))
-            x = float(np.round(rng.uniform(-0.4, 0.4) * R, 3))
-            y = x * x / (2 * R) + math.hypot(wid, hgt) / 2 + abs(x) / R * 0.5 + float(np.round(rng.uniform(0.05, 0.6), 3))
-            sc = dict(family=fam, e=e, mu=mu, width=wid, height=hgt, x=x, y=y, angle=th, vx=0.0, vy=0.0,
-                      omega=float(np.round(rng.uniform(-2, 2), 3)), radius=R, T=float(np.round(rng.uniform(0.8, 1.5), 2)))
-        sc["N"] = N
-        sc["id"] = f"f{i:03d}"
-        if scheme != "midpoint":
-            sc["scheme"] = scheme
+        sc = _draw_family(fam, rng)
+        sc.update(N=N, id=f"f{i:03d}", scheme=scheme)
         scenes.append(sc)
-        if i % 10 == 9 or scheme != "midpoint":
+        if i % 10 == 9 or high:
             scenes.append(dict(sc, N=2 * N, id=f"f{i:03d}x2", twin_of=sc["id"]))
     return scenes
 
