@@ -159,12 +159,19 @@ class ContactControlTranscription(ContactTranscription):
             # friction pushing it, a motion the march, one mode per part, does not have: certificate 4.9e-3.  Weighted
             # by the stage's normal force, the pair binds only where the contact is held, so a flight whose tangential
             # velocity turns inside a part meets no conflict with the stage pairs above)
+            # The converse holds the stages of a part whose slot sticks: a stage's displacement from its part's start
+            # against the slot's ratio, (μ_f ± ρ_slot) λ^c_j ⟂ χ±_j.  (Without it a part held at both ends had its
+            # stage slide forward and back inside it, its friction at the cone against a quadratic path through the
+            # part's ends: the launched block push, galerkin4 at N = 20, stopped with the second part of its stop's
+            # step 1.3 mm ahead at its stage and a force of μmg/2 pushing the stuck block, 5.7e-2 above J*, certified,
+            # since the march's nodes are the same)
             nlp.minimize_elements("stage_tie_penalty", self._stage_tie_penalty(cm),
                                   [X(nlp.index("lam_cstage").reshape(L, 2 * cm.sc)),
                                    X(nlp.index("fstage").reshape(L, nz)),
                                    X(nlp.index("slip_plus").reshape(L, 2 * c)),
-                                   X(nlp.index("slip_minus").reshape(L, 2 * c)), rho, Hc / self.scales_pref])
-            nlp.declared_pairs["stage_tie"] = L * 2 * nz
+                                   X(nlp.index("slip_minus").reshape(L, 2 * c)),
+                                   X(nlp.index("fratio").reshape(L, 2 * c)), SP, SM, rho, Hc / self.scales_pref])
+            nlp.declared_pairs["stage_tie"] = L * 4 * nz
         # (an open contact's slot has no force, so its ratio is free: the pair sets it against a flight's slip, and
         # nothing follows from it.  Weighted by the slot's normal force, three factors, the penalty stopped being
         # exact: Ipopt converged with residuals of 0.1-50 on the push to a target, the friction pushing forward)
@@ -290,8 +297,9 @@ class ContactControlTranscription(ContactTranscription):
                 mz = cm._stage_mu()[None, :]
                 zp_, zm_ = (values[name].reshape(L, cm.nfz) for name in ("stage_slip_plus", "stage_slip_minus"))
                 out.append(float(np.max(np.abs((mz + rz) * zp_) + np.abs((mz - rz) * zm_))))
-                a, b = self._stage_ties(cm, values["lam_cstage"].reshape(L, -1).T, rz.T, sp.T, sm.T)
-                out.append(float(np.max(np.abs(a) + np.abs(b))) * float(np.max(self.steps(values))) / self.scales_pref)
+                ties = self._stage_ties(cm, values["lam_cstage"].reshape(L, -1).T, rz.T, sp.T, sm.T, r.T, zp_.T, zm_.T)
+                out.append(float(np.max(sum(np.abs(t) for t in ties))) * float(np.max(self.steps(values)))
+                           / self.scales_pref)
         if self.end_velocity:
             out.append(float(np.max(np.abs(g(Q[L:]) * values["nu_end"]))) * self.h / self.scales_p)
         return float(max(out))
@@ -333,26 +341,29 @@ class ContactControlTranscription(ContactTranscription):
         return ca.Function("c_stage_hold_pen", [zm, zp, nu, mu, wn, wt, rho, sc], [rho * total / sc])
 
     @staticmethod
-    def _stage_ties(cm: ContactMechanics, lc, rz, sp, sm):
-        """``[(μ_f + ρ^Z_j) λ^c_j s⁺_slot, (μ_f − ρ^Z_j) λ^c_j s⁻_slot]`` per stage slot: a held stage's tangential force
-        against its part's slot (the first part's stages the node slot's, the second's the sub-node slot's)."""
+    def _stage_ties(cm: ContactMechanics, lc, rz, sp, sm, rs, zp, zm):
+        """The pairs that give each part of a step one friction mode, as the march's parts have, per stage slot:
+        ``(μ_f + ρ^Z_j) λ^c_j s⁺_slot``, ``(μ_f − ρ^Z_j) λ^c_j s⁻_slot`` (a stage slides as its part's slot slides) and
+        ``(μ_f + ρ_slot) λ^c_j χ⁺_j``, ``(μ_f − ρ_slot) λ^c_j χ⁻_j`` (a stage sticks where its slot sticks: ``χ±`` its
+        displacement from the part's start); the first part's stages take the node slot, the second's the sub-node
+        slot.  Weighted by the stage's normal force ``λ^c_j``, they bind only where the contact is held."""
         c, st = cm.c, cm.dm.scheme.stages
         muz = cm._stage_mu().reshape(-1, 1)
         if isinstance(lc, ca.SX):
             muz = ca.DM(muz)
-        slot = np.concatenate([np.tile(np.arange(c), st) + part * c for part in (0, 1)])
-        plus, minus = sp[slot.tolist()], sm[slot.tolist()]
-        return (muz + rz) * lc * plus, (muz - rz) * lc * minus
+        slot = np.concatenate([np.tile(np.arange(c), st) + part * c for part in (0, 1)]).tolist()
+        plus, minus, r = sp[slot], sm[slot], rs[slot]
+        return ((muz + rz) * lc * plus, (muz - rz) * lc * minus, (muz + r) * lc * zp, (muz - r) * lc * zm)
 
     @classmethod
     def _stage_tie_penalty(cm_cls, cm: ContactMechanics) -> ca.Function:
-        """``ρ w Σ_j [(μ_f + ρ^Z_j) λ^c_j s⁺ + (μ_f − ρ^Z_j) λ^c_j s⁻]`` over a step's stage slots (:meth:`_stage_ties`;
-        ``w`` the scale, ``h/p_ref``)."""
+        """``ρ w Σ`` of a step's stage-tie pairs (:meth:`_stage_ties`; ``w`` the scale, ``h/p_ref``)."""
         sym = ca.SX.sym
         lc, rz, sp, sm = sym("lc", 2 * cm.sc), sym("rz", cm.nfz), sym("sp", 2 * cm.c), sym("sm", 2 * cm.c)
+        rs, zp, zm = sym("rs", 2 * cm.c), sym("zp", cm.nfz), sym("zm", cm.nfz)
         w, sc = sym("rho"), sym("scale")
-        a, b = cm_cls._stage_ties(cm, lc, rz, sp, sm)
-        return ca.Function("c_stage_tie_pen", [lc, rz, sp, sm, w, sc], [w * sc * (ca.sum1(a) + ca.sum1(b))])
+        ties = cm_cls._stage_ties(cm, lc, rz, sp, sm, rs, zp, zm)
+        return ca.Function("c_stage_tie_pen", [lc, rz, sp, sm, rs, zp, zm, w, sc], [w * sc * sum(ca.sum1(t) for t in ties)])
 
     @staticmethod
     def _slip_penalty(cm: ContactMechanics, stages: bool = False) -> ca.Function:

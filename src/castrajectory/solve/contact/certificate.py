@@ -39,7 +39,7 @@ def _start_of(prog, V, q0):
     return h, p0, U
 
 
-def certify(P: Problem, res):
+def certify(P: Problem, res, hint=None):
     """Step 5: certify the answer, each of its steps marched from its own node (:func:`_local`); where a step does not
     reproduce it, solve the program again on a branch of the march (its modes fixed, :meth:`ContactNLP.mode_bounds`;
     the controls free) and certify again.  The first branch is the answer's own steps' (:func:`_local_point`: each
@@ -49,10 +49,11 @@ def certify(P: Problem, res):
     a step with two solutions -- a slip that turns at its very start, a landing at its very end -- is checked on the
     side the branch holds.  ``(result, certificate, solves)``: the :class:`~castrajectory.result.Certificate`'s
     ``local`` is the last one-step distance, its ``march`` that of the whole march from the initial state (``inf``
-    where a march stopped)."""
+    where a march stopped).  ``hint``: the modes of the branch ``res`` was solved on (``(modes, friction modes)`` per
+    step), its steps marched from those first."""
     cm, prog, q0, N, scales, o = P.cm, P.prog, P.q0, P.N, P.scales, P.o
     rho = float(np.asarray(prog.nlp.parameter_value("rho")).reshape(-1)[0])
-    solves, hint, last = 0, None, math.inf
+    solves, last = 0, math.inf
     while True:
         cert, local = _local(P, res.values, hint)
         # (a frictional impact's law (modes T, K): the branch fixes its impulse at the march's value, and the answer's

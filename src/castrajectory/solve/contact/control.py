@@ -48,7 +48,7 @@ from ..nlp import NLP
 from ...result import SUCCESS_STATUSES, ControlResult
 from ...validation import InputError
 from .certificate import _branch, _slips, _start_of, _zparts, certify
-from .events import (_across, _event_bounds, _event_start, _kept_moves, _restart, _shift, arrivals, pinned,
+from .events import (_across, _event_bounds, _event_start, _kept_moves, _onto_steps, _restart, _shift, arrivals, pinned,
                      read_branch)
 from .march import discrete_march
 from .nlp import ContactNLP
@@ -194,7 +194,11 @@ def _solve_contact_control(system, T, N: int, scheme: str, start, end, running, 
     on_node = []
     if not keep_modes and C.holds(o.certificate_tol) and res.success:
         res, C, moved, on_node = _across(P, res, C)
-        rounds += moved
+        res, C, onto = _onto_steps(P, res, C)
+        rounds += moved + onto
+        if onto:                  # (a stop moved into a step may sit at its window's edge: moved on across its node)
+            res, C, moved, on_node = _across(P, res, C)
+            rounds += moved
     out = _answer(system, P, res, rounds, controls, C, _time.perf_counter() - t_all, guess_time, keep_modes,
                   on_node)
     out.grids = rungs + [N]

@@ -12,7 +12,8 @@ from ...discretise.contact.transcription import ALPHA_MIN
 from ...models.impact import (frictional_impact, frictional_impact_plane, sequential_frictional_impact,
                                sequential_impact)
 from .friction_modes import _friction, _slow_arrivals, _stage_forces
-from .modes import (CLOSES, FREE, GAP_TIMED, HELD, KEPT_OUT, PUSHING, C, E, F, G, H, I, K, N, O, P, R, T, W, releases)
+from .modes import (CLOSES, DOWN, FIX, FREE, GAP_TIMED, HELD, KEPT_OUT, PUSHING, STICK, UP, C, E, F, G, H, I, K, N,
+                    O, P, R, T, W, releases)
 from .step import _Step, restage
 from .transitions import _grip_timing, _release_timing, _slip_turn
 
@@ -123,7 +124,34 @@ def _march_step(step: _Step, q, p, h, g_q, held_prev, tol, finest: bool, start=N
     found = _enumerate(step, q, p, h, g_q, touch, modes0, crossed, x0, pen, tol, finest)
     if found is not None:
         return found
+    turned = _turn_of_a_slide(step, q, p, h, modes0, x0)
+    if turned is not None:
+        return turned
     return "split" if not finest else (why, tuple(modes))
+
+
+def _turn_of_a_slide(step: _Step, q, p, h, modes, x0):
+    """A step no untimed mode solves, where a contact slid into it: the step solved with its slots sliding as they
+    did, unjudged, and its slip's stop or turn timed from that (:func:`_slip_turn`); the timed step's result, or None.
+    (A stop early in the step's first part has no untimed friction modes: sliding through the step turns its slip,
+    and sticking from the node needs a node impulse beyond the cone.  The search then halved the step until the
+    stop fell in a part some mode solved: the launched block push with galerkin4 and its optimal force at its
+    quadrature nodes, N = 20, stopped at 0.097 of step 12, and the march's grid, four parts there, was not the
+    program's)"""
+    if not step.nf or step.fd != 1 or any(m not in (O, H) for m in modes):
+        return None
+    c = step.c
+    active = [modes[i % c] == H and step.cm.mu_f[i % c] > 0 for i in range(2 * c)]
+    fm = [(step.fprev[i] if step.fprev[i] not in (FREE, FIX) else STICK) if active[i] else FREE for i in range(2 * c)]
+    if not any(fm[j] in (UP, DOWN) for j in range(c)):
+        return None
+    xs, ok = step.solve(x0.copy(), q, p, h, modes, fmodes=fm)
+    if not ok:
+        return None
+    # (the turn's first estimate then the slips' at the step's ends, s₀/(s₀ − s₁), not the half-impulse offset of
+    # turn_fraction, which the slide through the turn, its friction never reversed, doubles)
+    turned = _slip_turn(step, q, p, h, modes, xs, fm, through=True)
+    return None if turned is None else _result(step, *turned)
 
 
 def _base_mode(m: str, touching: bool):

@@ -12,14 +12,16 @@ from .modes import AT_SUB, CLOSES, DOWN, FREE, HELD, SLIDE, STICK, UP, E, G, H, 
 from .step import _Step, restage
 
 
-def _slip_turn(step: _Step, q, p, h, modes, x, fmodes):
+def _slip_turn(step: _Step, q, p, h, modes, x, fmodes, through: bool = False):
     """A held contact whose slip stops or turns inside the step (planar friction, no impact in the step): the step
     again with its sub-node timed there (mode W: the slip velocity at the sub-node, after the contact's share of
     the first part's force, vanishes), the first part sliding as its node slot did and the second sticking or
     sliding the other way.  Found where the node slot slides and the slip at the step's end has turned, and where the
     search let a contact that slid into the step's node stick from it while its slip there still runs (a stop just
     after the node).  ``(x, modes, gaps at q_{k+1}, friction modes)``, or None where no slip turns, or the
-    timed step does not solve with valid modes (the step as it was then stands: the turn inside it, first order)."""
+    timed step does not solve with valid modes (the step as it was then stands: the turn inside it, first order).
+    ``through``: ``x`` slid through the whole step unjudged (no untimed mode solved it,
+    :func:`.search._turn_of_a_slide`), and a slip whose ends bracket zero stops inside it."""
     cm, n, c = step.cm, step.n, step.c
     if not step.nf or step.fd != 1 or any(m not in (O, H) for m in modes):
         return None
@@ -45,7 +47,8 @@ def _slip_turn(step: _Step, q, p, h, modes, x, fmodes):
             slid = fm[j]
             sg = 1.0 if slid == UP else -1.0
             frac = turn_fraction(sg * s0[j], sg * s1[j])
-            if frac is None and step.o.time_held_events and fm[c + j] != slid and sg * s0[j] > 0.0 > sg * s1[j]:
+            if frac is None and (through or (step.o.time_held_events and fm[c + j] != slid)) \
+                    and sg * s0[j] > 0.0 > sg * s1[j]:
                 # (the node momenta's slips bracket the turn, which their half-impulse offset put before the step)
                 frac = sg * s0[j] / (sg * s0[j] - sg * s1[j])
         else:
