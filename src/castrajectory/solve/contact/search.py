@@ -12,7 +12,7 @@ from ...discretise.contact.transcription import ALPHA_MIN
 from ...models.impact import (frictional_impact, frictional_impact_plane, sequential_frictional_impact,
                                sequential_impact)
 from .friction_modes import _friction, _slow_arrivals, _stage_forces
-from .modes import (CLOSES, DOWN, FIX, FREE, GAP_TIMED, HELD, KEPT_OUT, PUSHING, STICK, UP, C, E, F, G, H, I, K, N,
+from .modes import (CLOSES, DOWN, FREE, GAP_TIMED, HELD, KEPT_OUT, PUSHING, STICK, UP, C, E, F, G, H, I, K, N,
                     O, P, R, T, W, releases)
 from .step import _Step, restage
 from .transitions import _grip_timing, _release_timing, _slip_turn
@@ -142,7 +142,10 @@ def _turn_of_a_slide(step: _Step, q, p, h, modes, x0):
         return None
     c = step.c
     active = [modes[i % c] == H and step.cm.mu_f[i % c] > 0 for i in range(2 * c)]
-    fm = [(step.fprev[i] if step.fprev[i] not in (FREE, FIX) else STICK) if active[i] else FREE for i in range(2 * c)]
+    # (each held slot slides as the step before left it.  Read in a march's first step from the way its slip runs at
+    # the step's start, the certificate's one-step marches timed stops in steps of unconverged rounds, and the launched
+    # spring-held push's rounds wandered: turns in steps 0, 1, 7, 8 of 10)
+    fm = [(step.fprev[i] if step.fprev[i] in (UP, DOWN) else STICK) if active[i] else FREE for i in range(2 * c)]
     if not any(fm[j] in (UP, DOWN) for j in range(c)):
         return None
     xs, ok = step.solve(x0.copy(), q, p, h, modes, fmodes=fm)

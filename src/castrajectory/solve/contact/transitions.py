@@ -47,9 +47,11 @@ def _slip_turn(step: _Step, q, p, h, modes, x, fmodes, through: bool = False):
             slid = fm[j]
             sg = 1.0 if slid == UP else -1.0
             frac = turn_fraction(sg * s0[j], sg * s1[j])
-            if frac is None and (through or (step.o.time_held_events and fm[c + j] != slid)) \
+            if (through or (frac is None and step.o.time_held_events and fm[c + j] != slid)) \
                     and sg * s0[j] > 0.0 > sg * s1[j]:
-                # (the node momenta's slips bracket the turn, which their half-impulse offset put before the step)
+                # (the node momenta's slips bracket the turn, which their half-impulse offset put before the step; and
+                # a slide through the step, its friction never reversed, turns at the straight line's zero: the
+                # offset's estimate started the spring-held block's stop at N = 40 where Newton left the window)
                 frac = sg * s0[j] / (sg * s0[j] - sg * s1[j])
         else:
             continue
