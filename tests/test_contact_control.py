@@ -397,3 +397,17 @@ def test_push_to_target_cost_converges_at_second_order():
         costs.append(sol.cost)
     order = np.log2((costs[0] - costs[1]) / (costs[1] - costs[2]))
     assert 1.5 < order < 2.5
+
+
+def test_a_solve_short_of_complementarity_fails_under_its_own_name():
+    """A penalty too small to reach complementarity (ρ = 1e-3 alone): Ipopt converges, the residual stays at 0.27, and
+    the answer fails as Complementarity_Not_Reached with Ipopt's own word kept apart (it read Solve_Succeeded, with
+    success False)."""
+    system, u = block(0.3)
+    ocp = ct.OptimalControl(system, T=2.0, N=10)
+    ocp.initial(q=[0.0, 0.0], qd=[0.0, 0.0])
+    ocp.final(q=[1.0, 0.0], qd=[0.0, 0.0])
+    ocp.minimize(running=u ** 2)
+    sol = ocp.solve(contact=ct.ContactControlOptions(penalties=(1e-3,)))
+    assert not sol.success and sol.status == "Complementarity_Not_Reached" and sol.solver_status == "Solve_Succeeded"
+    assert sol.complementarity > 1e-2

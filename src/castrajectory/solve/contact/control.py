@@ -601,7 +601,10 @@ def _answer(system, P: Problem, res: NLPResult, rounds, controls, C: Certificate
     # (each control value its own row, at its time t_u: one per step, or per node of each part's quadrature)
     Uv = U.reshape(-1, cm.nu1) if cm.nu else U
     out = ContactControlResult(
-        success=res.success, solver_status=res.solver_status, message=res.message, iterations=sum(st.iterations for st in steps),
+        success=res.success, solver_status=res.solver_status, message=res.message,
+        # (a failure found after the solver converged keeps its name: Complementarity_Not_Reached was reported as
+        # Ipopt's Solve_Succeeded with success False)
+        status="" if res.success else res.status, iterations=sum(st.iterations for st in steps),
         build_time_s=res.build_time_s, solve_time_s=wall - res.build_time_s, cost=cost, T=N * h, t=times, q=Q, v=v,
         u=Uv, t_u=cm.control_times(times[:-1], np.full(N, h), B).reshape(-1),
         controls=split_controls(Uv, controls, Uv.shape[0]),
