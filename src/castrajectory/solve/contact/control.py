@@ -48,8 +48,8 @@ from ..nlp import NLP
 from ...result import SUCCESS_STATUSES, ControlResult
 from ...validation import InputError
 from .certificate import _branch, _slips, _start_of, _zparts, certify
-from .events import (_across, _event_bounds, _event_start, _kept_moves, _onto_steps, _restart, _shift, arrivals, pinned,
-                     read_branch)
+from .events import (_across, _event_bounds, _event_start, _kept_moves, _onto_steps, _restart, _shift, arrivals,
+                     controls_at, pinned, read_branch)
 from .march import discrete_march
 from .nlp import ContactNLP
 from .options import ContactControlOptions
@@ -194,9 +194,9 @@ def _solve_contact_control(system, T, N: int, scheme: str, start, end, running, 
     on_node = []
     if not keep_modes and C.holds(o.certificate_tol) and res.success:
         res, C, moved, on_node = _across(P, res, C)
-        res, C, onto = _onto_steps(P, res, C)
+        res, C, onto, stopped = _onto_steps(P, res, C)
         rounds += moved + onto
-        if onto:                  # (a stop moved into a step may sit at its window's edge: moved on across its node)
+        if stopped:               # (a stop moved into a step may sit at its window's edge: moved on across its node)
             res, C, moved, on_node = _across(P, res, C)
             rounds += moved
     out = _answer(system, P, res, rounds, controls, C, _time.perf_counter() - t_all, guess_time, keep_modes,
@@ -228,8 +228,7 @@ def _interpolated(cm: ContactMechanics, prior: ContactControlResult, N: int) -> 
     tu = cm.control_times(h * np.arange(N), np.full(N, h), np.zeros(N)).reshape(-1)
     guess = {"T": prior.T, "qd0": prior.v[0]}
     if prior.u is not None and np.size(prior.u):      # (a system without controls has none to interpolate)
-        U = np.column_stack([np.interp(tu, prior.t_u, prior.u[:, j]) for j in range(prior.u.shape[1])])
-        guess["u"] = U.reshape(N, -1)
+        guess["u"] = controls_at(tu, prior.t_u, prior.u).reshape(N, -1)
     return guess
 
 

@@ -383,6 +383,13 @@ def _event_start(cm: ContactMechanics, turn, ratio, start) -> None:
     start["mul"] = np.where(t, np.asarray(start.get("mul", np.zeros(t.size)), float).reshape(-1), 0.0)
 
 
+def controls_at(t, tu, U) -> np.ndarray:
+    """The controls ``U`` (a row per time ``tu``) interpolated linearly at the times ``t``: ``(len(t), columns)``."""
+    U = np.asarray(U, float).reshape(len(tu), -1)
+    return np.column_stack([np.interp(t, tu, U[:, i]) for i in range(U.shape[1])]) if U.size \
+        else np.zeros((len(t), 0))
+
+
 def node_stops(P: Problem, V) -> List[tuple]:
     """The slips that stop on a node, untimed: ``(k, contact, ratio)`` where a held contact slides through step
     ``k − 1``'s second part (its sub-node slot's slip) and sticks through step ``k``'s first (its node slot's), at an
@@ -414,10 +421,10 @@ def node_stops(P: Problem, V) -> List[tuple]:
 def _onto_steps(P: Problem, res: NLPResult, C: Certificate):
     """A certified answer whose slips stop on nodes (:func:`node_stops`), each stop moved into the step after its node
     and into the step before (:func:`_onto`); the cheapest certified answer below the answer's cost is taken, and its
-    own stops on nodes moved, up to ``across_rounds`` times.  ``(result, certificate, solves)``.  (The launched block
+    own stops on nodes moved, up to ``across_rounds`` times.  ``(result, certificate, solves, moved)``.  (The launched block
     push with galerkin4 at N = 20 stopped on the node at t = 1.2, the optimum's stop 0.0097 s later: 6.5e-4 above J*;
     moved, 6.3e-13)"""
-    solves = 0
+    solves, moved = 0, False
     for _ in range(P.o.across_rounds):
         stops = node_stops(P, res.values)
         if not stops:
@@ -427,19 +434,19 @@ def _onto_steps(P: Problem, res: NLPResult, C: Certificate):
         solves += spent
         if best is None:
             break
-        res, C = best.res, best.certificate
-    return res, C, solves
+        res, C, moved = best.res, best.certificate, True
+    return res, C, solves, moved
 
 
 def _onto(P: Problem, res: NLPResult, k: int, j: int, ratio: float, to: int, c0: float):
     """The answer ``res`` with its stop on node ``k`` moved a quarter step into step ``to`` (``k``: after the node;
     ``k − 1``: before it): the answer's controls warped in time (the motion up to the node stretched or shrunk onto
     the quarter step, the rest of the horizon onto what is left) and marched from the start, which times the stop
-    there (mode W); the round on that march's branch solved as the first round on a finer grid is
-    (``near_ipopt``) and certified.  ``(a certified Attempt cheaper than c0 or None, solves)``.  (Started from the
-    answer itself with the turn held in step ``to``, its block at rest on the node, the round held the stop at its
-    window's edge next to the node, 1.1e-3 costlier than the stop on the node, where the stop's optimum is a tenth of
-    the step inside it)"""
+    there (mode W); the program solved on that march's branch (:func:`.certificate._branch`) and certified from its
+    modes.  ``(a certified Attempt cheaper than c0 or None, solves)``.  (Started from the answer itself with the turn
+    held in step ``to``, its block at rest on the node, the round held the stop at its window's edge next to the
+    node, 1.1e-3 costlier than the stop on the node, where the stop's optimum is a tenth of the step inside it; so
+    did the penalty round from the warped controls' march)"""
     cm, prog, N, o = P.cm, P.prog, P.N, P.o
     V = res.values
     h, p0, U = _start_of(prog, V, P.q0)
@@ -449,9 +456,7 @@ def _onto(P: Problem, res: NLPResult, k: int, j: int, ratio: float, to: int, c0:
     tu = cm.control_times(t[:-1], np.full(N, h), np.asarray(V["beta"], float).reshape(N)).reshape(-1)
     tn = cm.control_times(t[:-1], np.full(N, h), np.zeros(N)).reshape(-1)
     warped = np.where(tn <= ts, tn * tk / ts, tk + (tn - ts) * (T - tk) / (T - ts))
-    Uv = np.asarray(U, float).reshape(tu.size, -1)
-    Un = np.column_stack([np.interp(warped, tu, Uv[:, i]) for i in range(Uv.shape[1])]).reshape(N, -1) \
-        if Uv.size else np.zeros((N, 0))
+    Un = controls_at(warped, tu, np.asarray(U, float).reshape(tu.size, -1)).reshape(N, -1)
     point = discrete_march(cm, P.q0, p0, N, h, P.scales, controls=Un, options=o.march_options)
     if point is None or np.asarray(point["steps"]).size != N:
         return None, 0

@@ -142,9 +142,7 @@ def _turn_of_a_slide(step: _Step, q, p, h, modes, x0):
         return None
     c = step.c
     active = [modes[i % c] == H and step.cm.mu_f[i % c] > 0 for i in range(2 * c)]
-    # (each held slot slides as the step before left it.  Read in a march's first step from the way its slip runs at
-    # the step's start, the certificate's one-step marches timed stops in steps of unconverged rounds, and the launched
-    # spring-held push's rounds wandered: turns in steps 0, 1, 7, 8 of 10)
+    # (each held slot slides as the step before left it; a march's first step has none, docs/notes.md)
     fm = [(step.fprev[i] if step.fprev[i] in (UP, DOWN) else STICK) if active[i] else FREE for i in range(2 * c)]
     if not any(fm[j] in (UP, DOWN) for j in range(c)):
         return None
