@@ -8,7 +8,7 @@ from itertools import product
 
 import numpy as np
 
-from .modes import AT_SUB, CLOSES, DOWN, FIX, FREE, HELD, SLIDE, STICK, UP, I
+from .modes import CLOSES, DOWN, FIX, FREE, HELD, SLIDE, STICK, UP, I, slips_after
 from .step import _Step
 
 
@@ -44,7 +44,7 @@ def _friction(step: _Step, q, p, h, modes, x, mufix=None, rfix=None, mufixl=None
         fixed = np.isfinite(np.asarray(rfix, float).reshape(2 * c, d)[:, 0])
         fm = [FIX if fixed[i] else f for i, f in enumerate(fm)]
         rfix = np.where(np.isfinite(rfix), rfix, 0.0)
-    slips = np.array([m in AT_SUB for m in modes], float)
+    slips = slips_after(modes)
     judge = functools.partial(_friction_judged, step, q, p, h, modes, slips, muf,
                               dict(mufix=mufix, rfix=rfix, mufixl=mufixl, rfixl=rfixl))
     seen = set()

@@ -175,7 +175,7 @@ class ContactNLP(ContactTranscription):
         shi = np.select([fmd == M.STICK, fmd == M.DOWN], [0.0, 0.0], np.inf)
         bounds["fratio"] = (rlo.reshape(-1), rhi.reshape(-1))
         # the contacts that arrive at their sub-node (an impact, caught or fixed by a law): slip after it
-        self.arrive = np.isin(modes, M.AT_SUB).astype(float)
+        self.arrive = M.slips_after(modes)
         self.hold(arrive=self.arrive)
         bounds["slip"] = (slo.reshape(-1), shi.reshape(-1))
         # a released contact's share: its ratio and the slip before the impact as its node slot's mode (stick, or

@@ -187,7 +187,10 @@ def _started(step: _Step, q, p, h, g_q, tol, finest, x0, start):
         return None
     saved = list(step.fprev)
     step.fprev = list(fhint)
-    got = _try(step, q, p, h, modes, x0, np.asarray(xh, float).copy(), None)
+    slip_timed = any(m in (W, G) for m in modes)
+    got = _try(step, q, p, h, modes, x0, np.asarray(xh, float).copy(), None, fmodes=list(fhint) if slip_timed else None)
+    if got is not None and slip_timed and not ALPHA_MIN - 0.5 <= got[5] <= 0.5 - ALPHA_MIN:
+        got = None          # (its timed sub-node left the step)
     if got is not None:
         x, gs, gn, nu, mu, b, used = got
         if _next_modes(modes, touch, g_q, gs, gn, nu, mu, b, 1e-12 * step.ell, tol, step, finest,
@@ -219,10 +222,12 @@ def _solved(step: _Step, q, p, h, x, used, gn, tol):
     return law or _result(step, x, used, gn, step.last_fmodes)
 
 
-def _try(step: _Step, q, p, h, modes, x0, x, frac):
+def _try(step: _Step, q, p, h, modes, x0, x, frac, fmodes=None):
     """Solve the step in ``modes`` (from ``x``; a newly timed impact from its estimated crossing
     fraction ``frac``): ``(x, gaps at q̃, gaps at q_{k+1}, ν, μ, β, modes used)``, or None if Newton fails
-    (the modes used differ where an impact with friction took its impulse from its law: T or P, FIX)."""
+    (the modes used differ where an impact with friction took its impulse from its law: T or P, FIX).  ``fmodes``:
+    the friction modes of the first solve (frictionless without them; a slip's stop timed at the sub-node, mode W or
+    G, needs its own: solved frictionless, the spring-held block push's stop at 0.58 of its step went to β = −17)."""
     n, c = step.n, step.c
     gapf = step.cm.system.gap
     start = x.copy()
@@ -231,14 +236,14 @@ def _try(step: _Step, q, p, h, modes, x0, x, frac):
         start[2 * n] = min(max(frac - 0.5, ALPHA_MIN - 0.5), 0.5 - ALPHA_MIN)
         start[:n] = q + frac * (x[n:2 * n] - q)
         start = restage(step.cm, start, q)
-    xn, ok = step.solve(start, q, p, h, modes)
+    xn, ok = step.solve(start, q, p, h, modes, fmodes=fmodes)
     timed = [j for j, m in enumerate(modes) if m in GAP_TIMED]
     if timed and not (ok and ALPHA_MIN - 0.5 <= xn[2 * n] <= 0.5 - ALPHA_MIN):
         # Newton on the timing row left the step (its rows go like 1/α near α = 0): the time
         # of the impact by a bracketed search on the gap instead
         xn, ok = _timed_by_bracket(step, x, q, p, h, modes, timed[0])
     if not ok:
-        xn, ok = step.solve(x0.copy(), q, p, h, modes)
+        xn, ok = step.solve(x0.copy(), q, p, h, modes, fmodes=fmodes)
         if not ok:
             return None
     xn = _friction(step, q, p, h, modes, xn)

@@ -11,7 +11,7 @@ import numpy as np
 from ...discretise.contact.elements import ContactMechanics
 from .. import jit
 from .options import MarchOptions
-from .modes import AT_SUB, CLOSES, DOWN, FIX, FREE, HELD, SLIDE, SLIDING_UP, STICK, TIMES_SUB, UP, E, F, G, I, K, N, P, T, W, releases
+from .modes import CLOSES, DOWN, FIX, FREE, HELD, SLIDE, SLIDING_UP, STICK, TIMES_SUB, UP, E, F, G, I, K, N, P, T, W, releases, slips_after
 
 
 
@@ -175,7 +175,7 @@ class _Step:
         stick, sgn, fix = self._friction_modes(fmodes)
         nfs = self.cm.nfs
         args = args + (stick, sgn, fix, np.zeros(self.cm.nfr) if rfix is None else rfix,
-                       np.array([m in AT_SUB for m in modes], float)[:nfs // 2],
+                       slips_after(modes)[:nfs // 2],
                        np.zeros(self.cm.nfl) if rfixl is None else rfixl)
         small = 0
         size0 = 1.0 + float(np.max(np.abs(x)))

@@ -8,7 +8,7 @@ import numpy as np
 
 from ...discretise.contact.transcription import ALPHA_MIN
 from .friction_modes import _friction_judged, _stage_forces
-from .modes import AT_SUB, CLOSES, DOWN, FREE, HELD, SLIDE, STICK, UP, E, G, H, O, R, W, turn_fraction
+from .modes import CLOSES, DOWN, FREE, HELD, SLIDE, STICK, UP, E, G, H, O, R, W, slips_after, turn_fraction
 from .step import _Step, restage
 
 
@@ -76,7 +76,7 @@ def _slip_turn(step: _Step, q, p, h, modes, x, fmodes, through: bool = False):
             if valid:
                 # every slot's friction mode holds, with the stages of its part (sticking inside the cone, sliding with
                 # its slip's sign)
-                judged = _friction_judged(step, q, p, h, new, np.array([m in AT_SUB for m in new], float),
+                judged = _friction_judged(step, q, p, h, new, slips_after(new),
                                           np.concatenate([cm.mu_f, cm.mu_f]), {}, trial, xw)
                 valid = judged is not None and judged[1] is None
             if valid:
@@ -247,7 +247,7 @@ def _grip_solved(step: _Step, q, p, h, new, trial, x, j: int, f: float):
     if valid:
         # every slot's friction holds (the node slots and the first part's stages inside the cone, the sliding ones
         # with their slips' signs)
-        valid = _friction_judged(step, q, p, h, new, np.array([m in AT_SUB for m in new], float),
+        valid = _friction_judged(step, q, p, h, new, slips_after(new),
                                  np.concatenate([cm.mu_f, cm.mu_f]), {}, trial, xw)
         valid = valid is not None and valid[1] is None
     return (xw, new, gn, trial) if valid else None
