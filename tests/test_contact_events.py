@@ -60,6 +60,32 @@ def test_ladder_leaves_the_wall_at_the_classical_angle():
     assert np.asarray(out["contact_force"]).shape == (n + 1, 2)
 
 
+def test_a_release_that_stays_in_the_touching_band_is_listed():
+    """A contact whose force vanished may stay within the touching band for some nodes before it opens (a grazing
+    release, the gap growing as (t − t*)³): its release is at the last node with a force.  Synthetic node data: the
+    contact closed at nodes 0–5 with a force at 0–3, open from 6 on; the force a straight line through zero at
+    t = 3.5 (oracle), read from the nodes before node 3.  (It was not listed: the ladder's wall at N = 1600, 3200.)"""
+    from castrajectory.solve.contact.solution import _releases
+    t = np.arange(9.0)
+    closed = np.array([[True]] * 6 + [[False]] * 3)
+    force = np.array([[3.5], [2.5], [1.5], [0.5], [0.0], [0.0], [0.0], [0.0], [0.0]])
+    rel = _releases(t, closed, force, [])
+    assert [(r.step, r.contact, r.at_impact) for r in rel] == [(3, 0, False)]
+    assert rel[0].t == pytest.approx(3.5, abs=1e-12)
+
+
+@pytest.mark.slow
+def test_the_ladder_on_a_fine_grid_lists_its_release_and_no_impact():
+    """The ladder on 3200 midpoint steps: its wall's release listed and timed (3.2e-10 s from the closed form), and no
+    impact (its wall's free normal acceleration vanishes at the start, gravity along the wall, and a rounding-level
+    approach at the first sub-node read as an impact before the impact speed had the impulse tolerance's floor)."""
+    lad = _example("sliding_ladder")
+    tr = ct.simulate(lad.system(), lad.q0, lad.qd0, T=0.5, N=3200).detail
+    assert not tr.impacts
+    assert [(r.contact, r.timed) for r in tr.releases] == [(0, True)]
+    assert abs(tr.releases[0].t - _ladder_lift_off(lad)) < 1e-9
+
+
 def _ball(e=0.0, m=1.0):
     y = ca.SX.sym("y", 1)
     return ct.LagrangianSystem(y, ct.Atoms([ca.vertcat(0, y)], [m]), [ct.Gravity(G)],
