@@ -26,10 +26,10 @@ def test_tutorial_command_runs(command, tmp_path):
 
 
 def test_the_tutorial_files_are_the_examples():
-    """The files the tutorial shows are examples/coupled_pendulums.py and examples/heavy_top.py, statement
-    for statement (after their docstrings)."""
+    """The files the tutorial shows are examples/coupled_pendulums.py, examples/heavy_top.py and
+    examples/rod_chain.py, statement for statement (after their docstrings)."""
     codes = blocks("python")
-    assert len(codes) == 2
-    for code, name in zip(codes, ("coupled_pendulums", "heavy_top")):
+    assert len(codes) == 3
+    for code, name in zip(codes, ("coupled_pendulums", "heavy_top", "rod_chain")):
         example = open(os.path.join(ROOT, "examples", f"{name}.py")).read()
         assert example.endswith(code) and example[:len(example) - len(code)].strip().endswith('"""')

@@ -56,7 +56,8 @@ def scene_parser(prog: str, description: str) -> ArgumentParser:
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout and nothing else")
     p.add_argument("--verbose", action="store_true", help="stream Ipopt's log (to stderr with --json)")
     p.add_argument("--max-iter", type=int, default=None,
-                   help="Ipopt iterations of the whole run, every sub-solve included (default: no cap)")
+                   help="solver iterations (Ipopt's, and Newton's on an initial-value system) of the whole run, "
+                        "every sub-solve included (default: no cap)")
     return p
 
 
@@ -536,8 +537,9 @@ def estimate_lines(result) -> List[str]:
 
 
 def status_line(status: str, result) -> str:
-    """The closing line of every summary: status, Ipopt message, iterations and wall times."""
-    return (f"status: {status} ({result.message}); {result.iterations} Ipopt iterations; "
+    """The closing line of every summary: status, the solver's message, iterations (Ipopt's, and Newton's on an
+    initial-value system) and wall times."""
+    return (f"status: {status} ({result.message}); {result.iterations} solver iterations; "
             f"build {result.build_time_s:.3f} s, solve {result.solve_time_s:.4f} s")
 
 

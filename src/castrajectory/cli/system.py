@@ -44,7 +44,7 @@ def parser() -> ArgumentParser:
     p.add_argument("file", metavar="FILE.py", help="a Python file defining system(), q0, qd0 (T, n optional)")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout and nothing else")
     p.add_argument("--verbose", action="store_true", help="stream Ipopt's log (to stderr with --json)")
-    p.add_argument("--max-iter", type=int, default=None, help="Ipopt iterations of the whole run")
+    p.add_argument("--max-iter", type=int, default=None, help="solver iterations (Ipopt's and Newton's) of the whole run")
     add_trajectory_flags(p, T=None, n=None)
     p.add_argument("--derive", metavar="PATH", help="also write the system's derivation (Markdown, LaTeX math)")
     return p

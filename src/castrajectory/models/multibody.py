@@ -163,7 +163,8 @@ class Multibody:
 
     def _joint(self, kind, parent, child, pp, cp, axis, name) -> Joint:
         for b, what in ((parent, "parent"), (child, "child")):
-            if b is not None and (not isinstance(b, Body) or b.index >= len(self.bodies) or self.bodies[b.index] is not b):
+            foreign = not isinstance(b, Body) or b.index >= len(self.bodies) or self.bodies[b.index] is not b
+            if b is not None and foreign:
                 raise InputError(f"the joint's {what} is not a body of this Multibody (got {b!r})")
         if child is None:
             raise InputError("a joint's child is a body (the world is a parent only)")
@@ -297,17 +298,30 @@ class Multibody:
             return [ca.dot(normal, gap), cth - pth]
         return [gap[0], gap[1], cth - pth]
 
-    def _picture(self, origin, th) -> List:
-        """The points drawn: each body's joint points and outline, in the world (:attr:`links` joins them)."""
-        pts, self.links = [], []
+    def _picture_points(self) -> List[Tuple[Body, List[Tuple[float, float]]]]:
+        """Each body's points drawn, in its frame: its joints' points, then its outline (its centre of mass alone
+        where it has neither)."""
+        out = []
         for b in self.bodies:
             local = [j.child_point for j in self.joints if j.child is b] + \
                     [j.parent_point for j in self.joints if j.parent is b] + list(b.outline)
-            start = len(pts)
-            for p in local or [b.com]:
-                pts.append(origin[b.index] + ca.mtimes(_rot(th[b.index]), ca.DM(p)))
-            self.links += [(i, i + 1) for i in range(start, len(pts) - 1)]
-        return pts
+            out.append((b, local or [b.com]))
+        return out
+
+    @property
+    def links(self) -> List[Tuple[int, int]]:
+        """The pictures' segments, pairs of indices of the system's points: each body's points joined in order (a
+        system file's ``links``)."""
+        pairs, start = [], 0
+        for _, local in self._picture_points():
+            pairs += [(i, i + 1) for i in range(start, start + len(local) - 1)]
+            start += len(local)
+        return pairs
+
+    def _picture(self, origin, th) -> List:
+        """The points drawn (:meth:`_picture_points`), in the world (:attr:`links` joins them)."""
+        return [origin[b.index] + ca.mtimes(_rot(th[b.index]), ca.DM(p))
+                for b, local in self._picture_points() for p in local]
 
     # ------------------------------------------------------------------ states
     def state(self, positions=None, rates=None, formulation: str = "maximal") -> Tuple[np.ndarray, np.ndarray]:

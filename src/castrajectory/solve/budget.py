@@ -1,4 +1,5 @@
-"""Ipopt iteration budgets: a :class:`Budget` is shared by every solve it is given to.
+"""Iteration budgets: a :class:`Budget` is shared by every solve it is given to (Ipopt's iterations, and Newton's on a
+square initial-value system, :meth:`castrajectory.solve.nlp.NLP.newton`).
 
 A strategy may solve many NLPs (coarse-to-fine levels, horizon windows, penalty rungs, branches).  A budget caps the
 total of their Ipopt iterations: each solve may use at most what is left, and once nothing is left a solve returns

@@ -44,7 +44,7 @@ from ..models.mechanics import LagrangianSystem
 from ..result import NLPResult, Result
 from .guesses import (EXTRAPOLATION_POINTS, GUESS_H_OMEGA, GUESS_SUBSTEPS, _extrapolate,  # noqa: F401
                       _flow_guess, _initial_guess, _integrated, _refine)  # (EXTRAPOLATION_POINTS: the tests read it here)
-from .nlp import NLP
+from .nlp import NEWTON_MAX_ITER, NLP
 from ..validation import InputError, integer_at_least, one_of, positive, state_vector
 
 #: Ipopt settings for the square DEL systems (MUMPS scaling off: see solve.nlp.DEFAULT_IPOPT_OPTIONS).
@@ -196,8 +196,24 @@ class TrajectoryNLP(TrajectoryTranscription):
             opts["obj_scaling_factor"] = min(1.0, 100.0 * self.h ** 2 / (m_ref * size))
         opts.update(options or {})
         init = {k: v for k, v in guess.items() if k in self.nlp.variable_names}
+        if self.mode == "initial_value" and not verbose:
+            # the square initial-value system by Newton's method, its linear solves block by block in time
+            # (NLP.newton: linear in the bodies of a chain in maximal coordinates, where Ipopt's symmetric
+            # factorisation is cubic); where it does not contract from this guess, Ipopt solves from it
+            res = self.nlp.newton(init, float(opts["tol"]), bounds=self.fixed_bounds(),
+                                  max_iter=min(int(opts.get("max_iter", NEWTON_MAX_ITER)), NEWTON_MAX_ITER))
+            if res is not None:
+                self.function_time_s = 0.0
+                return res
+            # (a caller's max_iter caps the solve: Newton's iterations and Ipopt's together; the default cap is left
+            # as it is, whose change would build another Ipopt solver)
+            if options and "max_iter" in options:
+                opts["max_iter"] = max(0, int(opts["max_iter"]) - int(getattr(self.nlp, "newton_iterations", 0)))
         before = self.nlp._solver
         res = self.nlp.solve(init=init, options=opts, verbose=verbose, bounds=self.fixed_bounds())
+        # (a Newton attempt that did not converge spent iterations too: they count with this solve's)
+        res.iterations += int(getattr(self.nlp, "newton_iterations", 0)) if self.mode == "initial_value" else 0
+        self.nlp.newton_iterations = 0
         if before is not None and self.nlp._solver is before:
             res.build_time_s = 0.0  # nothing was built for this solve (a reused NLP: _trajectory_nlp)
         stats = self.nlp.last_stats  # of the solver just used
