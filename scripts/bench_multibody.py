@@ -37,7 +37,7 @@ import castrajectory as ct
 
 T = 3.0
 SCHEMES = ("galerkin6", "galerkin8")
-NS = (15, 20, 30, 40, 60, 90, 120, 180, 240, 360)
+NS = (40, 60, 90, 120, 180, 240, 360)
 
 
 def chain(n: int) -> ct.Multibody:

@@ -634,14 +634,14 @@ class NLP(Program):
             iterations=it, build_time_s=0.0, solve_time_s=time.perf_counter() - t,
             x=x, lam_x=np.zeros_like(x), lam_g=np.zeros(self._ng))
 
-    def _block_plan(self, sp: ca.Sparsity, free: np.ndarray):
+    def _block_plan(self, sp: ca.Sparsity, free: np.ndarray, build: bool = True):
         """``(BlockTriangular of J_EF, J's nonzeros of J_EF in its order, each nonzero's row)``, kept per pattern
         (every row an equality); None where the form has no use (one block, blocks smaller than
-        :data:`NEWTON_MIN_BLOCK`, or not triangular)."""
+        :data:`NEWTON_MIN_BLOCK`, or not triangular), or, without ``build``, where none was made before."""
         key = (sp.size1(), sp.size2(), sp.nnz(), free.tobytes())
         cache = self.__dict__.setdefault("_block_plans", {})
-        if key in cache:
-            return cache[key]
+        if key in cache or not build:
+            return cache.get(key)
         rows, cols = (np.asarray(v, int) for v in sp.get_triplet())
         col_of = np.full(sp.size2(), -1)
         col_of[free] = np.arange(free.size)
@@ -758,7 +758,9 @@ class NLP(Program):
         block where every row is an equality and the Jacobian has a block triangular form (:mod:`.triangular`:
         an initial-value trajectory; the whole sparse QR took 0.37 s on a 24-link chain in maximal coordinates)."""
         r = np.asarray(gv).reshape(-1)[eq] - a["lbg"][eq]
-        plan = self._block_plan(Jg.sparsity(), free) if eq.size == np.asarray(gv).size else None
+        # (the plan of a Newton solve of this program, where one ran: its form is not looked for here, where the
+        # whole QR is as good for the small steps that Newton leaves to Ipopt)
+        plan = self._block_plan(Jg.sparsity(), free, build=False) if eq.size == np.asarray(gv).size else None
         if plan is not None:
             bt, idx, _ = plan
             dx = bt.solve(np.asarray(Jg.nonzeros(), float)[idx], r)

@@ -44,7 +44,7 @@ from ..models.mechanics import LagrangianSystem
 from ..result import NLPResult, Result
 from .guesses import (EXTRAPOLATION_POINTS, GUESS_H_OMEGA, GUESS_SUBSTEPS, _extrapolate,  # noqa: F401
                       _flow_guess, _initial_guess, _integrated, _refine)  # (EXTRAPOLATION_POINTS: the tests read it here)
-from .nlp import NEWTON_MAX_ITER, NLP
+from .nlp import NEWTON_MAX_ITER, NEWTON_MIN_BLOCK, NLP
 from ..validation import InputError, integer_at_least, one_of, positive, state_vector
 
 #: Ipopt settings for the square DEL systems (MUMPS scaling off: see solve.nlp.DEFAULT_IPOPT_OPTIONS).
@@ -196,7 +196,9 @@ class TrajectoryNLP(TrajectoryTranscription):
             opts["obj_scaling_factor"] = min(1.0, 100.0 * self.h ** 2 / (m_ref * size))
         opts.update(options or {})
         init = {k: v for k, v in guess.items() if k in self.nlp.variable_names}
-        if self.mode == "initial_value" and not verbose:
+        # (a step's unknowns on average: below NEWTON_MIN_BLOCK no block can pay, and the block form is not looked for)
+        per_step = sum(b.init.size for b in self.nlp._vars) / self.N
+        if self.mode == "initial_value" and not verbose and per_step >= NEWTON_MIN_BLOCK:
             # the square initial-value system by Newton's method, its linear solves block by block in time
             # (NLP.newton: linear in the bodies of a chain in maximal coordinates, where Ipopt's symmetric
             # factorisation is cubic); where it does not contract from this guess, Ipopt solves from it
