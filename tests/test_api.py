@@ -12,7 +12,7 @@ def test_the_public_names():
                                "Contact", "RigidBody", "Inertia", "simulate", "Force", "Dissipation", "Damping",
                                "time", "velocity", "schemes", "rotation", "body_point", "unit_norm",
                                "quaternion_rate", "angular_velocity", "angular_momentum", "Control",
-                               "OptimalControl", "ContactControlOptions", "Multibody"}
+                               "OptimalControl", "ContactControlOptions", "Multibody", "load_mjcf", "load_urdf"}
 
 
 @pytest.mark.parametrize("name", sorted(ct.__all__))

@@ -26,10 +26,10 @@ def test_tutorial_command_runs(command, tmp_path):
 
 
 def test_the_tutorial_files_are_the_examples():
-    """The files the tutorial shows are examples/coupled_pendulums.py, examples/heavy_top.py and
-    examples/rod_chain.py, statement for statement (after their docstrings)."""
+    """The files the tutorial shows are examples/coupled_pendulums.py, examples/heavy_top.py,
+    examples/rod_chain.py and examples/arm.py, statement for statement (after their docstrings)."""
     codes = blocks("python")
-    assert len(codes) == 3
-    for code, name in zip(codes, ("coupled_pendulums", "heavy_top", "rod_chain")):
+    assert len(codes) == 4
+    for code, name in zip(codes, ("coupled_pendulums", "heavy_top", "rod_chain", "arm")):
         example = open(os.path.join(ROOT, "examples", f"{name}.py")).read()
         assert example.endswith(code) and example[:len(example) - len(code)].strip().endswith('"""')

@@ -31,7 +31,7 @@ discrete Lagrangians with their orders; ``simulate`` solves (one whole-trajector
 problem) and returns the result contract with ``t``, ``q``, ``energy``, ``error_estimate`` and
 ``warnings``; ``OptimalControl`` poses a problem of optimal control on the discrete action, and
 ``ContactControlOptions`` holds the settings of its solve through contact; ``Multibody`` builds a system from bodies
-and joints.  Everything else is internal.
+and joints, and ``load_mjcf`` / ``load_urdf`` one from a model file.  Everything else is internal.
 
 The flat module names of earlier versions (``castrajectory.droplet``, ``castrajectory.nlp``, ...)
 still import: they are aliases of the modules that now hold their contents (see ``_MOVED``).  Policy: they are
@@ -98,6 +98,7 @@ from .models.rigidbody import (  # noqa: E402
     Inertia, RigidBody, angular_momentum, angular_velocity, body_point, quaternion_rate, rotation, unit_norm)
 from .models.control import Control  # noqa: E402
 from .models.multibody import Multibody  # noqa: E402
+from .models.model_files import load_mjcf, load_urdf  # noqa: E402
 from .solve.optimal_control import OptimalControl  # noqa: E402
 from .solve.contact.options import ContactControlOptions  # noqa: E402
 from .solve.simulate import simulate  # noqa: E402
@@ -105,7 +106,7 @@ from .solve.simulate import simulate  # noqa: E402
 __all__ = ["LagrangianSystem", "Atoms", "MassMatrix", "Gravity", "Spring", "Potential", "Contact", "RigidBody",
            "Inertia", "Force", "Dissipation", "Damping", "time", "velocity", "schemes", "simulate",
            "rotation", "body_point", "unit_norm", "quaternion_rate", "angular_velocity", "angular_momentum",
-           "Control", "OptimalControl", "ContactControlOptions", "Multibody"]
+           "Control", "OptimalControl", "ContactControlOptions", "Multibody", "load_mjcf", "load_urdf"]
 
 
 def schemes() -> dict:

@@ -167,6 +167,20 @@ def clip_polyline(poly, lo, hi) -> Optional[np.ndarray]:
     return np.array(out)
 
 
+def _view(azimuth: float, elevation: float) -> np.ndarray:
+    """The orthographic projection (2 × 3) of space onto the screen of a camera at ``azimuth`` about the vertical
+    z axis from −y, and ``elevation`` above the horizon (radians): z stays up."""
+    ca_, sa, ce, se = np.cos(azimuth), np.sin(azimuth), np.cos(elevation), np.sin(elevation)
+    right = np.array([ca_, sa, 0.0])
+    up = np.array([-se * sa, se * ca_, ce])
+    return np.vstack([right, up])
+
+
+#: the view of points in space in :func:`animate_points` (30° round from the front, 20° above): x to the right,
+#: z up, y into the picture
+VIEW = _view(np.radians(30.0), np.radians(20.0))
+
+
 class PointsAnimation:
     """The figure of :func:`animate_points` and how to draw one sample on it, before anything is written.
 
@@ -186,8 +200,11 @@ class PointsAnimation:
         P = np.asarray(positions, dtype=float)
         if P.ndim == 2 and P.shape[-1] == 2:
             P = P[:, None, :]
+        if P.ndim == 3 and P.shape[-1] == 3:          # points in space: seen along a fixed oblique view
+            P = P @ VIEW.T
         if P.ndim != 3 or P.shape[-1] != 2 or P.shape[0] == 0:
-            raise ValueError(f"positions must have shape (K, n_points, 2), got {np.shape(positions)}")
+            raise ValueError(f"positions must have shape (K, n_points, 2) or (K, n_points, 3), got "
+                             f"{np.shape(positions)}")
         t = _as_time(t, "animate_points")
         if t.size != P.shape[0]:
             raise ValueError(f"animate_points: {P.shape[0]} position rows but {t.size} times")
@@ -305,7 +322,8 @@ def animate_points(positions, t, path: str, trail: bool = True, fps: int = 20, m
                    trail_time: float = 1.0, dpi: int = ANIMATION_DPI, ground=None) -> str:
     """Animate moving points (e.g. a pendulum's bobs) and write a GIF or an MP4.
 
-    ``positions`` has shape (K, n_points, 2) and ``t`` length K.  With
+    ``positions`` has shape (K, n_points, 2), or (K, n_points, 3) for points in space, drawn along the
+    oblique view :data:`VIEW` (z up), and ``t`` length K.  With
     ``links=True`` segments join ``pivot`` and the points in order; each frame
     shows markers at the points and, with ``trail=True``, a fading trail of
     the last point over the preceding ``trail_time`` (s).  Frames are
