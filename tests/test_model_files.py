@@ -155,8 +155,8 @@ def test_the_models_pictures_are_mujocos_geoms():
 
 def test_an_mjcf_models_free_motion_is_mujocos_rk4():
     """From a random state, 0.3 s of the joint system (galerkin6, N = 30) against MuJoCo's RK4 at a 1e-4 s step
-    (its error below 1e-13 here): the coordinates agree to 4.5e-12 (measured) with damping, a spring, an armature,
-    a ball joint, a compound joint and a free body."""
+    (it moves by 3.3e-13 when the step is halved): the coordinates agree to 6.5e-12 (measured) with damping, a
+    spring, an armature, a ball joint, a compound joint and a free body."""
     mb = load_mjcf(MJCF)
     model = mujoco.MjModel.from_xml_string(MJCF)
     order = mujoco_order(mb, model)
@@ -169,7 +169,7 @@ def test_an_mjcf_models_free_motion_is_mujocos_rk4():
     G = _velocity_map(model, qpos, order)
     run = ct.simulate(mb.system("joint"), qpos[order], G @ qvel, T=0.3, N=30, scheme="galerkin6")
     assert run.success, run.message
-    assert np.max(np.abs(run.q[-1] - data.qpos[order])) < 5e-10
+    assert np.max(np.abs(run.q[-1] - data.qpos[order])) < 3e-10
 
 
 @pytest.mark.parametrize("formulation", ["joint", "maximal"])
