@@ -134,8 +134,8 @@ def test_an_mjcf_model_has_mujocos_mass_matrix_and_energy():
 
 
 def test_the_models_pictures_are_mujocos_geoms():
-    """A capsule's and a cylinder's ends, and the boxes' and the ellipsoid's centres, are among the system's points, where MuJoCo puts
-    them (to rounding) at a random state."""
+    """A capsule's and a cylinder's ends, and the boxes' and the ellipsoid's centres, are among the system's
+    points, where MuJoCo puts them (to rounding) at a random state."""
     mb = load_mjcf(MJCF)
     model = mujoco.MjModel.from_xml_string(MJCF)
     qpos, qvel = _random_state(model, np.random.default_rng(4))

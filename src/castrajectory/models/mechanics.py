@@ -714,23 +714,38 @@ class LagrangianSystem:
             return M, f
         return self._get("dynamics_expr", build)
 
+    def _index1_matrix_exprs(self):
+        """The index-1 system's matrix and right-hand side, ``[M Cᵀ; C 0]`` and ``[f; γ]`` (``M`` and ``f``
+        without constraints), as expressions of ``(q, q̇, t)``."""
+        def build():
+            M, f = self.dynamics_exprs()
+            if not self.nc:
+                return M, f
+            c = self.constraint_expr()
+            C = ca.jacobian(c, self.q)
+            cdot = ca.mtimes(C, self.qd)
+            if ca.depends_on(c, self.t):
+                cdot = cdot + ca.jacobian(c, self.t)
+            gamma = -ca.mtimes(ca.jacobian(cdot, self.q), self.qd)
+            if ca.depends_on(cdot, self.t):
+                gamma = gamma - ca.jacobian(cdot, self.t)
+            return ca.blockcat([[M, C.T], [C, ca.SX(self.nc, self.nc)]]), ca.vertcat(f, gamma)
+        return self._get("index1_matrix_expr", build)
+
+    @property
+    def index1_system(self) -> ca.Function:
+        """``(q, q̇, t) ↦ (K, b)``: the index-1 equations ``K (q̈, λ) = b`` (:meth:`acceleration`) before they are
+        solved, ``K`` sparse: for a numerical sparse solve where the symbolic one grows as the cube of the
+        unknowns (a chain of many bodies)."""
+        return self._get("index1_system", lambda: ca.Function(
+            "index1_system", [self.q, self.qd, self.t], list(self._index1_matrix_exprs())))
+
     def _index1_exprs(self):
         """The index-1 system's ``(q̈, λ)`` as expressions of ``(q, q̇, t)``."""
         def build():
-            M, f = self.dynamics_exprs()
-            if self.nc:
-                c = self.constraint_expr()
-                C = ca.jacobian(c, self.q)
-                cdot = ca.mtimes(C, self.qd)
-                if ca.depends_on(c, self.t):
-                    cdot = cdot + ca.jacobian(c, self.t)
-                gamma = -ca.mtimes(ca.jacobian(cdot, self.q), self.qd)
-                if ca.depends_on(cdot, self.t):
-                    gamma = gamma - ca.jacobian(cdot, self.t)
-                K = ca.blockcat([[M, C.T], [C, ca.SX(self.nc, self.nc)]])
-                sol = ca.solve(K, ca.vertcat(f, gamma))
-                return sol[:self.nq], sol[self.nq:]
-            return ca.solve(M, f), ca.SX(0, 1)
+            K, b = self._index1_matrix_exprs()
+            sol = ca.solve(K, b)
+            return sol[:self.nq], sol[self.nq:]
         return self._get("index1_expr", build)
 
     def _index1(self):

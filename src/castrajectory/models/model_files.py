@@ -5,8 +5,8 @@ are what the builder receives, so that a loaded system is the file's physics as 
 
 What is carried: bodies (mass, centre of mass, inertia in its frame), joints (hinge, slide, ball, free, and several
 joints of one body as a :meth:`~castrajectory.models.multibody.Multibody.compound` joint), the joints' damping,
-springs, armatures and ``ref`` (the coordinate's value at the zero pose), their ranges (the limits, as contact gaps with :meth:`Multibody.system`'s ``limits=True``),
-gravity, and the geometry for the pictures (a capsule's or a cylinder's ends, another geom's centre).
+springs, armatures and ``ref`` (the coordinate's value at the zero pose), their ranges (the limits, as contact
+gaps with :meth:`Multibody.system`'s ``limits=True``), gravity, and the geometry for the pictures (a capsule's or a cylinder's ends, another geom's centre).
 
 What is refused, by name, before anything is built: what the builder cannot hold exactly (a joint's dry friction
 ``frictionloss``, damping, a spring or an armature on a ball joint, a ball joint's cone
@@ -23,7 +23,8 @@ from typing import Dict, Tuple
 import numpy as np
 
 from ..validation import InputError
-from .multibody import Multibody, matrix_quaternion
+from .multibody import Multibody
+from .poses import matrix_quaternion
 from .rigidbody import quat_multiply, rotation
 
 

@@ -48,7 +48,8 @@ import numpy as np
 
 from ..validation import InputError, finite, positive
 from .mechanics import Dissipation, Gravity, LagrangianSystem, Potential, velocity
-from .rigidbody import quat_conjugate, quat_multiply, rotation, unit_norm
+from .poses import GEOMETRY, Space, checked_inertia, checked_rotation, checked_vector, unit_vector
+from .rigidbody import rotation, unit_norm
 
 #: a one-coordinate joint's options: a viscous damping, a spring's stiffness and rest position, an armature (the
 #: rotor inertia a model file adds to the coordinate), the coordinate's limits (lower, upper), and the coordinate's
@@ -59,183 +60,6 @@ FORMULATIONS = ("maximal", "joint")
 #: the joint kinds and the coordinates each gives the joint formulation (in space; a planar joint has the same
 #: count, and no spherical joint)
 JOINT_KINDS = {"revolute": 1, "prismatic": 1, "spherical": 4, "weld": 0}
-
-
-# ----------------------------------------------------------------------------- the plane and space
-class _Plane:
-    """Orientations in the plane: an angle (a 1-vector); rotations ``R(θ)``."""
-
-    dim, nori = 2, 1
-    axes = ("x", "y")
-    ori_names = ("theta",)
-    identity = (0.0,)
-
-    @staticmethod
-    def R(ori):
-        c, s = ca.cos(ori[0]), ca.sin(ori[0])
-        return ca.vertcat(ca.horzcat(c, -s), ca.horzcat(s, c))
-
-    @staticmethod
-    def compose(a, b):
-        return a + b
-
-    @staticmethod
-    def relative(a, b):
-        """The orientation of ``b`` in ``a``'s frame."""
-        return b - a
-
-    @staticmethod
-    def hinge(axis, angle):
-        return ca.vertcat(angle)
-
-    @staticmethod
-    def hinge_angle(rel, axis):
-        return rel[0]
-
-    @staticmethod
-    def weld_rows(rel):
-        return [rel[0]]
-
-    @staticmethod
-    def axis_rows(rel, axis):
-        return []
-
-    @staticmethod
-    def normals(axis):
-        return [np.array([-axis[1], axis[0]])]
-
-    @staticmethod
-    def spin(ori, rate):
-        """½ × the body's rotational kinetic energy per unit inertia is ``½ θ̇²``: the angle's rate."""
-        return rate[0]
-
-
-class _Space:
-    """Orientations in space: a quaternion ``(w, x, y, z)`` (unit by a constraint), the quadratic rotation map
-    :func:`~castrajectory.models.rigidbody.rotation`."""
-
-    dim, nori = 3, 4
-    axes = ("x", "y", "z")
-    ori_names = ("qw", "qx", "qy", "qz")
-    identity = (1.0, 0.0, 0.0, 0.0)
-
-    @staticmethod
-    def R(ori):
-        return rotation(ori)
-
-    @staticmethod
-    def compose(a, b):
-        return quat_multiply(a, b)
-
-    @staticmethod
-    def relative(a, b):
-        return quat_multiply(quat_conjugate(a), b)
-
-    @staticmethod
-    def hinge(axis, angle):
-        return ca.vertcat(ca.cos(angle / 2), ca.sin(angle / 2) * ca.DM(axis))
-
-    @staticmethod
-    def hinge_angle(rel, axis):
-        return 2 * ca.atan2(ca.dot(rel[1:4], ca.DM(axis)), rel[0])
-
-    @staticmethod
-    def weld_rows(rel):
-        return [rel[1], rel[2], rel[3]]
-
-    @staticmethod
-    def axis_rows(rel, axis):
-        """A relative rotation about ``axis`` has its vector part along it: two rows, bilinear in the
-        quaternions."""
-        return [ca.dot(rel[1:4], ca.DM(n)) for n in _Space.normals(axis)]
-
-    @staticmethod
-    def normals(axis):
-        a = np.asarray(axis, float)
-        t = np.eye(3)[int(np.argmin(np.abs(a)))]
-        n1 = np.cross(a, t)
-        n1 /= np.linalg.norm(n1)
-        return [n1, np.cross(a, n1)]
-
-
-_GEOMETRY = {2: _Plane, 3: _Space}
-
-
-def _vector(value, n: int, what: str) -> Tuple[float, ...]:
-    try:
-        v = np.asarray(value, float).reshape(-1)
-    except (TypeError, ValueError):
-        raise InputError(f"{what} must be {n} numbers (got {value!r})") from None
-    if v.size != n or not np.all(np.isfinite(v)):
-        raise InputError(f"{what} must be {n} finite numbers (got {value!r})")
-    return tuple(float(x) for x in v)
-
-
-def _unit(value, n: int, what: str) -> Tuple[float, ...]:
-    v = np.asarray(_vector(value, n, what))
-    if not np.linalg.norm(v) > 0:
-        raise InputError(f"the {what} must be nonzero")
-    return tuple(float(x) for x in v / np.linalg.norm(v))
-
-
-def matrix_quaternion(R) -> np.ndarray:
-    """The unit quaternion ``(w, x, y, z)`` (``w ≥ 0``) of a rotation matrix (Shepperd's method).
-
-    >>> import numpy as np
-    >>> from castrajectory.models.multibody import matrix_quaternion
-    >>> np.round(matrix_quaternion([[0, -1, 0], [1, 0, 0], [0, 0, 1]]), 12).tolist()   # 90° about z
-    [0.707106781187, 0.0, 0.0, 0.707106781187]
-    """
-    R = np.asarray(R, float)
-    w = np.sqrt(max(0.0, 1.0 + np.trace(R))) / 2
-    d = np.sqrt(np.maximum(0.0, 1.0 + 2 * np.diag(R) - np.trace(R))) / 2
-    i = int(np.argmax([w, *d]))
-    if i == 0:
-        q = np.array([w, (R[2, 1] - R[1, 2]) / (4 * w), (R[0, 2] - R[2, 0]) / (4 * w), (R[1, 0] - R[0, 1]) / (4 * w)])
-    else:
-        k = i - 1
-        a, b = (k + 1) % 3, (k + 2) % 3
-        v = np.zeros(3)
-        v[k] = d[k]
-        v[a] = (R[a, k] + R[k, a]) / (4 * d[k])
-        v[b] = (R[b, k] + R[k, b]) / (4 * d[k])
-        q = np.array([(R[b, a] - R[a, b]) / (4 * d[k]), *v])
-    q = q / np.linalg.norm(q)
-    return q if q[0] >= 0 else -q
-
-
-def _rotation(value, dim: int, what: str) -> Tuple[float, ...]:
-    """A joint's rotation: an angle in the plane; in space a quaternion ``(w, x, y, z)`` (normalised) or a 3 × 3
-    rotation matrix."""
-    if dim == 2:
-        return (finite(what, value),)
-    arr = np.asarray(value, float) if not isinstance(value, str) else np.array([np.nan])
-    if arr.shape == (3, 3):
-        if not (np.all(np.isfinite(arr)) and np.allclose(arr @ arr.T, np.eye(3), atol=1e-9)
-                and np.linalg.det(arr) > 0):
-            raise InputError(f"the {what} is not a rotation matrix (orthonormal, determinant 1)")
-        return tuple(float(x) for x in matrix_quaternion(arr))
-    return _unit(value, 4, f"{what} (a quaternion w, x, y, z)")
-
-
-def _inertia(value, dim: int, name: str):
-    """A body's inertia about its centre of mass: a number in the plane; in space 3 principal moments along the
-    body's axes or a symmetric 3 × 3 matrix, positive definite and obeying the triangle inequality."""
-    if dim == 2:
-        return positive(f"inertia of {name}", value)
-    arr = np.asarray(value, float)
-    if arr.shape == (3,):
-        arr = np.diag(arr)
-    if arr.shape != (3, 3) or not np.all(np.isfinite(arr)) or not np.allclose(arr, arr.T, atol=1e-12 * np.abs(arr).max()):
-        raise InputError(f"inertia of {name} must be 3 principal moments or a symmetric 3x3 matrix (got {value!r})")
-    moments = np.linalg.eigvalsh(arr)
-    if moments[0] <= 0:
-        raise InputError(f"inertia of {name} must be positive definite (its principal moments are "
-                         f"{', '.join(f'{m:g}' for m in moments)})")
-    if moments[0] + moments[1] < moments[2] * (1 - 1e-9):
-        raise InputError(f"inertia of {name}: no mass distribution has the principal moments "
-                         f"{', '.join(f'{m:g}' for m in moments)} (the triangle inequality I₁ + I₂ ≥ I₃)")
-    return tuple(tuple(float(x) for x in row) for row in 0.5 * (arr + arr.T))
 
 
 @dataclass(frozen=True)
@@ -359,14 +183,14 @@ class Multibody:
     world = None
 
     def __post_init__(self):
-        if self.dim not in _GEOMETRY:
+        if self.dim not in GEOMETRY:
             raise InputError(f"dim must be 2 (planar) or 3 (spatial) (got {self.dim!r})")
-        self._geo = _GEOMETRY[self.dim]
+        self._geo = GEOMETRY[self.dim]
         if np.ndim(self.g) == 0:
             g = finite("g", self.g)
             self.gravity = -g * np.eye(self.dim)[-1]
         else:
-            self.gravity = np.asarray(_vector(self.g, self.dim, "the gravity vector"))
+            self.gravity = np.asarray(checked_vector(self.g, self.dim, "the gravity vector"))
 
     # ------------------------------------------------------------------ building
     def body(self, name: str, mass: float, inertia, com=None, outline: Sequence = ()) -> Body:
@@ -376,9 +200,9 @@ class Multibody:
         d = self.dim
         if any(b.name == name for b in self.bodies):
             raise InputError(f"a body named {name!r} exists already")
-        b = Body(name, positive(f"mass of {name}", mass), _inertia(inertia, d, name),
-                 _vector(np.zeros(d) if com is None else com, d, f"com of {name}"),
-                 tuple(_vector(p, d, f"outline point of {name}") for p in outline), len(self.bodies))
+        b = Body(name, positive(f"mass of {name}", mass), checked_inertia(inertia, d, name),
+                 checked_vector(np.zeros(d) if com is None else com, d, f"com of {name}"),
+                 tuple(checked_vector(p, d, f"outline point of {name}") for p in outline), len(self.bodies))
         self.bodies.append(b)
         return b
 
@@ -428,8 +252,8 @@ class Multibody:
             kind, axis, point = part[:3]
             if kind not in ("revolute", "prismatic", "spherical") or (kind == "spherical" and d != 3):
                 raise InputError(f"part {k} of a compound joint: kind {kind!r} is not a joint with coordinates")
-            axis = _unit(axis, d, f"axis of part {k}") if kind != "spherical" else (0.0,) * d
-            checked.append((kind, axis, _vector(point, d, f"point of part {k}")))
+            axis = unit_vector(axis, d, f"axis of part {k}") if kind != "spherical" else (0.0,) * d
+            checked.append((kind, axis, checked_vector(point, d, f"point of part {k}")))
             part_options.append(self._options(f"part {k} of {name}", dict(part[3]) if len(part) == 4 else {},
                                               JOINT_KINDS[kind]))
         if not checked:
@@ -461,7 +285,7 @@ class Multibody:
             if key in extra:
                 extra[key] = finite(f"{key} of joint {name}", extra[key])
         if extra.get("limits") is not None:
-            lo, hi = _vector(extra["limits"], 2, f"limits of joint {name}")
+            lo, hi = checked_vector(extra["limits"], 2, f"limits of joint {name}")
             if not lo < hi:
                 raise InputError(f"limits of joint {name} must be (lower, upper) with lower < upper")
             extra["limits"] = (lo, hi)
@@ -485,7 +309,7 @@ class Multibody:
             raise InputError(f"a joint named {name!r} exists already")
         if axis is None:
             axis = np.eye(3)[2] if kind == "revolute" and d == 3 else np.eye(d)[0]
-        axis = _unit(axis, d, f"{kind} axis") if kind == "prismatic" or (kind == "revolute" and d == 3) else \
+        axis = unit_vector(axis, d, f"{kind} axis") if kind == "prismatic" or (kind == "revolute" and d == 3) else \
             tuple(float(x) for x in axis)
         tree = not any(j.child is child and j.tree for j in self.joints)
         if tree and parent is not None and self._ancestor(child, parent):
@@ -495,9 +319,10 @@ class Multibody:
         extra = self._options(name, options, JOINT_KINDS.get(kind, 0))
         if rotation is None:
             rotation = geo.identity[0] if d == 2 else geo.identity
-        j = Joint(name, kind, parent, child, _vector(np.zeros(d) if pp is None else pp, d, f"parent point of {name}"),
-                  _vector(np.zeros(d) if cp is None else cp, d, f"child point of {name}"), axis,
-                  _rotation(rotation, d, f"rotation of {name}"), tree, parts, **extra)
+        pp = checked_vector(np.zeros(d) if pp is None else pp, d, f"parent point of {name}")
+        j = Joint(name, kind, parent, child, pp,
+                  checked_vector(np.zeros(d) if cp is None else cp, d, f"child point of {name}"), axis,
+                  checked_rotation(rotation, d, f"rotation of {name}"), tree, parts, **extra)
         self.joints.append(j)
         return j
 
@@ -547,7 +372,7 @@ class Multibody:
             for k, (kind, _, _) in enumerate(j.elements()):
                 label = self._element_label(j, k)
                 if kind == "spherical":
-                    out += [(f"{label}.{c}", i == 0) for i, c in enumerate(_Space.ori_names)]
+                    out += [(f"{label}.{c}", i == 0) for i, c in enumerate(Space.ori_names)]
                 else:
                     out.append((label, False))
         return out
@@ -881,7 +706,7 @@ class Frames:
         b = next((x for x in mb.bodies if x is body or x.name == body), None)
         if b is None:
             raise InputError(f"no body {body!r} (the bodies are {', '.join(x.name for x in mb.bodies)})")
-        p = _vector(np.zeros(mb.dim) if point is None else point, mb.dim, f"point of {b.name}")
+        p = checked_vector(np.zeros(mb.dim) if point is None else point, mb.dim, f"point of {b.name}")
         o, ori = self._frames[b.index]
         return o + ca.mtimes(mb._geo.R(ori), ca.DM(p))
 

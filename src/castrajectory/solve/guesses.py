@@ -141,6 +141,10 @@ def _substep(dm: DiscreteMechanics, compile_: bool) -> ca.Function:
     if hit is not None and hit[0] is dm.del_residual and (hit[2] or not compile_):  # not a reused id
         return hit[1]
     n = dm.n
+    if _sparse_index1(dm):
+        fast = _sparse_substep(dm, compile_)
+        _FLOWS[key] = (dm.del_residual, fast, True)
+        return fast
     acc, lamf = dm.system.acceleration, dm.system.multiplier
     x, ts, dt = ca.SX.sym("x", 2 * n), ca.SX.sym("t"), ca.SX.sym("dt")
     if dm.timed:
@@ -154,6 +158,35 @@ def _substep(dm: DiscreteMechanics, compile_: bool) -> ca.Function:
         _FLOWS.clear()
     _FLOWS[key] = (dm.del_residual, fast, fast is not sub)
     return fast
+
+
+#: The integrated guess solves the index-1 equations numerically, with a sparse QR factorisation per
+#: evaluation, where they have at least this many unknowns (coordinates and multipliers); below, their
+#: symbolic solution is compiled (straight-line code, fastest for a few unknowns).
+SPARSE_INDEX1 = 8
+
+
+def _sparse_index1(dm: DiscreteMechanics) -> bool:
+    return SPARSE_INDEX1 > 0 and dm.n + dm.m >= SPARSE_INDEX1
+
+
+def _sparse_substep(dm: DiscreteMechanics, compile_: bool) -> ca.Function:
+    """:func:`_substep` with the index-1 equations ``K (q̈, λ) = b`` assembled by a compiled function and solved
+    numerically by a sparse QR factorisation at each of RK4's evaluations (CasADi's ``qr`` linear solver in an MX
+    graph), instead of their symbolic solution, whose expressions grow as the cube of the unknowns: a chain of 8
+    bodies in maximal coordinates (40 unknowns) ran its guess in 0.32 s per flow."""
+    n = dm.n
+    kkt = dm.system.index1_system
+    kkt = jit.compiled(kkt, compile_) if _nlp.JIT else kkt
+    x, ts, dt = ca.MX.sym("x", 2 * n), ca.MX.sym("t"), ca.MX.sym("dt")
+
+    def solve(y, t):
+        K, b = kkt(y[:n], y[n:], t)
+        return ca.solve(K, b, "qr")
+
+    y = rk4_step(lambda y, t: ca.vertcat(y[n:], solve(y, t)[:n]), x, dt, ts)
+    lam = solve(y, ts + dt)[n:] if dm.m else ca.MX(0, 1)
+    return ca.Function("guess_substep", [x, ts, dt], [y, ts + dt, lam])
 
 
 def _pieces(dm: DiscreteMechanics, substeps: int) -> np.ndarray:

@@ -262,6 +262,14 @@ def _trajectory_nlp(dm: DiscreteMechanics, N: int, T: float, mode: str, q0, end,
 # ----------------------------------------------------------------------------- drivers
 #: Coarse levels must resolve the fastest linearised motion: h ω ≤ this.
 COARSE_H_OMEGA = 0.5
+#: An estimate's coarser grid whose step covers more than this much of the fastest linearised motion's
+#: phase, or more radians than the scheme's order if that is more (a Gauss scheme of order p has p/2
+#: stages: two radians of phase each), gets its first attempt only, without the horizon windows: its
+#: error is far from its asymptotic regime, and where the attempt fails the windows and the final whole
+#: attempt fail too (rod chains in maximal coordinates, galerkin6, T = 3, N = 15: at h ω = 4.3 (8 rods)
+#: it solved in 0.02 s with observed order 6.04; at 6.8 (16 rods) it spent 3.3 s in 9 attempts and
+#: failed, where the answer took 0.3 s).  A linear oscillator's grid of 2 steps at h ω = 3.5 solves.
+PARTNER_H_OMEGA = math.pi
 #: Schemes of a higher order than this skip the coarse levels when the integrated motion (RK4 on
 #: substeps) resolves the grid: it is then a closer guess than any coarse level's interpolated answer,
 #: and N is solved from it at once (the error estimate's coarser grid follows from the answer).  Their
@@ -274,17 +282,34 @@ LADDER_MAX_ORDER = 4
 def _fastest_frequency(system: LagrangianSystem, q0: np.ndarray, qd0: np.ndarray) -> float:
     """Largest linearised angular frequency at the initial state: √|eig(M⁻¹ ∇²U)|, or |q̇0|-based if larger;
     with forces also the rates of their linearisation, |eig(M⁻¹ ∂Q/∂q̇)| (a damping's 1/time) and
-    √|eig(M⁻¹ ∂Q/∂q)|."""
+    √|eig(M⁻¹ ∂Q/∂q)|.  With holonomic constraints the linearisation is the constrained one: on the tangent
+    space ``Z`` of the constraints (``C Z = 0``), the stiffness ``Zᵀ ∇²(U + λ·c) Z`` against the mass ``Zᵀ M Z``,
+    ``λ`` the multipliers of the motion (the constraint forces' curvature: a chain in maximal coordinates has a
+    gravity linear in its coordinates, and its every frequency comes from the pins' tensions)."""
     q, t = system.q, system.t
-    H = ca.Function("hessU", [q, t], [ca.hessian(system.potential_expr(), q)[0]])(q0, 0.0)
     M = np.asarray(system.mass_matrix(q0, 0.0))
-    w2 = np.abs(np.linalg.eigvals(np.linalg.solve(M, np.asarray(H)))).max() if system.nq else 0.0
-    rates = [np.sqrt(w2), np.abs(qd0).max()]
+    Z = np.eye(system.nq)
+    if system.nc:
+        lam_sym = ca.SX.sym("lam", system.nc)
+        V = system.potential_expr() + ca.dot(lam_sym, system.constraint_expr())
+        lam = np.asarray(system.multiplier(q0, qd0, 0.0)).reshape(-1)
+        H = np.asarray(ca.Function("hessV", [q, t, lam_sym], [ca.hessian(V, q)[0]])(q0, 0.0, lam))
+        C = np.asarray(system.constraint(q0, 0.0)[1])
+        _, sv, vt = np.linalg.svd(C)
+        rank = int(np.sum(sv > 1e-10 * max(1.0, sv.max(initial=0.0))))
+        Z = vt[rank:].T
+    else:
+        H = np.asarray(ca.Function("hessU", [q, t], [ca.hessian(system.potential_expr(), q)[0]])(q0, 0.0))
+    Mr = Z.T @ M @ Z
+
+    def fastest(A):
+        return np.abs(np.linalg.eigvals(np.linalg.solve(Mr, Z.T @ np.asarray(A) @ Z))).max() if Z.shape[1] else 0.0
+    rates = [np.sqrt(fastest(H)), np.abs(qd0).max()]
     if system.forced:
         Q = system.force_expr()
         J = ca.Function("dQ", [q, system.qd, t], [ca.jacobian(Q, system.qd), ca.jacobian(Q, q)])(q0, qd0, 0.0)
-        rates.append(np.abs(np.linalg.eigvals(np.linalg.solve(M, np.asarray(J[0])))).max())
-        rates.append(np.sqrt(np.abs(np.linalg.eigvals(np.linalg.solve(M, np.asarray(J[1])))).max()))
+        rates.append(fastest(J[0]))
+        rates.append(np.sqrt(fastest(J[1])))
     return float(max(rates))
 
 
@@ -671,16 +696,18 @@ def _polish(tn: TrajectoryNLP, res: NLPResult, solved: List[tuple]) -> None:
 
 
 def _coarse_partner(tn: TrajectoryNLP, values, Nc: int, options, verbose, log: List[Level], omega: float,
-                    polish: bool, windowed: bool) -> Optional[tuple]:
+                    polish: bool, windowed: bool, windows: bool = True) -> Optional[tuple]:
     """The grid ``Nc`` solved for an estimate from the answer on ``tn`` restricted to it (one or two
     Newton iterations, or its own windows, straight away where the answer needed them: the discrete
     motions of N and N/2 part further than the guess from N is off; the 20-flip midpoint body,
     N = 11200: a whole attempt of 10 iterations, 2.1 s); ``(nlp, values)``, or ``None`` if it did not
-    converge.  ``polish``: it takes a Newton step too, as the answer did."""
+    converge.  ``polish``: it takes a Newton step too, as the answer did.  ``windows = False``: its first
+    attempt only (:data:`PARTNER_H_OMEGA`)."""
     pc = _trajectory_nlp(tn.dm, Nc, tn.T, tn.mode, tn.q0, tn.end)
     n_log = len(log)
-    rc = _solve_level(pc, _refine(tn, values, pc), options, verbose, log, allow_windows=tn.mode == "initial_value",
-                      final=True, omega=omega, windows_first=windowed)
+    allow = tn.mode == "initial_value"
+    rc = _solve_level(pc, _refine(tn, values, pc), options, verbose, log, allow_windows=allow,
+                      final=True, omega=omega, windows_first=windowed and windows, windows_after_failure=windows)
     for lv in log[n_log:]:
         lv.purpose = "estimate"
     if not rc.success:
@@ -708,9 +735,13 @@ def _partners(solved: List[tuple], tn: TrajectoryNLP, res: NLPResult, options, v
         return [], f"N = {tn.N} has no coarser grid"
     windowed = any(lv.n == tn.N and lv.horizon < tn.N for lv in log)
     grids, why = [], ""
+    # (a grid past the bound, where the answer's own grid is within it, has its first attempt only: no windows)
+    bound = max(PARTNER_H_OMEGA, float(tn.dm.scheme.order))
+    resolved = math.isfinite(omega) and tn.T / tn.N * omega <= bound
     for Nc in reversed(want):
         src = grids[0] if grids else (tn, res.values)
-        got = _coarse_partner(src[0], src[1], Nc, options, verbose, log, omega, polish, windowed)
+        got = _coarse_partner(src[0], src[1], Nc, options, verbose, log, omega, polish, windowed,
+                              windows=not (resolved and tn.T / Nc * omega > bound))
         if got is None:
             if not grids:
                 st = log[-1].status if log else "no log"
