@@ -179,3 +179,48 @@ def test_bad_bodies_and_joints_are_refused():
         mb.system("minimal")
     with pytest.raises(InputError, match="axis"):
         mb.prismatic(mb.world, mb.body("c", 1.0, 0.1), axis=(0.0, 0.0))
+
+
+def test_a_constrained_systems_fastest_frequency_is_on_its_tangent_space():
+    """The linearised frequency of a constrained system comes from its constraint forces' curvature: a pendulum
+    in Cartesian coordinates at rest at θ₀ has ω² = g cos θ₀ / l (the tension's λ on the tangent), as in its
+    angle; a rod chain hanging at rest has the same fastest normal mode in maximal and in joint coordinates (in
+    maximal ones the gravity is linear, and it was 0).  (Away from an equilibrium the two linearisations differ:
+    the maximal one's tensions hold the chain's acceleration; 9.8 against 10.8 rad/s at one state of 4 rods.)"""
+    from castrajectory.solve.trajectory import _fastest_frequency
+    l, th0 = 2.0, 0.4
+    x = ca.SX.sym("x", 2)
+    cart = ct.LagrangianSystem(x, ct.Atoms([x], [3.0]), [ct.Gravity(G)], constraints=[(ca.dot(x, x) - l * l) / 2])
+    q0 = l * np.array([math.sin(th0), -math.cos(th0)])
+    assert _fastest_frequency(cart, q0, np.zeros(2)) == pytest.approx(math.sqrt(G * math.cos(th0) / l), rel=1e-12)
+    mb = rod_chain(4)
+    w = [_fastest_frequency(mb.system(f), *mb.state(formulation=f)) for f in ("maximal", "joint")]
+    assert w[0] > 1.0 and w[0] == pytest.approx(w[1], rel=1e-10)
+
+
+def test_the_index1_solution_in_numbers_is_the_symbolic_one():
+    """A 5-rod chain in maximal coordinates (15 coordinates, 10 multipliers) is past the size where the index-1
+    equations are solved numerically: the same accelerations and multipliers as their symbolic solution."""
+    from castrajectory.models import mechanics
+    mb = rod_chain(5)
+    system = mb.system()
+    q0, v0 = mb.state([0.5, 0.1, -0.2, 0.3, 0.0], [0.3, -0.1, 0.2, 0.0, 0.5])
+    assert system.nq + system.nc >= mechanics.SYMBOLIC_INDEX1
+    a, lam = system.index1_values(q0, v0)
+    scale = np.max(np.abs(a))
+    assert np.max(np.abs(a - np.asarray(system.acceleration(q0, v0)).reshape(-1))) < 1e-12 * scale
+    assert np.max(np.abs(lam - np.asarray(system.multiplier(q0, v0)).reshape(-1))) < 1e-12 * np.max(np.abs(lam))
+
+
+@pytest.mark.slow
+def test_a_32_rod_chain_compiles_every_element(tmp_path, monkeypatch):
+    """Issue 45: no element function of a 32-body chain falls back to CasADi's virtual machine (their code is
+    linear in the bodies; past LARGE_CODE_CHARS it compiles at -O1: 7 s for four functions, measured), and the
+    answer converges.  A fresh compile cache, so that nothing is loaded from an earlier run."""
+    from castrajectory.solve import jit
+    monkeypatch.setenv("CASTRAJECTORY_CACHE_DIR", str(tmp_path))
+    mb = rod_chain(32)
+    before = dict(jit.stats)
+    run = ct.simulate(mb.system(), *mb.state(np.r_[0.5, np.zeros(31)]), T=3.0, N=120, scheme="galerkin8")
+    assert run.success, run.message
+    assert jit.stats["fallbacks"] == before["fallbacks"] and jit.stats["compiled"] > before["compiled"]

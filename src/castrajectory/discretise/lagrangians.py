@@ -212,7 +212,7 @@ class DiscreteMechanics:
 
     def first_step_guess(self, q0, qd0, h, t0: float = 0.0):
         """``q_1 ≈ q_0 + h q̇_0 + ½h² q̈_0`` (the Legendre equation then makes it exact)."""
-        qdd = np.asarray(self.system.acceleration(q0, qd0, t0)).reshape(-1)
+        qdd = self.system.index1_values(q0, qd0, t0)[0]
         return np.asarray(q0) + h * np.asarray(qd0) + 0.5 * h * h * qdd
 
     def momenta(self, q: np.ndarray, Z: np.ndarray, h: float, t0: float = 0.0, U=None) -> np.ndarray:

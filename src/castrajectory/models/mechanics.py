@@ -34,7 +34,7 @@ Example (planar pendulum, one atom)::
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Optional, Sequence, Tuple
 
 import casadi as ca
 import numpy as np
@@ -342,6 +342,11 @@ class Damping:
 
 
 # ----------------------------------------------------------------------------- the system
+#: :meth:`LagrangianSystem.index1_values` solves the index-1 equations numerically from this many unknowns
+#: (coordinates and multipliers) up; below, the compiled symbolic solution is used.
+SYMBOLIC_INDEX1 = 24
+
+
 class _Timed(ca.Function):
     """A CasADi function whose last input is the time.  ``optional``: a call may leave the time out
     (a time-independent system's functions, which do not depend on it); otherwise it must be given,
@@ -739,6 +744,19 @@ class LagrangianSystem:
         unknowns (a chain of many bodies)."""
         return self._get("index1_system", lambda: ca.Function(
             "index1_system", [self.q, self.qd, self.t], list(self._index1_matrix_exprs())))
+
+    def index1_values(self, q, qd, t=0.0) -> Tuple[np.ndarray, np.ndarray]:
+        """``(q̈, λ)`` of the index-1 equations at one state, as numbers: from the compiled symbolic solution
+        (:attr:`acceleration`, :attr:`multiplier`) where the equations have fewer than :data:`SYMBOLIC_INDEX1`
+        unknowns, otherwise from :attr:`index1_system` and a numerical solve (the symbolic solution of a chain's
+        equations grows as the cube of its unknowns: 1.6 s to build for 32 rods in maximal coordinates)."""
+        if self.nq + self.nc < SYMBOLIC_INDEX1:
+            return (np.asarray(self.acceleration(q, qd, t), float).reshape(-1),
+                    np.asarray(self.multiplier(q, qd, t), float).reshape(-1) if self.nc else np.zeros(0))
+        K, b = self.index1_system(q, qd, t)
+        with np.errstate(all="ignore"):
+            x = np.linalg.solve(np.asarray(K, float), np.asarray(b, float).reshape(-1))
+        return x[:self.nq], x[self.nq:]
 
     def _index1_exprs(self):
         """The index-1 system's ``(q̈, λ)`` as expressions of ``(q, q̇, t)``."""

@@ -234,7 +234,7 @@ def _flow_values(dm: DiscreteMechanics, q0, qd0, h: float, steps: int, t0: float
     if m:
         # the multipliers at the start node of each step and at its stage times
         Lam = Lam.T
-        lam0 = np.asarray(dm.system.multiplier(q0, qd0, float(t0))).reshape(1, -1)
+        lam0 = dm.system.index1_values(q0, qd0, float(t0))[1].reshape(1, -1)
         out["lam"] = np.vstack([lam0, Lam[base[:-1, 0] + ends[-1]]]).reshape(-1)
         if s:
             out["nu"] = Lam[(base + ends[None, :-1]).reshape(-1)].reshape(-1)

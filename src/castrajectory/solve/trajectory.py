@@ -153,7 +153,7 @@ def _check_finite_state(system: LagrangianSystem, q0, qd0) -> None:
     check_inertia(system, q0)
     with np.errstate(all="ignore"):
         E = float(np.asarray(system.energy(q0, qd0, 0.0)).reshape(-1)[0])
-        a = np.asarray(system.acceleration(q0, qd0, 0.0), float).reshape(-1)
+        a = system.index1_values(q0, qd0, 0.0)[0]
     if not (np.isfinite(E) and np.all(np.isfinite(a)) and abs(E) < 1e150 and np.max(np.abs(a), initial=0.0) < 1e150):
         raise InputError(f"the initial state's energy ({E:.3g}) or acceleration ({np.max(np.abs(a), initial=0.0):.3g}) "
                          "overflows: the inputs are too large for double precision")
@@ -231,9 +231,12 @@ class TrajectoryNLP(TrajectoryTranscription):
         return self.nlp.check(init, tol, bounds=self.fixed_bounds())
 
 
-#: Whole-trajectory NLPs kept for reuse, and the largest kept (unknowns: at about 2 kB each, see
-#: memory.bytes_per_step, the cache holds at most some 300 MB); see :func:`_trajectory_nlp`.
-NLP_CACHE_ENTRIES, NLP_CACHE_MAX_UNKNOWNS = 8, 20_000
+#: Whole-trajectory NLPs kept for reuse, at most NLP_CACHE_ENTRIES of them and NLP_CACHE_MAX_UNKNOWNS
+#: unknowns in all (the least recently used go first; at about 2 kB per unknown, see memory.bytes_per_step,
+#: some 400 MB); see :func:`_trajectory_nlp`.  A budget in all, not per NLP: a 32-rod chain's three grids
+#: (galerkin8, N = 120, 60, 30: 77 000, 38 000 and 19 000 unknowns) were rebuilt on every run at 20 000 per NLP
+#: (2.42 s a run; 1.88 s kept, and the process's peak 356 -> 309 MB without the rebuilds' garbage).
+NLP_CACHE_ENTRIES, NLP_CACHE_MAX_UNKNOWNS = 8, 200_000
 _NLPS: "Dict[tuple, TrajectoryNLP]" = {}
 
 
@@ -252,11 +255,18 @@ def _trajectory_nlp(dm: DiscreteMechanics, N: int, T: float, mode: str, q0, end,
         _NLPS[key] = hit  # most recently used last
         return hit
     tn = TrajectoryNLP(dm, N, T, mode, q0, end, t0)
-    if N * (dm.n + dm.s + dm.m * (1 + dm.scheme.stages)) <= NLP_CACHE_MAX_UNKNOWNS:
-        while len(_NLPS) >= NLP_CACHE_ENTRIES:
+    size = _unknowns(tn)
+    if size <= NLP_CACHE_MAX_UNKNOWNS:
+        while _NLPS and (len(_NLPS) >= NLP_CACHE_ENTRIES
+                         or sum(_unknowns(v) for v in _NLPS.values()) + size > NLP_CACHE_MAX_UNKNOWNS):
             _NLPS.pop(next(iter(_NLPS)))
         _NLPS[key] = tn
     return tn
+
+
+def _unknowns(tn: "TrajectoryNLP") -> int:
+    dm = tn.dm
+    return tn.N * (dm.n + dm.s + dm.m * (1 + dm.scheme.stages))
 
 
 # ----------------------------------------------------------------------------- drivers
@@ -292,7 +302,7 @@ def _fastest_frequency(system: LagrangianSystem, q0: np.ndarray, qd0: np.ndarray
     if system.nc:
         lam_sym = ca.SX.sym("lam", system.nc)
         V = system.potential_expr() + ca.dot(lam_sym, system.constraint_expr())
-        lam = np.asarray(system.multiplier(q0, qd0, 0.0)).reshape(-1)
+        lam = system.index1_values(q0, qd0, 0.0)[1]
         H = np.asarray(ca.Function("hessV", [q, t, lam_sym], [ca.hessian(V, q)[0]])(q0, 0.0, lam))
         C = np.asarray(system.constraint(q0, 0.0)[1])
         _, sv, vt = np.linalg.svd(C)

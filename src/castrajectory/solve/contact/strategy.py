@@ -32,7 +32,7 @@ def _scales(system: LagrangianSystem, q0, qd0, length: float, acc: Optional[floa
     """(length, momentum, velocity, acceleration) scales of the scene for the penalty terms; ``acc`` the largest
     acceleration at the start (default: the system's own, with no controls)."""
     if acc is None:
-        acc = float(np.max(np.abs(np.asarray(system.acceleration(q0, qd0))))) if system.nq else 0.0
+        acc = float(np.max(np.abs(system.index1_values(q0, qd0)[0]))) if system.nq else 0.0
     vref = max(float(np.max(np.abs(qd0))), math.sqrt(acc * length), 1e-8)
     mref = float(np.max(np.diag(np.asarray(system.mass_matrix(q0)))))
     return length, mref * vref, vref, acc
