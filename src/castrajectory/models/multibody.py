@@ -47,7 +47,7 @@ import casadi as ca
 import numpy as np
 
 from ..validation import InputError, finite, positive
-from .mechanics import Dissipation, Gravity, LagrangianSystem, Potential, velocity
+from .mechanics import Dissipation, Force, Gravity, LagrangianSystem, Potential, velocity
 from .poses import GEOMETRY, Space, checked_inertia, checked_rotation, checked_vector, unit_vector
 from .rigidbody import rotation, unit_norm
 
@@ -460,7 +460,7 @@ class Multibody:
 
     # ------------------------------------------------------------------ the system
     def system(self, formulation: str = "maximal", contact=None, limits: bool = False,
-               restitution: float = 0.0) -> LagrangianSystem:
+               restitution: float = 0.0, efforts: Optional[Dict[str, object]] = None) -> LagrangianSystem:
         """The :class:`LagrangianSystem` of the bodies and joints in ``formulation`` (module doc), with gravity,
         the joints' springs, dampers and armatures, and the bodies' outlines and joint points as its pictures
         (:attr:`links`).
@@ -469,7 +469,9 @@ class Multibody:
         :class:`~castrajectory.models.contact.Contact`, its gaps written with ``at(body, point)``, the world
         position of a body's point, and ``at.joint(name)``, a joint coordinate; ``at.limits()`` gives the joints'
         limits as gaps.  ``limits=True`` without ``contact``: the joints' limits alone, as contacts of
-        ``restitution``.
+        ``restitution``.  ``efforts``: a torque (revolute) or a force (prismatic) on joint coordinates by name,
+        numbers or expressions of the time and of controls (``ct.Control``): the generalised force ``τ ∇x`` of
+        each coordinate ``x`` (its virtual work ``τ δx``), in either formulation.
 
         A rod on a pin whose angle is held within ±0.3 rad, its stop plastic:
 
@@ -535,6 +537,15 @@ class Multibody:
             potentials.append(Dissipation(rayleigh, "joint damping"))
         if "armature" in used:
             kinetic.extra = kinetic_extra
+        if efforts:
+            unknown = sorted(set(efforts) - set(coords))
+            if unknown:
+                raise InputError(f"efforts: unknown joint coordinates {', '.join(unknown)} (they are "
+                                 f"{', '.join(coords)})")
+            Q = ca.SX.zeros(q.numel())
+            for name, tau in efforts.items():
+                Q += ca.SX(tau) * ca.gradient(coords[name], q)
+            potentials.append(Force(Q, "joint efforts"))
         points = self._picture(frames)
         at = Frames(self, frames, coords)
         if contact is not None:
