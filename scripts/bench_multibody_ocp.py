@@ -37,18 +37,10 @@ import numpy as np  # noqa: E402
 import castrajectory as ct  # noqa: E402
 from castrajectory.inspect.study import time_to_error  # noqa: E402
 
+from bench_multibody import chain  # noqa: E402  (the same rods: scripts/ is on the path of a script)
+
 T, UMAX, TARGET_ANGLE = 2.0, 200.0, 0.3
 IPOPT = {"tol": 1e-10, "max_iter": 3000, "print_level": 0}
-
-
-def chain(n: int) -> ct.Multibody:
-    mb = ct.Multibody(g=9.81)
-    parent, at = mb.world, (0.0, 0.0)
-    for i in range(n):
-        rod = mb.body(f"rod{i + 1}", 1.0, 1.0 / 12, outline=[(0.0, 0.5), (0.0, -0.5)])
-        mb.revolute(parent, rod, parent_point=at, child_point=(0.0, 0.5), name=f"pin{i + 1}")
-        parent, at = rod, (0.0, -0.5)
-    return mb
 
 
 def final_angles(n: int) -> np.ndarray:
