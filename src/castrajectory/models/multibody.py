@@ -490,6 +490,28 @@ class Multibody:
             raise InputError(f"formulation must be one of {', '.join(FORMULATIONS)} (got {formulation!r})")
         if not self.bodies:
             raise InputError("a Multibody needs at least one body")
+        q, names, frames, rows = self._unknowns(formulation)
+        coords = dict(zip(names if formulation == "joint" else self.joint_names(),
+                          self._coordinate_exprs(q, frames, formulation)))
+        centres = [self._com(b, *frames[b.index]) for b in self.bodies]
+        kinetic = _Bodies(centres, [frames[b.index][1] for b in self.bodies], self.bodies, self.dim,
+                          q if formulation == "maximal" else None)
+        potentials = []
+        if np.any(self.gravity != 0):
+            g = float(np.linalg.norm(self.gravity))
+            up = -self.gravity / g
+            potentials.append(Gravity(g, heights=[ca.dot(ca.DM(up), c) for c in centres],
+                                      masses=[b.mass for b in self.bodies]))
+        potentials += self._joint_terms(q, coords, kinetic, efforts)
+        at = Frames(self, frames, coords)
+        return LagrangianSystem(q, kinetic, potentials, constraints=rows, names=names,
+                                points_expr=self._picture(frames),
+                                contact=self._contact(at, contact, limits, restitution))
+
+    def _unknowns(self, formulation: str):
+        """``(q, names, frames, rows)`` of ``formulation``: the coordinates, their names, the bodies' frames as
+        expressions of them, and the holonomic rows (maximal: every joint and each quaternion's norm; joint: the
+        loop-closing joints and each quaternion coordinate's norm)."""
         geo, d, no = self._geo, self.dim, self._geo.nori
         if formulation == "maximal":
             compound = [j.name for j in self.joints if j.compound]
@@ -502,27 +524,21 @@ class Multibody:
             rows = [r for j in self.joints for r in self._joint_rows(j, frames)]
             if d == 3:
                 rows += [unit_norm(frames[b.index][1]) for b in self.bodies]
-        else:
-            labels = self._coordinates()
-            names = [n for n, _ in labels]
-            q = ca.SX.sym("q", len(names))
-            frames = self._frames(q)
-            rows = [r for j in self.joints if not j.tree for r in self._joint_rows(j, frames)]
-            rows += [unit_norm(q[i:i + 4]) for i in self._quaternions(labels)]
-        coords = dict(zip(names if formulation == "joint" else self.joint_names(),
-                          self._coordinate_exprs(q, frames, formulation)))
-        centres = [self._com(b, *frames[b.index]) for b in self.bodies]
-        oris = [frames[b.index][1] for b in self.bodies]
-        kinetic = _Bodies(centres, oris, self.bodies, self.dim, q if formulation == "maximal" else None)
-        potentials = []
-        if np.any(self.gravity != 0):
-            g = float(np.linalg.norm(self.gravity))
-            up = -self.gravity / g
-            potentials.append(Gravity(g, heights=[ca.dot(ca.DM(up), c) for c in centres],
-                                      masses=[b.mass for b in self.bodies]))
+            return q, names, frames, rows
+        labels = self._coordinates()
+        names = [n for n, _ in labels]
+        q = ca.SX.sym("q", len(names))
+        frames = self._frames(q)
+        rows = [r for j in self.joints if not j.tree for r in self._joint_rows(j, frames)]
+        rows += [unit_norm(q[i:i + 4]) for i in self._quaternions(labels)]
+        return q, names, frames, rows
+
+    def _joint_terms(self, q, coords, kinetic, efforts) -> List:
+        """The joints' springs, dampers and efforts as terms, each through its coordinate's expression ``coords``
+        (so alike in both formulations); the armatures go into ``kinetic``."""
         kinetic_extra, spring, rayleigh = ca.SX(0), ca.SX(0), ca.SX(0)
         qd = velocity(q)
-        used = set()
+        used, terms = set(), []
         for j in self.tree_joints:
             for k, opts in j.options():
                 x = coords[self._element_label(j, k)]
@@ -532,9 +548,9 @@ class Multibody:
                 rayleigh += 0.5 * opts.get("damping", 0.0) * rate * rate
                 used |= {key for key in ("armature", "stiffness", "damping") if opts.get(key)}
         if "stiffness" in used:
-            potentials.append(Potential(spring, "joint springs"))
+            terms.append(Potential(spring, "joint springs"))
         if "damping" in used:
-            potentials.append(Dissipation(rayleigh, "joint damping"))
+            terms.append(Dissipation(rayleigh, "joint damping"))
         if "armature" in used:
             kinetic.extra = kinetic_extra
         if efforts:
@@ -545,21 +561,23 @@ class Multibody:
             Q = ca.SX.zeros(q.numel())
             for name, tau in efforts.items():
                 Q += ca.SX(tau) * ca.gradient(coords[name], q)
-            potentials.append(Force(Q, "joint efforts"))
-        points = self._picture(frames)
-        at = Frames(self, frames, coords)
+            terms.append(Force(Q, "joint efforts"))
+        return terms
+
+    @staticmethod
+    def _contact(at, contact, limits: bool, restitution: float):
+        """The system's contact: the user's (a function of ``at``), or the joints' limits, or none."""
         if contact is not None:
             if not callable(contact):
                 raise InputError("contact must be a function of the bodies' frames (at) returning a ct.Contact")
-            contact = contact(at)
-        elif limits:
-            from .contact import Contact
-            gaps, gap_names = at.limits()
-            if not gaps:
-                raise InputError("limits=True: no joint has limits")
-            contact = Contact(gaps, restitution=restitution, names=gap_names)
-        return LagrangianSystem(q, kinetic, potentials, constraints=rows, names=names, points_expr=points,
-                                contact=contact)
+            return contact(at)
+        if not limits:
+            return None
+        from .contact import Contact
+        gaps, gap_names = at.limits()
+        if not gaps:
+            raise InputError("limits=True: no joint has limits")
+        return Contact(gaps, restitution=restitution, names=gap_names)
 
     def _coordinate_exprs(self, q, frames, formulation: str) -> List:
         """The joint coordinates (:meth:`joint_names`' order) as expressions of a system's ``q``: ``q`` itself in
